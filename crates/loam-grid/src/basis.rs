@@ -1,0 +1,365 @@
+//! Basis functions tying a material point to grid nodes, as tensor products of 1D functions.
+//!
+//! - `Linear`: the standard MPM tent function N(d) = 1 − |d|/h. Its gradient jumps at cell
+//!   faces, the source of cell-crossing noise; it does not converge on the self-weight column.
+//! - `Gimp`: the uniform GIMP function of Bardenhagen & Kober (2004): the tent averaged over
+//!   the point's domain [x_p − l_p, x_p + l_p], S(d) = (M(d + l) − M(d − l)) / (2l) with M the
+//!   antiderivative of the tent. For l ≤ h/2 this is exactly the five-piece table of
+//!   THEORY.md §5; written as a difference of antiderivatives it also holds for l up to h,
+//!   which iGIMP domains reach when stretched (Charlton et al. 2017).
+//!
+//! Face rule, used by every function here: along each axis a cell owns `[x_i, x_{i+1})`.
+//! A point exactly on a face belongs to the cell above it, so the linear basis picks one
+//! gradient consistently and rigid motion creates no stress.
+
+use crate::Grid;
+use nalgebra::SVector;
+
+/// Which basis functions a run uses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum BasisKind {
+    Linear,
+    Gimp,
+}
+
+/// A point whose basis support leaves the grid.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum BasisError {
+    #[error("position component {axis} = {coordinate} lies outside the grid [{min}, {max})")]
+    OutsideGrid { axis: usize, coordinate: f64, min: f64, max: f64 },
+    #[error("position or domain half-length along axis {axis} is not finite")]
+    NonFinite { axis: usize },
+}
+
+/// Half-lengths below this fraction of a cell use the linear limit of GIMP (l → 0).
+const MIN_HALF_LENGTH: f64 = 1e-9;
+/// Half-lengths are capped at one cell: beyond that the support would exceed four nodes
+/// per axis. The cap keeps the partition of unity; it only limits how far a stretched
+/// domain reaches.
+const MAX_HALF_LENGTH: f64 = 1.0;
+/// Nodes whose weight and gradient would both be below this (in cell units) are dropped.
+const SUPPORT_EPS: f64 = 1e-12;
+
+impl BasisKind {
+    /// Largest number of nodes the basis touches along one axis.
+    pub const fn max_support_1d(self) -> usize {
+        match self {
+            BasisKind::Linear => 2,
+            BasisKind::Gimp => 4,
+        }
+    }
+
+    /// Largest number of nodes the basis touches in `dim` dimensions: the stride of
+    /// per-point support buffers.
+    pub fn max_support(self, dim: usize) -> usize {
+        self.max_support_1d().pow(dim as u32)
+    }
+
+    /// Evaluate the basis at `x` for a point of domain half-lengths `half_length` (ignored
+    /// by `Linear`). Writes node indices (ascending), values and gradients with respect to
+    /// position into the buffers, which must hold `max_support(D)` entries, and returns
+    /// how many were written.
+    pub fn evaluate<const D: usize>(
+        self,
+        grid: &Grid<D>,
+        x: &SVector<f64, D>,
+        half_length: &SVector<f64, D>,
+        nodes: &mut [u32],
+        values: &mut [f64],
+        gradients: &mut [SVector<f64, D>],
+    ) -> Result<usize, BasisError> {
+        let mut idx = [[0usize; 4]; D];
+        let mut w = [[0f64; 4]; D];
+        let mut dw = [[0f64; 4]; D];
+        let mut count = [0usize; D];
+        for a in 0..D {
+            let h = grid.cell_size()[a];
+            let xi = (x[a] - grid.origin()[a]) / h;
+            let l = half_length[a] / h;
+            if !xi.is_finite() || !l.is_finite() {
+                return Err(BasisError::NonFinite { axis: a });
+            }
+            let n_cells = grid.cells()[a];
+            let outside = || BasisError::OutsideGrid {
+                axis: a,
+                coordinate: x[a],
+                min: grid.origin()[a],
+                max: grid.origin()[a] + h * n_cells as f64,
+            };
+            count[a] = match self {
+                BasisKind::Linear => linear_1d(xi, n_cells, &mut idx[a], &mut w[a], &mut dw[a]),
+                BasisKind::Gimp if l < MIN_HALF_LENGTH => {
+                    linear_1d(xi, n_cells, &mut idx[a], &mut w[a], &mut dw[a])
+                }
+                BasisKind::Gimp => gimp_1d(
+                    xi,
+                    l.min(MAX_HALF_LENGTH),
+                    n_cells,
+                    &mut idx[a],
+                    &mut w[a],
+                    &mut dw[a],
+                ),
+            }
+            .ok_or_else(outside)?;
+            for v in dw[a][..count[a]].iter_mut() {
+                *v /= h;
+            }
+        }
+        // Tensor product with axis 0 fastest: node indices come out ascending.
+        let total: usize = count.iter().product();
+        let mut odo = [0usize; D];
+        for k in 0..total {
+            let mut ijk = [0usize; D];
+            let mut value = 1.0;
+            for a in 0..D {
+                ijk[a] = idx[a][odo[a]];
+                value *= w[a][odo[a]];
+            }
+            let mut grad = SVector::<f64, D>::zeros();
+            for a in 0..D {
+                let mut g = dw[a][odo[a]];
+                for b in 0..D {
+                    if b != a {
+                        g *= w[b][odo[b]];
+                    }
+                }
+                grad[a] = g;
+            }
+            nodes[k] = grid.node_index(ijk) as u32;
+            values[k] = value;
+            gradients[k] = grad;
+            for a in 0..D {
+                odo[a] += 1;
+                if odo[a] < count[a] {
+                    break;
+                }
+                odo[a] = 0;
+            }
+        }
+        Ok(total)
+    }
+}
+
+/// Tent function in cell units on the cell owning `xi` (half-open rule).
+fn linear_1d(
+    xi: f64,
+    n_cells: usize,
+    idx: &mut [usize; 4],
+    w: &mut [f64; 4],
+    dw: &mut [f64; 4],
+) -> Option<usize> {
+    let cell = xi.floor();
+    if cell < 0.0 || cell >= n_cells as f64 {
+        return None;
+    }
+    let i = cell as usize;
+    let f = xi - cell;
+    idx[0] = i;
+    idx[1] = i + 1;
+    w[0] = 1.0 - f;
+    w[1] = f;
+    dw[0] = -1.0;
+    dw[1] = 1.0;
+    Some(2)
+}
+
+/// The tent N(s) = max(0, 1 − |s|) in cell units.
+#[inline]
+fn tent(s: f64) -> f64 {
+    (1.0 - s.abs()).max(0.0)
+}
+
+/// Antiderivative of the tent, M(s) = ∫_{−∞}^{s} N.
+#[inline]
+fn tent_integral(s: f64) -> f64 {
+    if s <= -1.0 {
+        0.0
+    } else if s <= 0.0 {
+        0.5 * (1.0 + s) * (1.0 + s)
+    } else if s <= 1.0 {
+        1.0 - 0.5 * (1.0 - s) * (1.0 - s)
+    } else {
+        1.0
+    }
+}
+
+/// GIMP in cell units: nodes i with |xi − i| < 1 + l. A node beyond the grid that would
+/// carry weight means the point's domain leaves the grid.
+fn gimp_1d(
+    xi: f64,
+    l: f64,
+    n_cells: usize,
+    idx: &mut [usize; 4],
+    w: &mut [f64; 4],
+    dw: &mut [f64; 4],
+) -> Option<usize> {
+    let reach = 1.0 + l - SUPPORT_EPS;
+    let first = (xi - reach).ceil() as i64;
+    let last = (xi + reach).floor() as i64;
+    let mut count = 0;
+    for i in first..=last {
+        let d = xi - i as f64;
+        if d.abs() >= reach {
+            continue;
+        }
+        if i < 0 || i > n_cells as i64 {
+            return None;
+        }
+        idx[count] = i as usize;
+        w[count] = (tent_integral(d + l) - tent_integral(d - l)) / (2.0 * l);
+        dw[count] = (tent(d + l) - tent(d - l)) / (2.0 * l);
+        count += 1;
+    }
+    Some(count)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+    use nalgebra::{Vector2, Vector3};
+    use proptest::prelude::*;
+
+    /// THEORY.md §5 table (Bardenhagen & Kober 2004), h = 1, valid for l ≤ 1/2.
+    fn gimp_table(d: f64, l: f64) -> (f64, f64) {
+        if d <= -1.0 - l || d > 1.0 + l {
+            (0.0, 0.0)
+        } else if d <= -1.0 + l {
+            ((1.0 + l + d).powi(2) / (4.0 * l), (1.0 + l + d) / (2.0 * l))
+        } else if d <= -l {
+            (1.0 + d, 1.0)
+        } else if d <= l {
+            (1.0 - (d * d + l * l) / (2.0 * l), -d / l)
+        } else if d <= 1.0 - l {
+            (1.0 - d, -1.0)
+        } else {
+            ((1.0 + l - d).powi(2) / (4.0 * l), -(1.0 + l - d) / (2.0 * l))
+        }
+    }
+
+    fn grid2(n: usize) -> Grid<2> {
+        Grid::new(Vector2::zeros(), Vector2::new(1.0, 1.0), [n, n]).unwrap()
+    }
+
+    fn eval2(kind: BasisKind, g: &Grid<2>, x: Vector2<f64>, l: f64) -> Vec<(u32, f64, Vector2<f64>)> {
+        let m = kind.max_support(2);
+        let (mut nodes, mut n, mut dn) = (vec![0; m], vec![0.0; m], vec![Vector2::zeros(); m]);
+        let c = kind.evaluate(g, &x, &Vector2::repeat(l), &mut nodes, &mut n, &mut dn).unwrap();
+        (0..c).map(|k| (nodes[k], n[k], dn[k])).collect()
+    }
+
+    #[test]
+    fn gimp_matches_the_published_table() {
+        for &l in &[0.25, 0.125, 0.5] {
+            for k in 0..400 {
+                let d = -1.6 + 3.2 * k as f64 / 399.0;
+                let (s, ds) = gimp_table(d, l);
+                let s2 = (tent_integral(d + l) - tent_integral(d - l)) / (2.0 * l);
+                let ds2 = (tent(d + l) - tent(d - l)) / (2.0 * l);
+                // Both are closed forms of the same function: equal to rounding.
+                assert!((s - s2).abs() < 1e-14, "S at d={d}, l={l}: {s} vs {s2}");
+                assert!((ds - ds2).abs() < 1e-12, "dS at d={d}, l={l}: {ds} vs {ds2}");
+            }
+        }
+    }
+
+    proptest! {
+        /// Partition of unity and of its gradient (Σ N = 1, Σ ∇N = 0) and linear
+        /// completeness (Σ N x_I = x), which every basis here must reproduce exactly.
+        #[test]
+        fn partition_of_unity_and_linear_reproduction(
+            x in 1.3f64..6.7, y in 1.3f64..6.7, l in 0.0f64..1.0, gimp in any::<bool>()
+        ) {
+            let kind = if gimp { BasisKind::Gimp } else { BasisKind::Linear };
+            let g = grid2(8);
+            let p = Vector2::new(x, y);
+            let s = eval2(kind, &g, p, l);
+            let sum: f64 = s.iter().map(|t| t.1).sum();
+            let gsum: Vector2<f64> = s.iter().map(|t| t.2).sum();
+            let xr: Vector2<f64> = s.iter().map(|t| g.node_position(t.0 as usize) * t.1).sum();
+            let grad_x: nalgebra::Matrix2<f64> =
+                s.iter().map(|t| g.node_position(t.0 as usize) * t.2.transpose()).sum();
+            prop_assert!((sum - 1.0).abs() < 1e-13);
+            prop_assert!(gsum.norm() < 1e-12);
+            prop_assert!((xr - p).norm() < 1e-12);
+            prop_assert!((grad_x - nalgebra::Matrix2::identity()).norm() < 1e-12);
+            let mut sorted: Vec<u32> = s.iter().map(|t| t.0).collect();
+            sorted.sort();
+            prop_assert_eq!(sorted, s.iter().map(|t| t.0).collect::<Vec<_>>());
+        }
+
+        /// Gradients are the derivatives of the values (central differences, step 1e-6:
+        /// truncation O(1e-12) for the C¹ GIMP away from its kinks).
+        #[test]
+        fn gimp_gradient_is_the_derivative(x in 2.0f64..5.0, y in 2.0f64..5.0, l in 0.05f64..0.9) {
+            let g = grid2(8);
+            let p = Vector2::new(x, y);
+            let base = eval2(BasisKind::Gimp, &g, p, l);
+            let eps = 1e-6;
+            for axis in 0..2 {
+                let mut dp = Vector2::zeros();
+                dp[axis] = eps;
+                let plus = eval2(BasisKind::Gimp, &g, p + dp, l);
+                let minus = eval2(BasisKind::Gimp, &g, p - dp, l);
+                let at = |v: &Vec<(u32, f64, Vector2<f64>)>, node: u32| {
+                    v.iter().find(|t| t.0 == node).map_or(0.0, |t| t.1)
+                };
+                for t in &base {
+                    let fd = (at(&plus, t.0) - at(&minus, t.0)) / (2.0 * eps);
+                    prop_assert!((fd - t.2[axis]).abs() < 1e-6, "node {} axis {axis}: {fd} vs {}", t.0, t.2[axis]);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn linear_face_rule_takes_the_cell_above() {
+        let g = grid2(4);
+        let s = eval2(BasisKind::Linear, &g, Vector2::new(2.0, 1.5), 0.0);
+        let nodes: Vec<u32> = s.iter().map(|t| t.0).collect();
+        // cell [2,3) x [1,2): nodes (2,1),(3,1),(2,2),(3,2)
+        assert_eq!(nodes, vec![7, 8, 12, 13]);
+        assert_relative_eq!(s[0].1, 0.5);
+        assert_relative_eq!(s[0].2[0], -0.5);
+    }
+
+    #[test]
+    fn gimp_support_counts() {
+        let g = grid2(8);
+        // l = h/4 at the centre of a quarter cell: 2 nodes per axis.
+        assert_eq!(eval2(BasisKind::Gimp, &g, Vector2::new(3.25, 3.75), 0.25).len(), 4);
+        // domain straddling a node: 3 nodes along that axis.
+        assert_eq!(eval2(BasisKind::Gimp, &g, Vector2::new(3.1, 3.5), 0.25).len(), 6);
+    }
+
+    #[test]
+    fn support_leaving_the_grid_is_an_error() {
+        let g = grid2(4);
+        let m = 16;
+        let (mut nodes, mut n, mut dn) = (vec![0; m], vec![0.0; m], vec![Vector2::zeros(); m]);
+        // A quarter-cell point at the grid edge touches only inner nodes...
+        assert!(BasisKind::Gimp
+            .evaluate(&g, &Vector2::new(0.25, 1.5), &Vector2::repeat(0.25), &mut nodes, &mut n, &mut dn)
+            .is_ok());
+        // ...but a domain crossing the edge would need a node outside the grid.
+        let err = BasisKind::Gimp
+            .evaluate(&g, &Vector2::new(0.1, 1.5), &Vector2::repeat(0.25), &mut nodes, &mut n, &mut dn)
+            .unwrap_err();
+        assert!(matches!(err, BasisError::OutsideGrid { axis: 0, .. }));
+        assert!(BasisKind::Linear
+            .evaluate(&g, &Vector2::new(4.0, 1.0), &Vector2::zeros(), &mut nodes, &mut n, &mut dn)
+            .is_err());
+    }
+
+    #[test]
+    fn three_dimensional_partition_of_unity() {
+        let g = Grid::<3>::new(Vector3::zeros(), Vector3::new(0.5, 1.0, 2.0), [4, 4, 4]).unwrap();
+        let m = BasisKind::Gimp.max_support(3);
+        let (mut nodes, mut n, mut dn) = (vec![0; m], vec![0.0; m], vec![Vector3::zeros(); m]);
+        let c = BasisKind::Gimp
+            .evaluate(&g, &Vector3::new(1.01, 2.3, 4.4), &Vector3::new(0.1, 0.3, 0.6), &mut nodes, &mut n, &mut dn)
+            .unwrap();
+        let sum: f64 = n[..c].iter().sum();
+        assert_relative_eq!(sum, 1.0, epsilon = 1e-14);
+    }
+}

@@ -1,0 +1,275 @@
+//! Point–node connectivity of one step: the basis values and gradients of every point at
+//! the start of the step, the active nodes (those some point's basis touches — the only
+//! unknowns of the step) and, per active node, the points that touch it.
+//!
+//! Per-point data is stored struct-of-arrays with a fixed stride (`BasisKind::max_support`)
+//! so that the hot loops index flat buffers, and buffers are reused from step to step.
+//! The node → point adjacency lets every node *gather* its contributions in a fixed point
+//! order, which makes parallel assembly deterministic without atomics or colouring.
+
+use crate::{BasisError, BasisKind, Grid};
+use nalgebra::SVector;
+use rayon::prelude::*;
+
+/// Marker for a grid node that no point touches.
+pub const INACTIVE: u32 = u32::MAX;
+
+/// Numbering of the active nodes, ascending in grid node index.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ActiveNodes {
+    /// Active index of each grid node, or `INACTIVE`.
+    pub grid_to_active: Vec<u32>,
+    /// Grid node index of each active node.
+    pub active_to_grid: Vec<u32>,
+}
+
+impl ActiveNodes {
+    pub fn len(&self) -> usize {
+        self.active_to_grid.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.active_to_grid.is_empty()
+    }
+}
+
+/// For each active node, the (point, local support slot) pairs touching it, ascending in
+/// point index.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct NodePointAdjacency {
+    pub offsets: Vec<usize>,
+    pub entries: Vec<(u32, u32)>,
+}
+
+impl NodePointAdjacency {
+    pub fn of(&self, node: usize) -> &[(u32, u32)] {
+        &self.entries[self.offsets[node]..self.offsets[node + 1]]
+    }
+}
+
+/// Point–node connectivity at the start of a step. See the module docs.
+#[derive(Debug, Clone)]
+pub struct Connectivity<const D: usize> {
+    basis: BasisKind,
+    stride: usize,
+    count: Vec<u32>,
+    grid_nodes: Vec<u32>,
+    active: Vec<u32>,
+    values: Vec<f64>,
+    gradients: Vec<SVector<f64, D>>,
+    active_nodes: ActiveNodes,
+    node_points: NodePointAdjacency,
+}
+
+/// A point whose basis could not be evaluated, with the reason.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("material point {point} at {position:?}: {source}")]
+pub struct PointBasisError {
+    pub point: usize,
+    pub position: Vec<f64>,
+    pub source: BasisError,
+}
+
+impl<const D: usize> Connectivity<D> {
+    pub fn new(basis: BasisKind) -> Self {
+        Self {
+            basis,
+            stride: basis.max_support(D),
+            count: Vec::new(),
+            grid_nodes: Vec::new(),
+            active: Vec::new(),
+            values: Vec::new(),
+            gradients: Vec::new(),
+            active_nodes: ActiveNodes::default(),
+            node_points: NodePointAdjacency::default(),
+        }
+    }
+
+    pub fn basis(&self) -> BasisKind {
+        self.basis
+    }
+
+    /// Buffer stride per point.
+    pub fn stride(&self) -> usize {
+        self.stride
+    }
+
+    pub fn num_points(&self) -> usize {
+        self.count.len()
+    }
+
+    pub fn active_nodes(&self) -> &ActiveNodes {
+        &self.active_nodes
+    }
+
+    pub fn node_points(&self) -> &NodePointAdjacency {
+        &self.node_points
+    }
+
+    /// Number of nodes point `p` touches.
+    #[inline]
+    pub fn support_len(&self, p: usize) -> usize {
+        self.count[p] as usize
+    }
+
+    /// Active node indices touched by point `p`, ascending.
+    #[inline]
+    pub fn support_nodes(&self, p: usize) -> &[u32] {
+        let s = p * self.stride;
+        &self.active[s..s + self.count[p] as usize]
+    }
+
+    /// Grid node indices touched by point `p`, ascending.
+    #[inline]
+    pub fn support_grid_nodes(&self, p: usize) -> &[u32] {
+        let s = p * self.stride;
+        &self.grid_nodes[s..s + self.count[p] as usize]
+    }
+
+    /// Basis values at point `p` for its support nodes.
+    #[inline]
+    pub fn support_values(&self, p: usize) -> &[f64] {
+        let s = p * self.stride;
+        &self.values[s..s + self.count[p] as usize]
+    }
+
+    /// Basis gradients (with respect to the start-of-step position) at point `p`.
+    #[inline]
+    pub fn support_gradients(&self, p: usize) -> &[SVector<f64, D>] {
+        let s = p * self.stride;
+        &self.gradients[s..s + self.count[p] as usize]
+    }
+
+    /// Evaluate the basis of every point, number the active nodes and build the node →
+    /// point adjacency. Buffers are reused. On failure, the error names the first point
+    /// (lowest index) whose basis left the grid.
+    pub fn compute(
+        &mut self,
+        grid: &Grid<D>,
+        positions: &[SVector<f64, D>],
+        half_lengths: &[SVector<f64, D>],
+    ) -> Result<(), PointBasisError> {
+        assert_eq!(positions.len(), half_lengths.len());
+        let n = positions.len();
+        let stride = self.stride;
+        let basis = self.basis;
+        self.count.resize(n, 0);
+        self.grid_nodes.resize(n * stride, 0);
+        self.active.resize(n * stride, 0);
+        self.values.resize(n * stride, 0.0);
+        self.gradients.resize(n * stride, SVector::zeros());
+
+        let first_error = self
+            .grid_nodes
+            .par_chunks_mut(stride)
+            .zip(self.values.par_chunks_mut(stride))
+            .zip(self.gradients.par_chunks_mut(stride))
+            .zip(self.count.par_iter_mut())
+            .enumerate()
+            .filter_map(|(p, (((nodes, vals), grads), count))| {
+                match basis.evaluate(grid, &positions[p], &half_lengths[p], nodes, vals, grads) {
+                    Ok(c) => {
+                        *count = c as u32;
+                        None
+                    }
+                    Err(e) => {
+                        *count = 0;
+                        Some((p, e))
+                    }
+                }
+            })
+            .min_by_key(|(p, _)| *p);
+        if let Some((p, source)) = first_error {
+            return Err(PointBasisError {
+                point: p,
+                position: positions[p].iter().copied().collect(),
+                source,
+            });
+        }
+
+        // Active numbering, ascending in grid index so that supports stay sorted.
+        let an = &mut self.active_nodes;
+        an.grid_to_active.clear();
+        an.grid_to_active.resize(grid.num_nodes(), INACTIVE);
+        for p in 0..n {
+            let s = p * stride;
+            for &g in &self.grid_nodes[s..s + self.count[p] as usize] {
+                an.grid_to_active[g as usize] = 0;
+            }
+        }
+        an.active_to_grid.clear();
+        for (g, a) in an.grid_to_active.iter_mut().enumerate() {
+            if *a != INACTIVE {
+                *a = an.active_to_grid.len() as u32;
+                an.active_to_grid.push(g as u32);
+            }
+        }
+        let g2a = &an.grid_to_active;
+        self.active
+            .par_chunks_mut(stride)
+            .zip(self.grid_nodes.par_chunks(stride))
+            .zip(self.count.par_iter())
+            .for_each(|((act, grid_nodes), &c)| {
+                for k in 0..c as usize {
+                    act[k] = g2a[grid_nodes[k] as usize];
+                }
+            });
+
+        // Node → point adjacency by counting sort (points ascending within each node).
+        let n_active = an.active_to_grid.len();
+        let adj = &mut self.node_points;
+        adj.offsets.clear();
+        adj.offsets.resize(n_active + 1, 0);
+        for p in 0..n {
+            let s = p * stride;
+            for &a in &self.active[s..s + self.count[p] as usize] {
+                adj.offsets[a as usize + 1] += 1;
+            }
+        }
+        for i in 0..n_active {
+            adj.offsets[i + 1] += adj.offsets[i];
+        }
+        adj.entries.clear();
+        adj.entries.resize(adj.offsets[n_active], (0, 0));
+        let mut fill = adj.offsets.clone();
+        for p in 0..n {
+            let s = p * stride;
+            for (k, &a) in self.active[s..s + self.count[p] as usize].iter().enumerate() {
+                let slot = &mut fill[a as usize];
+                adj.entries[*slot] = (p as u32, k as u32);
+                *slot += 1;
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Vector2;
+
+    #[test]
+    fn active_nodes_and_adjacency_of_two_points() {
+        let g = Grid::<2>::new(Vector2::zeros(), Vector2::new(1.0, 1.0), [4, 4]).unwrap();
+        let mut c = Connectivity::<2>::new(BasisKind::Linear);
+        let pos = [Vector2::new(0.5, 0.5), Vector2::new(1.5, 0.5)];
+        c.compute(&g, &pos, &[Vector2::zeros(); 2]).unwrap();
+        // Cells (0,0) and (1,0): grid nodes 0,1,2 and 5,6,7 are active.
+        assert_eq!(c.active_nodes().active_to_grid, vec![0, 1, 2, 5, 6, 7]);
+        assert_eq!(c.support_nodes(0), &[0, 1, 3, 4]);
+        assert_eq!(c.support_nodes(1), &[1, 2, 4, 5]);
+        // Active node 1 (grid 1) is touched by point 0 (slot 1) and point 1 (slot 0).
+        assert_eq!(c.node_points().of(1), &[(0, 1), (1, 0)]);
+        assert_eq!(c.node_points().of(0), &[(0, 0)]);
+    }
+
+    #[test]
+    fn first_failing_point_is_named() {
+        let g = Grid::<2>::new(Vector2::zeros(), Vector2::new(1.0, 1.0), [2, 2]).unwrap();
+        let mut c = Connectivity::<2>::new(BasisKind::Linear);
+        let pos = [Vector2::new(0.5, 0.5), Vector2::new(2.5, 0.5), Vector2::new(-1.0, 0.5)];
+        let e = c.compute(&g, &pos, &[Vector2::zeros(); 3]).unwrap_err();
+        assert_eq!(e.point, 1);
+    }
+}
