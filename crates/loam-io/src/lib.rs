@@ -1,1 +1,3 @@
 //! loam-io
+
+pub mod output;

@@ -1,0 +1,332 @@
+//! Output writers: VTK XML point clouds (`.vtu`), ParaView collections
+//! (`.pvd`) and CSV tables/logs.
+//!
+//! Everything here is plain `std` text output. Whole-file writes (VTU, PVD,
+//! whole CSV tables) go to a temporary file in the destination folder which is
+//! then renamed over the destination, so a crash never leaves a half-written
+//! file behind. Append-only CSV logs flush after every row instead.
+
+mod csv;
+mod pvd;
+mod vtu;
+
+pub use csv::{write_csv_table, CsvCell, CsvWriter};
+pub use pvd::PvdWriter;
+pub use vtu::write_vtu;
+
+use std::fs::{self, File};
+use std::io::{self, BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// A borrowed view of the point fields to write, struct-of-arrays.
+///
+/// With `n = positions.len() / dim` points:
+/// - `positions`: `n * dim` values, point-major (`x0, y0, [z0], x1, ...`);
+/// - `scalars`: one value per point (`n` each);
+/// - `vectors`: `dim` components per point (`n * dim` each); padded with
+///   zeros to 3 components in VTU output;
+/// - `tensors`: symmetric 3x3 tensors, 6 components per point (`n * 6`
+///   each) in the order `xx, yy, zz, xy, yz, xz` (the order ParaView expects
+///   for 6-component symmetric tensors), also in 2D.
+#[derive(Debug, Clone)]
+pub struct PointCloud<'a> {
+    /// Spatial dimension, 2 or 3.
+    pub dim: usize,
+    /// Point coordinates, `n * dim` values, point-major.
+    pub positions: &'a [f64],
+    /// Named per-point scalar fields, `n` values each.
+    pub scalars: Vec<(&'a str, &'a [f64])>,
+    /// Named per-point vector fields, `n * dim` values each.
+    pub vectors: Vec<(&'a str, &'a [f64])>,
+    /// Named per-point symmetric tensor fields, `n * 6` values each
+    /// (`xx, yy, zz, xy, yz, xz`).
+    pub tensors: Vec<(&'a str, &'a [f64])>,
+}
+
+impl<'a> PointCloud<'a> {
+    /// A cloud with positions only; add fields with the builder methods or
+    /// by pushing onto the public vectors.
+    pub fn new(dim: usize, positions: &'a [f64]) -> Self {
+        Self {
+            dim,
+            positions,
+            scalars: Vec::new(),
+            vectors: Vec::new(),
+            tensors: Vec::new(),
+        }
+    }
+
+    /// Adds a per-point scalar field.
+    pub fn with_scalar(mut self, name: &'a str, values: &'a [f64]) -> Self {
+        self.scalars.push((name, values));
+        self
+    }
+
+    /// Adds a per-point vector field (`dim` components per point).
+    pub fn with_vector(mut self, name: &'a str, values: &'a [f64]) -> Self {
+        self.vectors.push((name, values));
+        self
+    }
+
+    /// Adds a per-point symmetric tensor field (6 components per point).
+    pub fn with_tensor(mut self, name: &'a str, values: &'a [f64]) -> Self {
+        self.tensors.push((name, values));
+        self
+    }
+
+    /// Number of points (`positions.len() / dim`; 0 for an invalid `dim`).
+    pub fn len(&self) -> usize {
+        self.positions.len().checked_div(self.dim).unwrap_or(0)
+    }
+
+    /// Whether the cloud has no points.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Checks `dim`, every field's length, and that every value is finite.
+    ///
+    /// Shapes are checked for all fields before any value is looked at.
+    pub fn validate(&self) -> Result<(), OutputError> {
+        if self.dim != 2 && self.dim != 3 {
+            return Err(OutputError::Dim { found: self.dim });
+        }
+        let n = self.len();
+        let check_len = |field: &str, expected: usize, found: usize| {
+            if expected == found {
+                Ok(())
+            } else {
+                Err(OutputError::Shape {
+                    field: field.to_owned(),
+                    expected,
+                    found,
+                })
+            }
+        };
+        check_len("positions", n * self.dim, self.positions.len())?;
+        for (name, v) in &self.scalars {
+            check_len(name, n, v.len())?;
+        }
+        for (name, v) in &self.vectors {
+            check_len(name, n * self.dim, v.len())?;
+        }
+        for (name, v) in &self.tensors {
+            check_len(name, n * 6, v.len())?;
+        }
+
+        check_finite("positions", self.positions, self.dim)?;
+        for (name, v) in &self.scalars {
+            check_finite(name, v, 1)?;
+        }
+        for (name, v) in &self.vectors {
+            check_finite(name, v, self.dim)?;
+        }
+        for (name, v) in &self.tensors {
+            check_finite(name, v, 6)?;
+        }
+        Ok(())
+    }
+}
+
+/// Errors from the output writers.
+#[derive(Debug, thiserror::Error)]
+pub enum OutputError {
+    /// An I/O operation on `path` failed.
+    #[error("I/O error on {}", path.display())]
+    Io {
+        /// The file being written.
+        path: PathBuf,
+        /// The underlying error.
+        source: io::Error,
+    },
+    /// A field (or CSV row) has the wrong number of values.
+    #[error("field `{field}` has {found} values, expected {expected}")]
+    Shape {
+        /// The field, or `"row"`/`"columns"` for CSV arity errors.
+        field: String,
+        /// The number of values required.
+        expected: usize,
+        /// The number of values given.
+        found: usize,
+    },
+    /// A field holds NaN or an infinity; it is never written silently.
+    #[error("field `{field}` is not finite (NaN or infinite) at point {point}")]
+    NonFinite {
+        /// The offending field.
+        field: String,
+        /// Index of the offending point (or entry, e.g. PVD data set).
+        point: usize,
+    },
+    /// `PointCloud::dim` is neither 2 nor 3.
+    #[error("point cloud dimension must be 2 or 3, found {found}")]
+    Dim {
+        /// The dimension given.
+        found: usize,
+    },
+}
+
+fn check_finite(field: &str, values: &[f64], comps: usize) -> Result<(), OutputError> {
+    match values.iter().position(|v| !v.is_finite()) {
+        None => Ok(()),
+        Some(i) => Err(OutputError::NonFinite {
+            field: field.to_owned(),
+            point: i / comps.max(1),
+        }),
+    }
+}
+
+pub(crate) fn io_err(path: &Path) -> impl FnOnce(io::Error) -> OutputError + '_ {
+    move |source| OutputError::Io {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
+/// Formats a finite `f64` so that it parses back to the same value.
+///
+/// Uses plain decimal (`Display`) for ordinary magnitudes, and exponent form
+/// (`LowerExp`, e.g. `1.5e-12`) for very small or very large ones, where
+/// `Display` would print hundreds of digits. Both are shortest round-trip
+/// representations understood by C/C++ stream parsers, Python and numpy.
+/// Non-finite values print as Rust's `NaN`, `inf`, `-inf`.
+pub(crate) fn fmt_f64(x: f64) -> String {
+    let a = x.abs();
+    if x == 0.0 || !x.is_finite() || (1e-5..1e16).contains(&a) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
+
+static TMP_COUNTER: AtomicU64 = AtomicU64::new(0);
+
+/// Writes a file atomically: `fill` writes into a temporary file in the same
+/// folder as `path`, which is synced and then renamed over `path`. On error
+/// the temporary file is removed and `path` is untouched.
+pub(crate) fn write_atomic<F>(path: &Path, fill: F) -> Result<(), OutputError>
+where
+    F: FnOnce(&mut dyn Write) -> io::Result<()>,
+{
+    let file_name = path.file_name().ok_or_else(|| OutputError::Io {
+        path: path.to_path_buf(),
+        source: io::Error::new(io::ErrorKind::InvalidInput, "path has no file name"),
+    })?;
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    let mut tmp_name = std::ffi::OsString::from(".");
+    tmp_name.push(file_name);
+    tmp_name.push(format!(
+        ".tmp-{}-{}",
+        std::process::id(),
+        TMP_COUNTER.fetch_add(1, Ordering::Relaxed)
+    ));
+    let tmp = dir.join(tmp_name);
+
+    let result = (|| -> io::Result<()> {
+        let file = File::create(&tmp)?;
+        let mut w = BufWriter::new(file);
+        fill(&mut w)?;
+        let file = w.into_inner().map_err(|e| e.into_error())?;
+        file.sync_all()?;
+        drop(file);
+        fs::rename(&tmp, path)
+    })();
+    if let Err(source) = result {
+        let _ = fs::remove_file(&tmp);
+        return Err(OutputError::Io {
+            path: path.to_path_buf(),
+            source,
+        });
+    }
+    Ok(())
+}
+
+/// Escapes a string for use inside an XML attribute value or text node.
+pub(crate) fn xml_escape(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    for c in s.chars() {
+        match c {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            '\'' => out.push_str("&apos;"),
+            _ => out.push(c),
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fmt_f64_round_trips() {
+        for &x in &[
+            0.0,
+            -0.0,
+            1.0,
+            -2.5,
+            0.1,
+            1.0 / 3.0,
+            1e-5,
+            9.99e-6,
+            1e15,
+            1e16,
+            1e-300,
+            1.7e308,
+            f64::MIN_POSITIVE,
+            5e-324,
+            123456.789,
+        ] {
+            let s = fmt_f64(x);
+            assert_eq!(
+                s.parse::<f64>().unwrap().to_bits(),
+                x.to_bits(),
+                "{x} -> {s}"
+            );
+            assert!(s.len() < 30, "{s}");
+        }
+        assert_eq!(fmt_f64(0.5), "0.5");
+        assert_eq!(fmt_f64(1e-7), "1e-7");
+    }
+
+    #[test]
+    fn xml_escape_special_chars() {
+        assert_eq!(xml_escape(r#"a<b>&"c'"#), "a&lt;b&gt;&amp;&quot;c&apos;");
+    }
+
+    #[test]
+    fn atomic_write_replaces_and_leaves_no_temp() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("x.txt");
+        write_atomic(&p, |w| w.write_all(b"one")).unwrap();
+        write_atomic(&p, |w| w.write_all(b"two")).unwrap();
+        assert_eq!(fs::read_to_string(&p).unwrap(), "two");
+        // A failing writer leaves the old file intact and no temp file.
+        let err = write_atomic(&p, |w| {
+            w.write_all(b"partial")?;
+            Err(io::Error::other("boom"))
+        })
+        .unwrap_err();
+        assert!(matches!(err, OutputError::Io { .. }));
+        assert_eq!(fs::read_to_string(&p).unwrap(), "two");
+        let names: Vec<_> = fs::read_dir(dir.path()).unwrap().collect();
+        assert_eq!(names.len(), 1);
+    }
+
+    #[test]
+    fn missing_folder_is_io_error_naming_path() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("nope").join("x.txt");
+        let err = write_atomic(&p, |w| w.write_all(b"x")).unwrap_err();
+        match err {
+            OutputError::Io { path, .. } => assert_eq!(path, p),
+            e => panic!("{e:?}"),
+        }
+    }
+}
