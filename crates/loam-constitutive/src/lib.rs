@@ -1,1 +1,85 @@
-//! loam-constitutive
+//! Constitutive laws and stress-update kinematics for loam.
+//!
+//! - [`tensor`]: spectral helpers for symmetric 3×3 tensors (logarithm, exponential,
+//!   derivative of the logarithm) and the fourth-order [`Tensor4`] convention.
+//! - [`ConstitutiveLaw`]: a small-strain return mapping from a trial elastic strain,
+//!   with history kept in caller-owned slices (points store it struct-of-arrays).
+//! - [`Elastic`]: linear isotropic elasticity (Hencky elasticity when driven by
+//!   logarithmic strain).
+//! - [`small_strain_update`] and [`finite_strain_update`]: the two kinematic drivers
+//!   (THEORY §3 and §2). The finite-strain spatial tangent is de Souza Neto, Perić &
+//!   Owen (2008), *Computational Methods for Plasticity*, eq. 14.103.
+//!
+//! Stress is tension-positive. Fourth-order tensors are full (not Voigt) 9×9 matrices
+//! with entry `(3*i + j, 3*k + l) = A_ijkl`, so that `A : g` is a matrix–vector product
+//! on the row-major flattening of `g` and `A : B` is a matrix product.
+
+pub mod tensor;
+
+mod elastic;
+mod kinematics;
+
+pub use elastic::Elastic;
+pub use kinematics::{finite_strain_update, small_strain_update, FiniteStrainUpdate};
+pub use tensor::Tensor4;
+
+use nalgebra::Matrix3;
+
+/// Failures of a stress update. Updates never panic on bad input; the caller (Newton
+/// loop) reacts to these by cutting the step.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ConstitutiveError {
+    #[error("non-finite value in {what}")]
+    NonFinite { what: &'static str },
+    #[error("non-positive Jacobian J = {j}")]
+    NonPositiveJacobian { j: f64 },
+    #[error("tensor is not positive definite (smallest eigenvalue {min_eigenvalue})")]
+    NotPositiveDefinite { min_eigenvalue: f64 },
+    #[error("symmetric eigen-decomposition did not converge")]
+    EigenFailed,
+    #[error("invalid material parameter {name} = {value}")]
+    InvalidParameter { name: &'static str, value: f64 },
+    #[error("history slice has length {got}, law needs {expected}")]
+    HistoryLength { expected: usize, got: usize },
+}
+
+/// Output of a small-strain return mapping.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StressUpdate {
+    /// σ, or the Kirchhoff stress τ when driven by logarithmic strain.
+    pub stress: Matrix3<f64>,
+    /// Updated elastic strain ε^e.
+    pub elastic_strain: Matrix3<f64>,
+    /// Algorithmic modulus D = ∂σ/∂ε_trial (minor-symmetric).
+    pub tangent: Tensor4,
+}
+
+/// A constitutive law in small-strain form: a return mapping from a trial elastic strain.
+/// History lives in caller-owned slices so that points can store it struct-of-arrays.
+pub trait ConstitutiveLaw: Send + Sync + std::fmt::Debug {
+    fn name(&self) -> &'static str;
+    fn history_len(&self) -> usize {
+        0
+    }
+    fn init_history(&self, _h: &mut [f64]) {}
+    /// true when the algorithmic tangent is symmetric (elastic, associated flow)
+    fn symmetric_tangent(&self) -> bool {
+        true
+    }
+    fn update(
+        &self,
+        eps_trial: &Matrix3<f64>,
+        h_n: &[f64],
+        h_out: &mut [f64],
+    ) -> Result<StressUpdate, ConstitutiveError>;
+    /// P-wave (constrained) modulus, used for stiffness scaling and explicit CFL later
+    fn p_wave_modulus(&self) -> f64;
+}
+
+pub(crate) fn check_finite(m: &Matrix3<f64>, what: &'static str) -> Result<(), ConstitutiveError> {
+    if m.iter().all(|v| v.is_finite()) {
+        Ok(())
+    } else {
+        Err(ConstitutiveError::NonFinite { what })
+    }
+}

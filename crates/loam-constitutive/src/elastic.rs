@@ -1,0 +1,163 @@
+//! Linear isotropic elasticity, σ = λ tr(ε) I + 2μ ε. Driven by small strain it is linear
+//! elasticity; driven by logarithmic strain through
+//! [`finite_strain_update`](crate::finite_strain_update) it is Hencky elasticity
+//! (de Souza Neto et al. 2008, §14.2).
+
+use nalgebra::Matrix3;
+
+use crate::tensor::{isotropic, Tensor4};
+use crate::{check_finite, ConstitutiveError, ConstitutiveLaw, StressUpdate};
+
+/// Linear isotropic elasticity with Young's modulus and Poisson's ratio.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Elastic {
+    pub young: f64,
+    pub poisson: f64,
+}
+
+impl Elastic {
+    /// Validates `E > 0` and `-1 < ν < 0.5` (strict: ν = 0.5 makes λ infinite).
+    pub fn new(young: f64, poisson: f64) -> Result<Self, ConstitutiveError> {
+        if !(young.is_finite() && young > 0.0) {
+            return Err(ConstitutiveError::InvalidParameter {
+                name: "young",
+                value: young,
+            });
+        }
+        if !(poisson.is_finite() && poisson > -1.0 && poisson < 0.5) {
+            return Err(ConstitutiveError::InvalidParameter {
+                name: "poisson",
+                value: poisson,
+            });
+        }
+        Ok(Self { young, poisson })
+    }
+
+    /// Lamé constants `(λ, μ)`.
+    #[inline]
+    pub fn lame(&self) -> (f64, f64) {
+        let (e, nu) = (self.young, self.poisson);
+        let mu = e / (2.0 * (1.0 + nu));
+        let lambda = e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
+        (lambda, mu)
+    }
+
+    /// The constant elasticity tensor `λ I⊗I + 2μ I^s`.
+    pub fn stiffness(&self) -> Tensor4 {
+        let (lambda, mu) = self.lame();
+        isotropic(lambda, mu)
+    }
+
+    /// Stress for a given (symmetric) strain.
+    #[inline]
+    pub fn stress(&self, eps: &Matrix3<f64>) -> Matrix3<f64> {
+        let (lambda, mu) = self.lame();
+        Matrix3::identity() * (lambda * eps.trace()) + eps * (2.0 * mu)
+    }
+}
+
+impl ConstitutiveLaw for Elastic {
+    fn name(&self) -> &'static str {
+        "elastic"
+    }
+
+    fn update(
+        &self,
+        eps_trial: &Matrix3<f64>,
+        _h_n: &[f64],
+        _h_out: &mut [f64],
+    ) -> Result<StressUpdate, ConstitutiveError> {
+        check_finite(eps_trial, "trial strain")?;
+        Ok(StressUpdate {
+            stress: self.stress(eps_trial),
+            elastic_strain: *eps_trial,
+            tangent: self.stiffness(),
+        })
+    }
+
+    fn p_wave_modulus(&self) -> f64 {
+        let (lambda, mu) = self.lame();
+        lambda + 2.0 * mu
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::tensor::{flatten, idx};
+
+    #[test]
+    fn rejects_bad_parameters() {
+        assert!(Elastic::new(0.0, 0.3).is_err());
+        assert!(Elastic::new(-1.0, 0.3).is_err());
+        assert!(Elastic::new(f64::NAN, 0.3).is_err());
+        assert!(Elastic::new(1.0, 0.5).is_err());
+        assert!(Elastic::new(1.0, -1.0).is_err());
+        assert!(Elastic::new(1.0, 0.49).is_ok());
+        assert!(Elastic::new(1.0, -0.5).is_ok());
+    }
+
+    #[test]
+    fn rejects_non_finite_strain() {
+        let law = Elastic::new(1.0, 0.2).unwrap();
+        let mut e = Matrix3::zeros();
+        e[(0, 0)] = f64::INFINITY;
+        assert!(matches!(
+            law.update(&e, &[], &mut []),
+            Err(ConstitutiveError::NonFinite { .. })
+        ));
+    }
+
+    #[test]
+    fn uniaxial_strain_closed_form() {
+        let law = Elastic::new(200.0, 0.25).unwrap();
+        let (lambda, mu) = law.lame();
+        // E = 200, ν = 0.25: μ = 80, λ = 80 (closed form).
+        assert!((mu - 80.0).abs() < 1e-12 && (lambda - 80.0).abs() < 1e-12);
+        let e = 1e-3;
+        let mut eps = Matrix3::zeros();
+        eps[(1, 1)] = e;
+        let up = law.update(&eps, &[], &mut []).unwrap();
+        // Exact arithmetic up to a couple of roundings.
+        assert!((up.stress[(1, 1)] - (lambda + 2.0 * mu) * e).abs() < 1e-15);
+        assert!((up.stress[(0, 0)] - lambda * e).abs() < 1e-15);
+        assert!((up.stress[(2, 2)] - lambda * e).abs() < 1e-15);
+        assert_eq!(up.stress[(0, 1)], 0.0);
+        assert_eq!(up.elastic_strain, eps);
+        assert!((up.tangent - isotropic(lambda, mu)).norm() < 1e-12);
+        assert!((law.p_wave_modulus() - 240.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn tangent_matches_finite_difference() {
+        let law = Elastic::new(1.3e4, 0.31).unwrap();
+        let eps0 = Matrix3::new(1e-3, 2e-4, -3e-4, 2e-4, -5e-4, 1e-4, -3e-4, 1e-4, 7e-4);
+        let d = law.update(&eps0, &[], &mut []).unwrap().tangent;
+        // Linear law: central differences are exact up to round-off (~1e-16 · |σ| / h).
+        let h = 1e-6;
+        let mut fd = Tensor4::zeros();
+        for k in 0..3 {
+            for l in 0..3 {
+                let mut s = Matrix3::zeros();
+                s[(k, l)] += 0.5;
+                s[(l, k)] += 0.5;
+                let sp = law.update(&(eps0 + s * h), &[], &mut []).unwrap().stress;
+                let sm = law.update(&(eps0 - s * h), &[], &mut []).unwrap().stress;
+                fd.set_column(idx(k, l), &flatten(&((sp - sm) / (2.0 * h))));
+            }
+        }
+        let r = (d - fd).norm() / d.norm();
+        assert!(r < 1e-6, "rel {r}");
+        // Minor symmetry.
+        for i in 0..3 {
+            for j in 0..3 {
+                for k in 0..3 {
+                    for l in 0..3 {
+                        assert_eq!(d[(idx(i, j), idx(k, l))], d[(idx(j, i), idx(k, l))]);
+                        assert_eq!(d[(idx(i, j), idx(k, l))], d[(idx(i, j), idx(l, k))]);
+                    }
+                }
+            }
+        }
+    }
+}
