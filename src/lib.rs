@@ -1,1 +1,20 @@
-//! loam facade
+//! loam: an implicit material point method for geotechnics.
+//!
+//! This facade re-exports the layered crates so that a user can depend on one crate:
+//! - [`grid`]: background grid, linear and GIMP basis functions, connectivity;
+//! - [`points`]: the material point store and its generation;
+//! - [`constitutive`]: constitutive laws and the small/finite strain updates;
+//! - [`solve`]: sparse assembly, linear solvers, Newton's method;
+//! - [`implicit`]: quasi-static implicit analysis;
+//! - [`io`]: scenes, output writers.
+//!
+//! [`verification`] holds the closed-form references of the verification problems.
+
+pub use loam_constitutive as constitutive;
+pub use loam_grid as grid;
+pub use loam_implicit as implicit;
+pub use loam_io as io;
+pub use loam_points as points;
+pub use loam_solve as solve;
+
+pub mod verification;

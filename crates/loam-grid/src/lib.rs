@@ -11,7 +11,7 @@ mod basis;
 mod connectivity;
 
 pub use basis::{BasisError, BasisKind};
-pub use connectivity::{ActiveNodes, Connectivity, NodePointAdjacency};
+pub use connectivity::{ActiveNodes, Connectivity, NodePointAdjacency, PointBasisError, INACTIVE};
 
 use nalgebra::SVector;
 

@@ -1,1 +1,12 @@
-//! loam-implicit
+//! Implicit MPM analyses over the grid, points, constitutive and solver crates: the
+//! updated-Lagrangian step as a Newton system (`step`), and quasi-static load stepping with
+//! cut-back (`quasi_static`). The formulation is the seed paper's (Wang et al. 2016) with
+//! the finite-strain extension of THEORY.md §2.
+
+mod model;
+mod quasi_static;
+mod step;
+
+pub use model::{Kinematics, Model, ModelError, PlaneConstraint};
+pub use quasi_static::{QuasiStatic, QuasiStaticSettings, RunError, StepError, StepReport};
+pub use step::PointUpdateError;

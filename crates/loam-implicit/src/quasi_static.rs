@@ -1,0 +1,357 @@
+//! Quasi-static implicit analysis: loads applied in steps, Newton per step, automatic
+//! cut-back, commit of the converged state (DESIGN.md "Data flow of one implicit step").
+//!
+//! A load step that Newton cannot solve is retried from the last committed state with half
+//! the load increment, as many times as `max_cutbacks` allows; then the run stops with an
+//! error naming the step, the load factor and the residual history. An unconverged state is
+//! never committed.
+
+use crate::model::Model;
+use crate::step::{PointCouplings, PointUpdateError, StepSystem, TrialState};
+use loam_grid::{Connectivity, PointBasisError};
+use loam_solve::{
+    gather_nodal, BlockPattern, LinearSolverKind, LinearSolverTimings, NewtonError, NewtonSettings, NewtonSolver,
+    SparseDirectSolver,
+};
+use nalgebra::{Matrix3, SVector};
+use rayon::prelude::*;
+use std::time::{Duration, Instant};
+
+/// Settings of a quasi-static analysis.
+#[derive(Debug, Clone, PartialEq)]
+pub struct QuasiStaticSettings {
+    /// Number of equal load steps from zero to full load.
+    pub load_steps: usize,
+    pub newton: NewtonSettings,
+    /// How many times one load step may be halved before the run stops.
+    pub max_cutbacks: usize,
+    /// Force a linear solver; `None` chooses Cholesky for symmetric tangents, LU otherwise.
+    pub linear_solver: Option<LinearSolverKind>,
+}
+
+impl Default for QuasiStaticSettings {
+    fn default() -> Self {
+        Self { load_steps: 10, newton: NewtonSettings::default(), max_cutbacks: 8, linear_solver: None }
+    }
+}
+
+/// What one load step did.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StepReport {
+    /// 1-based step number.
+    pub step: usize,
+    pub load_factor: f64,
+    /// Sub-steps the step needed (1 without cut-back).
+    pub substeps: usize,
+    /// Failed attempts that were cut back.
+    pub cutbacks: usize,
+    /// Newton corrections over all converged sub-steps.
+    pub iterations: usize,
+    /// Relative residuals of the last sub-step, before the first and after each correction.
+    pub residuals: Vec<f64>,
+    pub active_nodes: usize,
+    pub dofs: usize,
+    pub wall_time: Duration,
+}
+
+impl StepReport {
+    pub fn final_residual(&self) -> f64 {
+        self.residuals.last().copied().unwrap_or(f64::NAN)
+    }
+}
+
+/// Why a run stopped.
+#[derive(Debug, Clone, thiserror::Error)]
+pub enum StepError {
+    #[error("step {step}: {source}; the point left the grid (enlarge the grid)")]
+    PointOutsideGrid { step: usize, source: PointBasisError },
+    #[error("constraint {index} (axis {axis}, node plane {plane}) touches no active node: no material point has support on that plane")]
+    ConstraintTouchesNoNode { index: usize, axis: usize, plane: usize },
+    #[error("step {step} did not converge at load factor {load_factor:.6} after {cutbacks} cut-backs: {reason}")]
+    NotConverged { step: usize, load_factor: f64, cutbacks: usize, reason: String, residuals: Vec<f64> },
+    #[error("the analysis is already finished ({0} steps)")]
+    Finished(usize),
+}
+
+/// Quasi-static implicit analysis of a model. See the module docs.
+pub struct QuasiStatic<const D: usize> {
+    model: Model<D>,
+    settings: QuasiStaticSettings,
+    step: usize,
+    load_factor: f64,
+    conn: Connectivity<D>,
+    conn_current: bool,
+    pattern: BlockPattern,
+    values: Vec<f64>,
+    constrained: Vec<bool>,
+    f_ext: Vec<f64>,
+    du: Vec<f64>,
+    trial: TrialState<D>,
+    newton: NewtonSolver,
+}
+
+impl<const D: usize> QuasiStatic<D> {
+    pub fn new(model: Model<D>, settings: QuasiStaticSettings) -> Self {
+        let kind = settings.linear_solver.unwrap_or(if model.symmetric_tangent() {
+            LinearSolverKind::Cholesky
+        } else {
+            LinearSolverKind::Lu
+        });
+        tracing::info!(solver = %kind, "linear solver chosen from the tangent's symmetry");
+        let newton = NewtonSolver::new(settings.newton, SparseDirectSolver::new(kind));
+        Self {
+            conn: Connectivity::new(model.basis),
+            model,
+            settings,
+            step: 0,
+            load_factor: 0.0,
+            conn_current: false,
+            pattern: BlockPattern::new(D),
+            values: Vec::new(),
+            constrained: Vec::new(),
+            f_ext: Vec::new(),
+            du: Vec::new(),
+            trial: TrialState::default(),
+            newton,
+        }
+    }
+
+    pub fn model(&self) -> &Model<D> {
+        &self.model
+    }
+
+    pub fn into_model(self) -> Model<D> {
+        self.model
+    }
+
+    pub fn settings(&self) -> &QuasiStaticSettings {
+        &self.settings
+    }
+
+    pub fn steps_done(&self) -> usize {
+        self.step
+    }
+
+    pub fn load_factor(&self) -> f64 {
+        self.load_factor
+    }
+
+    pub fn is_finished(&self) -> bool {
+        self.step >= self.settings.load_steps
+    }
+
+    pub fn linear_solver_kind(&self) -> LinearSolverKind {
+        self.newton.linear_solver().kind()
+    }
+
+    pub fn linear_solver_timings(&self) -> LinearSolverTimings {
+        self.newton.linear_solver().timings()
+    }
+
+    /// Connectivity of the committed configuration (computed once per committed state).
+    fn connect(&mut self) -> Result<(), StepError> {
+        if self.conn_current {
+            return Ok(());
+        }
+        let pts = &self.model.points;
+        self.conn
+            .compute(&self.model.grid, &pts.position, &pts.half_length)
+            .map_err(|source| StepError::PointOutsideGrid { step: self.step + 1, source })?;
+        self.pattern.update(&PointCouplings(&self.conn));
+        let an = self.conn.active_nodes();
+        self.constrained.clear();
+        self.constrained.resize(an.len() * D, false);
+        for (a, &g) in an.active_to_grid.iter().enumerate() {
+            let ijk = self.model.grid.node_coords(g as usize);
+            for c in &self.model.constraints {
+                if ijk[c.axis] == c.plane {
+                    for i in 0..D {
+                        self.constrained[a * D + i] |= c.fixed[i];
+                    }
+                }
+            }
+        }
+        self.conn_current = true;
+        Ok(())
+    }
+
+    /// Check what can only be checked against the connectivity: every constraint must
+    /// hold at least one active node. Scene validation calls this before the first step.
+    pub fn check(&mut self) -> Result<(), StepError> {
+        self.connect()?;
+        let an = self.conn.active_nodes();
+        for (index, c) in self.model.constraints.iter().enumerate() {
+            let touches = an
+                .active_to_grid
+                .iter()
+                .any(|&g| self.model.grid.node_coords(g as usize)[c.axis] == c.plane);
+            if !touches {
+                return Err(StepError::ConstraintTouchesNoNode { index, axis: c.axis, plane: c.plane });
+            }
+        }
+        Ok(())
+    }
+
+    /// External nodal forces at load factor `lambda`: gravity on point masses and point
+    /// forces, both dead loads.
+    fn external_forces(&mut self, lambda: f64) {
+        let pts = &self.model.points;
+        let g = self.model.gravity;
+        let forces = &self.model.point_forces;
+        let conn = &self.conn;
+        self.f_ext.resize(conn.active_nodes().len() * D, 0.0);
+        gather_nodal(&PointCouplings(conn), D, &mut self.f_ext, |p, a, out| {
+            let n = conn.support_values(p)[a];
+            let mut f = g * pts.mass[p];
+            if let Some(fp) = forces.get(p) {
+                f += fp;
+            }
+            for i in 0..D {
+                out[i] += lambda * n * f[i];
+            }
+        });
+    }
+
+    /// Try to reach `lambda` from the committed state. On success the state is committed.
+    fn attempt(&mut self, lambda: f64) -> Result<loam_solve::NewtonReport, NewtonError<PointUpdateError>> {
+        self.external_forces(lambda);
+        let n_dofs = self.conn.active_nodes().len() * D;
+        self.du.clear();
+        self.du.resize(n_dofs, 0.0);
+        self.trial.resize(self.model.points.len(), self.conn.stride(), self.model.points.history_stride());
+        let mut system = StepSystem {
+            model: &self.model,
+            conn: &self.conn,
+            pattern: &self.pattern,
+            values: &mut self.values,
+            constrained: &self.constrained,
+            f_ext: &self.f_ext,
+            trial: &mut self.trial,
+        };
+        let report = self.newton.solve(&mut system, &mut self.du)?;
+        self.commit();
+        self.load_factor = lambda;
+        Ok(report)
+    }
+
+    /// Commit the converged trial state (THEORY.md §1): positions, F, volume, stress,
+    /// elastic strain, history, and GIMP half-lengths stretched with F (iGIMP).
+    fn commit(&mut self) {
+        let conn = &self.conn;
+        let du = &self.du;
+        let trial = &self.trial;
+        let pts = &mut self.model.points;
+        let hs = pts.history_stride();
+        (
+            pts.position.par_iter_mut(),
+            pts.deformation_gradient.par_iter_mut(),
+            pts.volume.par_iter_mut(),
+            pts.half_length.par_iter_mut(),
+            pts.half_length0.par_iter(),
+        )
+            .into_par_iter()
+            .enumerate()
+            .for_each(|(p, (x, f, v, l, l0))| {
+                for (&node, &n) in conn.support_nodes(p).iter().zip(conn.support_values(p)) {
+                    for i in 0..D {
+                        x[i] += n * du[node as usize * D + i];
+                    }
+                }
+                let df = trial.delta_f[p];
+                *v *= df.determinant();
+                *f = df * *f;
+                // Right stretch U = √(FᵀF); in plane strain F is block-diagonal, so the
+                // in-plane block of the 3×3 U is the in-plane stretch.
+                let eig = (f.transpose() * *f).symmetric_eigen();
+                let u = eig.eigenvectors
+                    * Matrix3::from_diagonal(&eig.eigenvalues.map(|e| e.max(0.0).sqrt()))
+                    * eig.eigenvectors.transpose();
+                *l = SVector::from_fn(|i, _| l0[i] * u[(i, i)]);
+            });
+        pts.stress.copy_from_slice(&trial.stress);
+        pts.elastic_strain.copy_from_slice(&trial.elastic_strain);
+        if hs > 0 {
+            for p in 0..pts.len() {
+                pts.history[p * hs..(p + 1) * hs].copy_from_slice(&trial.history[p * hs..(p + 1) * hs]);
+            }
+        }
+        self.conn_current = false;
+    }
+
+    /// Advance one load step, cutting back as needed.
+    pub fn step(&mut self) -> Result<StepReport, StepError> {
+        if self.is_finished() {
+            return Err(StepError::Finished(self.settings.load_steps));
+        }
+        let start = Instant::now();
+        let step = self.step + 1;
+        let target = step as f64 / self.settings.load_steps as f64;
+        let mut increment = target - self.load_factor;
+        let (mut substeps, mut cutbacks, mut iterations) = (0, 0, 0);
+        let mut residuals = Vec::new();
+        let (mut active_nodes, mut dofs) = (0, 0);
+        while self.load_factor < target - 1e-12 * target.abs().max(1.0) {
+            self.connect()?;
+            active_nodes = self.conn.active_nodes().len();
+            dofs = active_nodes * D;
+            let lambda = (self.load_factor + increment).min(target);
+            match self.attempt(lambda) {
+                Ok(report) => {
+                    substeps += 1;
+                    iterations += report.iterations();
+                    residuals = report.residuals;
+                }
+                Err(e) => {
+                    cutbacks += 1;
+                    tracing::warn!(step, load_factor = lambda, error = %e, "Newton failed; cutting the load step back");
+                    if cutbacks > self.settings.max_cutbacks {
+                        return Err(StepError::NotConverged {
+                            step,
+                            load_factor: lambda,
+                            cutbacks: cutbacks - 1,
+                            reason: e.to_string(),
+                            residuals: e.report().residuals.clone(),
+                        });
+                    }
+                    increment /= 2.0;
+                }
+            }
+        }
+        self.step = step;
+        Ok(StepReport {
+            step,
+            load_factor: self.load_factor,
+            substeps,
+            cutbacks,
+            iterations,
+            residuals,
+            active_nodes,
+            dofs,
+            wall_time: start.elapsed(),
+        })
+    }
+
+    /// Run every remaining step, calling `on_step` after each.
+    pub fn run<E>(
+        &mut self,
+        mut on_step: impl FnMut(&StepReport, &Model<D>) -> Result<(), E>,
+    ) -> Result<(), RunError<E>>
+    where
+        E: std::error::Error + 'static,
+    {
+        while !self.is_finished() {
+            let report = self.step().map_err(RunError::Step)?;
+            on_step(&report, &self.model).map_err(RunError::Observer)?;
+        }
+        Ok(())
+    }
+}
+
+/// A run stopped by the analysis or by the step observer (e.g. an output error).
+#[derive(Debug, thiserror::Error)]
+pub enum RunError<E: std::error::Error + 'static> {
+    #[error(transparent)]
+    Step(StepError),
+    #[error(transparent)]
+    Observer(E),
+}

@@ -1,0 +1,251 @@
+//! One implicit step as a Newton system (DESIGN.md "Data flow of one implicit step").
+//!
+//! The unknown is the incremental nodal displacement Δu of the active nodes. For a given
+//! Δu every point recomputes its kinematics and stress from its *committed* state
+//! (THEORY.md §7), so iterations never compound; the residual and tangent are then
+//! gathered node by node:
+//!   f_int,I = Σ_p v_p σ_p ∂N_I/∂x,   K_IJ = Σ_p v_p (∂N_I/∂x)_j a_ijkl (∂N_J/∂x)_l
+//! with a the spatial tangent (finite strain, THEORY.md §2) or D (small strain, §3).
+
+use crate::model::{Kinematics, Model};
+use loam_constitutive::{finite_strain_update, small_strain_update, ConstitutiveError, Tensor4};
+use loam_grid::Connectivity;
+use loam_solve::{gather_nodal, BlockPattern, Couplings, NewtonProblem};
+use nalgebra::{Matrix3, SMatrix, SVector};
+use rayon::prelude::*;
+
+/// Connectivity seen as the coupling structure of the assembly: points are elements.
+pub(crate) struct PointCouplings<'a, const D: usize>(pub &'a Connectivity<D>);
+
+impl<const D: usize> Couplings for PointCouplings<'_, D> {
+    fn num_nodes(&self) -> usize {
+        self.0.active_nodes().len()
+    }
+    fn elements_of(&self, node: usize) -> &[(u32, u32)] {
+        self.0.node_points().of(node)
+    }
+    fn nodes_of(&self, element: usize) -> &[u32] {
+        self.0.support_nodes(element)
+    }
+}
+
+/// A material point whose update failed inside a Newton iteration.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("material point {point}: {source}")]
+pub struct PointUpdateError {
+    pub point: usize,
+    pub source: ConstitutiveError,
+}
+
+/// Trial state of every point for the current Newton iterate. Reused across iterations and
+/// steps; the committed state in the model only changes when a step converges.
+#[derive(Debug, Default)]
+pub(crate) struct TrialState<const D: usize> {
+    pub delta_f: Vec<Matrix3<f64>>,
+    pub stress: Vec<Matrix3<f64>>,
+    pub elastic_strain: Vec<Matrix3<f64>>,
+    pub history: Vec<f64>,
+    pub volume: Vec<f64>,
+    /// v_p times the in-plane part of the tangent, (i·D + j, k·D + l) = v a_ijkl.
+    pub tangent: Vec<SMatrix<f64, 9, 9>>,
+    /// Spatial gradients ∂N/∂x, `stride` per point.
+    pub grad_x: Vec<SVector<f64, D>>,
+}
+
+impl<const D: usize> TrialState<D> {
+    pub fn resize(&mut self, n_points: usize, stride: usize, history_stride: usize) {
+        self.delta_f.resize(n_points, Matrix3::identity());
+        self.stress.resize(n_points, Matrix3::zeros());
+        self.elastic_strain.resize(n_points, Matrix3::zeros());
+        // At least one slot per point so that every point gets its own chunk.
+        self.history.resize(n_points * history_stride.max(1), 0.0);
+        self.volume.resize(n_points, 0.0);
+        self.tangent.resize(n_points, SMatrix::zeros());
+        self.grad_x.resize(n_points * stride, SVector::zeros());
+    }
+}
+
+/// The Newton system of one load step.
+pub(crate) struct StepSystem<'a, const D: usize> {
+    pub model: &'a Model<D>,
+    pub conn: &'a Connectivity<D>,
+    pub pattern: &'a BlockPattern,
+    pub values: &'a mut Vec<f64>,
+    pub constrained: &'a [bool],
+    pub f_ext: &'a [f64],
+    pub trial: &'a mut TrialState<D>,
+}
+
+/// Embed the in-plane displacement-increment gradient in 3×3 (plane strain: zero out of plane).
+#[inline]
+fn embed<const D: usize>(g: &SMatrix<f64, D, D>) -> Matrix3<f64> {
+    let mut m = Matrix3::zeros();
+    for i in 0..D {
+        for j in 0..D {
+            m[(i, j)] = g[(i, j)];
+        }
+    }
+    m
+}
+
+/// In-plane block (i·D + j, k·D + l) of a full 9×9 tensor, scaled; unused entries zero.
+#[inline]
+fn in_plane<const D: usize>(a: &Tensor4, scale: f64) -> SMatrix<f64, 9, 9> {
+    if D == 3 {
+        return a * scale;
+    }
+    let mut out = SMatrix::<f64, 9, 9>::zeros();
+    for i in 0..D {
+        for j in 0..D {
+            for k in 0..D {
+                for l in 0..D {
+                    out[(i * D + j, k * D + l)] = scale * a[(3 * i + j, 3 * k + l)];
+                }
+            }
+        }
+    }
+    out
+}
+
+impl<const D: usize> StepSystem<'_, D> {
+    /// Update every point's trial state for the increment `du`.
+    fn update_points(&mut self, du: &[f64]) -> Result<(), PointUpdateError> {
+        let model = self.model;
+        let conn = self.conn;
+        let pts = &model.points;
+        let hs = pts.history_stride();
+        let stride = conn.stride();
+        let kin = model.kinematics;
+        let t = &mut *self.trial;
+        let hist_chunks = t.history.par_chunks_mut(hs.max(1));
+        let first_error = (
+            t.delta_f.par_iter_mut(),
+            t.stress.par_iter_mut(),
+            t.elastic_strain.par_iter_mut(),
+            t.volume.par_iter_mut(),
+            t.tangent.par_iter_mut(),
+            t.grad_x.par_chunks_mut(stride),
+        )
+            .into_par_iter()
+            .zip(hist_chunks)
+            .enumerate()
+            .filter_map(|(p, ((df, stress, elastic, volume, tangent, grad_x), h_out))| {
+                let nodes = conn.support_nodes(p);
+                let grads = conn.support_gradients(p);
+                let mut g = SMatrix::<f64, D, D>::zeros();
+                for (a, &node) in nodes.iter().enumerate() {
+                    let u = SVector::<f64, D>::from_fn(|i, _| du[node as usize * D + i]);
+                    g += u * grads[a].transpose();
+                }
+                let law = &*model.materials[pts.material[p] as usize];
+                let h_n = pts.history(p);
+                let h_out = &mut h_out[..hs];
+                match kin {
+                    Kinematics::FiniteStrain => {
+                        let dfd = SMatrix::<f64, D, D>::identity() + g;
+                        let f3 = Matrix3::identity() + embed(&g);
+                        let det_df = f3.determinant();
+                        let j_total = det_df * pts.deformation_gradient[p].determinant();
+                        let upd = match finite_strain_update(law, &f3, &pts.elastic_strain[p], j_total, h_n, h_out) {
+                            Ok(u) => u,
+                            Err(source) => return Some(PointUpdateError { point: p, source }),
+                        };
+                        // det ΔF > 0 was checked by the update, so ΔF is invertible.
+                        let inv = dfd.try_inverse().unwrap_or_else(SMatrix::identity);
+                        for a in 0..nodes.len() {
+                            grad_x[a] = inv.transpose() * grads[a];
+                        }
+                        *df = f3;
+                        *stress = upd.cauchy;
+                        *elastic = upd.be;
+                        *volume = det_df * pts.volume[p];
+                        *tangent = in_plane::<D>(&upd.spatial_tangent, *volume);
+                    }
+                    Kinematics::SmallStrain => {
+                        let g3 = embed(&g);
+                        let upd = match small_strain_update(law, &g3, &pts.elastic_strain[p], h_n, h_out) {
+                            Ok(u) => u,
+                            Err(source) => return Some(PointUpdateError { point: p, source }),
+                        };
+                        grad_x[..nodes.len()].copy_from_slice(grads);
+                        *df = Matrix3::identity() + g3;
+                        *stress = upd.stress;
+                        *elastic = upd.elastic_strain;
+                        *volume = pts.volume[p];
+                        *tangent = in_plane::<D>(&upd.tangent, *volume);
+                    }
+                }
+                None
+            })
+            .min_by_key(|e| e.point);
+        match first_error {
+            Some(e) => Err(e),
+            None => Ok(()),
+        }
+    }
+}
+
+impl<const D: usize> NewtonProblem for StepSystem<'_, D> {
+    type Error = PointUpdateError;
+
+    fn num_dofs(&self) -> usize {
+        self.conn.active_nodes().len() * D
+    }
+
+    fn evaluate(&mut self, du: &[f64], r: &mut [f64]) -> Result<f64, PointUpdateError> {
+        self.update_points(du)?;
+        let trial = &*self.trial;
+        let conn = self.conn;
+        let stride = conn.stride();
+        gather_nodal(&PointCouplings(conn), D, r, |p, a, out| {
+            let s = &trial.stress[p];
+            let g = &trial.grad_x[p * stride + a];
+            let v = trial.volume[p];
+            for i in 0..D {
+                let mut f = 0.0;
+                for j in 0..D {
+                    f += s[(i, j)] * g[j];
+                }
+                out[i] += v * f;
+            }
+        });
+        // r = f_int − f_ext; the reference is the external force on free dofs plus the
+        // support reactions (= f_int) on constrained ones (THEORY.md §7).
+        let mut reference = 0.0;
+        for ((ri, &fe), &fixed) in r.iter_mut().zip(self.f_ext).zip(self.constrained) {
+            if fixed {
+                reference += *ri * *ri;
+                *ri = 0.0;
+            } else {
+                reference += fe * fe;
+                *ri -= fe;
+            }
+        }
+        Ok(reference.sqrt())
+    }
+
+    fn assemble(&mut self) {
+        let trial = &*self.trial;
+        let stride = self.conn.stride();
+        self.pattern.assemble(&PointCouplings(self.conn), self.constrained, self.values, |p, a, b, out| {
+            let ga = &trial.grad_x[p * stride + a];
+            let gb = &trial.grad_x[p * stride + b];
+            let t = &trial.tangent[p];
+            for i in 0..D {
+                for k in 0..D {
+                    let mut s = 0.0;
+                    for j in 0..D {
+                        for l in 0..D {
+                            s += ga[j] * t[(i * D + j, k * D + l)] * gb[l];
+                        }
+                    }
+                    out[i * D + k] += s;
+                }
+            }
+        });
+    }
+
+    fn matrix(&self) -> (&BlockPattern, &[f64]) {
+        (self.pattern, self.values)
+    }
+}

@@ -1,0 +1,208 @@
+//! Closed-form references of the verification problems (`../shared/VERIFICATION.md`,
+//! `docs/verification.md`) and the error norms measured against them. Shared by the tests,
+//! `cargo xtask verify`, the benches and the examples, so every consumer measures the same
+//! thing the same way.
+
+use crate::points::PointStore;
+
+/// Principal branch W₀ of the Lambert W function for x ≥ 0 (w e^w = x), by Halley's
+/// iteration from a log-based start; converged to rounding.
+pub fn lambert_w0(x: f64) -> f64 {
+    assert!(x >= 0.0 && x.is_finite(), "lambert_w0 is implemented for finite x >= 0, got {x}");
+    if x == 0.0 {
+        return 0.0;
+    }
+    let mut w = if x < 1.0 { x / (1.0 + x) } else { (1.0 + x).ln() * (1.0 - (1.0 + (1.0 + x).ln()).ln() / (2.0 + (1.0 + x).ln())) };
+    for _ in 0..50 {
+        let ew = w.exp();
+        let f = w * ew - x;
+        let wp1 = w + 1.0;
+        let step = f / (ew * wp1 - (w + 2.0) * f / (2.0 * wp1));
+        w -= step;
+        if step.abs() <= 1e-16 * w.abs().max(1e-300) {
+            break;
+        }
+    }
+    w
+}
+
+/// The self-weight column of V1: height `h0`, Young's modulus, density, gravity (ν = 0,
+/// rollers on the sides so that the cross-section does not change).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Column {
+    pub height: f64,
+    pub young: f64,
+    pub density: f64,
+    pub gravity: f64,
+}
+
+impl Column {
+    /// V1a: small deformation, E = 1e6, ρ = 80, g = 10, H = 50.
+    pub const V1A: Column = Column { height: 50.0, young: 1e6, density: 80.0, gravity: 10.0 };
+    /// V1b: large deformation, 3D, E = 1e3, ρ = 50, g = 9.81, H = 0.8.
+    pub const V1B: Column = Column { height: 0.8, young: 1e3, density: 50.0, gravity: 9.81 };
+    /// V1c: large deformation, 2D, E = 1e5, ρ = 2000, g = 10, H = 10.
+    pub const V1C: Column = Column { height: 10.0, young: 1e5, density: 2000.0, gravity: 10.0 };
+
+    /// ρ₀ g H₀: the stress scale of the error norm.
+    pub fn stress_scale(&self) -> f64 {
+        self.density * self.gravity * self.height
+    }
+
+    /// Vertical Cauchy stress at the point of initial height `y0`, for any law and any
+    /// deformation: the weight above per unit (unchanged) area.
+    pub fn stress_yy(&self, y0: f64) -> f64 {
+        -self.density * self.gravity * (self.height - y0)
+    }
+
+    /// Stretch of Hencky elasticity at initial height `y0`: λ = W(s)/s, s = ρ₀g(H₀ − Y)/E.
+    pub fn hencky_stretch(&self, y0: f64) -> f64 {
+        let s = self.density * self.gravity * (self.height - y0) / self.young;
+        if s <= 0.0 {
+            1.0
+        } else {
+            lambert_w0(s) / s
+        }
+    }
+
+    /// Vertical displacement of the material at initial height `y0`, Hencky elasticity:
+    /// u(Y) = ∫₀^Y (λ(Y') − 1) dY', by 64-point Gauss–Legendre on 16 panels (the integrand
+    /// is smooth; converged to ~1e-15 relative).
+    pub fn hencky_displacement(&self, y0: f64) -> f64 {
+        gauss_legendre(|y| self.hencky_stretch(y) - 1.0, 0.0, y0, 16)
+    }
+
+    /// Vertical displacement of linear small-strain elasticity (M = E for ν = 0):
+    /// u(Y) = −(ρ₀g/E)(H₀Y − Y²/2).
+    pub fn small_strain_displacement(&self, y0: f64) -> f64 {
+        -(self.density * self.gravity / self.young) * (self.height * y0 - 0.5 * y0 * y0)
+    }
+}
+
+/// ∫_a^b f by `panels` panels of 8-point Gauss–Legendre.
+fn gauss_legendre(f: impl Fn(f64) -> f64, a: f64, b: f64, panels: usize) -> f64 {
+    // 8-point nodes and weights (Abramowitz & Stegun 25.4.30).
+    const X: [f64; 4] = [0.183_434_642_495_649_8, 0.525_532_409_916_329, 0.796_666_477_413_626_7, 0.960_289_856_497_536_3];
+    const W: [f64; 4] = [0.362_683_783_378_362, 0.313_706_645_877_887_3, 0.222_381_034_453_374_5, 0.101_228_536_290_376_3];
+    let h = (b - a) / panels as f64;
+    let mut sum = 0.0;
+    for k in 0..panels {
+        let c = a + (k as f64 + 0.5) * h;
+        for i in 0..4 {
+            sum += W[i] * (f(c - 0.5 * h * X[i]) + f(c + 0.5 * h * X[i]));
+        }
+    }
+    sum * 0.5 * h
+}
+
+/// Errors of a column run against the closed form.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ColumnErrors {
+    /// e_σ = Σ |σ_yy,p − σ_yy(Y_p)| V⁰_p / (Σ V⁰_p · ρ₀gH₀) (AMPLE; Wyser et al. 2020).
+    pub stress: f64,
+    /// |u_num − u_ref| / |u_ref| at the highest point.
+    pub top_displacement: f64,
+    /// Numerical displacement of the highest point.
+    pub top_displacement_value: f64,
+}
+
+/// Measure a finished column run. `vertical` is the axis of gravity; `reference_u` the
+/// closed-form displacement at an initial height.
+pub fn column_errors<const D: usize>(
+    points: &PointStore<D>,
+    column: &Column,
+    vertical: usize,
+    reference_u: impl Fn(f64) -> f64,
+) -> ColumnErrors {
+    let mut num = 0.0;
+    let mut vol = 0.0;
+    let mut top = 0;
+    for p in 0..points.len() {
+        let y0 = points.position0[p][vertical];
+        let s = points.stress[p][(vertical, vertical)];
+        num += (s - column.stress_yy(y0)).abs() * points.volume0[p];
+        vol += points.volume0[p];
+        if y0 > points.position0[top][vertical] {
+            top = p;
+        }
+    }
+    let y0 = points.position0[top][vertical];
+    let u = points.position[top][vertical] - y0;
+    let u_ref = reference_u(y0);
+    ColumnErrors {
+        stress: num / (vol * column.stress_scale()),
+        top_displacement: (u - u_ref).abs() / u_ref.abs(),
+        top_displacement_value: u,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lambert_w_satisfies_its_definition() {
+        for &x in &[1e-12, 1e-3, 0.04, 0.392, 1.0, 2.0, 10.0, 1e3] {
+            let w = lambert_w0(x);
+            assert!((w * w.exp() - x).abs() <= 1e-14 * x.max(1.0), "x={x} w={w}");
+        }
+        // W(1) = Ω, the omega constant.
+        assert!((lambert_w0(1.0) - 0.567_143_290_409_783_8).abs() < 1e-15);
+    }
+
+    /// The top displacements of VERIFICATION.md's table, computed independently there.
+    #[test]
+    fn column_reference_displacements_match_the_published_table() {
+        let cases = [(Column::V1A, -0.962009), (Column::V1B, -0.115671), (Column::V1C, -3.919632)];
+        for (c, u) in cases {
+            let got = c.hencky_displacement(c.height);
+            // the table gives 6 decimals
+            assert!((got - u).abs() < 5e-7, "{c:?}: {got} vs {u}");
+        }
+        assert!((Column::V1A.small_strain_displacement(50.0) + 1.0).abs() < 1e-12);
+    }
+}
+
+/// The V1 column as a model: one cell wide (`width`; the cell is `width` across in every
+/// horizontal axis), `cells_high` cells over the column height plus one empty cell above,
+/// `points_per_cell`^D points per cell, rollers on the sides and the base, ν = 0 elastic,
+/// gravity along −y (axis 1) in 2D and 3D.
+pub fn column_model<const D: usize>(
+    column: &Column,
+    width: f64,
+    cells_high: usize,
+    points_per_cell: usize,
+    basis: crate::grid::BasisKind,
+    kinematics: crate::implicit::Kinematics,
+) -> crate::implicit::Model<D> {
+    use crate::constitutive::Elastic;
+    use crate::grid::Grid;
+    use crate::implicit::{Model, PlaneConstraint};
+    use crate::points::Shape;
+    use nalgebra::SVector;
+    use std::sync::Arc;
+    assert!(D >= 2);
+    let h = column.height / cells_high as f64;
+    let cell = SVector::<f64, D>::from_fn(|a, _| if a == 1 { h } else { width });
+    let mut cells = [1usize; D];
+    cells[1] = cells_high + 1;
+    let grid = Grid::new(SVector::zeros(), cell, cells).expect("valid column grid");
+    let mut points = PointStore::new();
+    let max = SVector::<f64, D>::from_fn(|a, _| if a == 1 { column.height } else { width });
+    points
+        .fill(&grid, &Shape::Box { min: SVector::zeros(), max }, points_per_cell, column.density, 0)
+        .expect("column fits the grid");
+    let mut constraints = Vec::new();
+    for a in 0..D {
+        let mut fixed = [false; 3];
+        fixed[a] = true;
+        constraints.push(PlaneConstraint { axis: a, plane: 0, fixed });
+        if a != 1 {
+            constraints.push(PlaneConstraint { axis: a, plane: 1, fixed });
+        }
+    }
+    let mut gravity = SVector::<f64, D>::zeros();
+    gravity[1] = -column.gravity;
+    let law = Elastic::new(column.young, 0.0).expect("valid elastic constants");
+    Model::new(grid, basis, kinematics, points, vec![Arc::new(law)], constraints, gravity).expect("valid column model")
+}
