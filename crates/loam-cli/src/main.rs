@@ -1,1 +1,106 @@
-fn main() {}
+//! The `loam` command-line program: run or check a scene file.
+
+use anyhow::Context;
+use clap::{Parser, Subcommand};
+use indicatif::{ProgressBar, ProgressStyle};
+use loam_io::{run_scene, LoadedScene};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(name = "loam", version, about = "Implicit material point method for geotechnics")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run a scene and write its outputs (VTU/PVD frames, run_log.csv, points_final.csv).
+    Run {
+        /// Scene file (RON), see docs/scene-format.md.
+        scene: PathBuf,
+        /// Output folder [default: out/<scene name>].
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// No progress bar.
+        #[arg(long, short)]
+        quiet: bool,
+    },
+    /// Validate a scene completely (down to points and constraints) without running it.
+    Check {
+        /// Scene file (RON).
+        scene: PathBuf,
+    },
+}
+
+fn main() -> ExitCode {
+    match run(Cli::parse()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(cli: Cli) -> anyhow::Result<()> {
+    match cli.command {
+        Command::Check { scene } => {
+            let loaded = LoadedScene::read(&scene)?;
+            let (points, dofs) = match loaded.scene.dimension {
+                3 => {
+                    let a = loaded.build::<3>()?;
+                    (a.model().points.len(), a.model().grid.num_nodes() * 3)
+                }
+                _ => {
+                    let a = loaded.build::<2>()?;
+                    (a.model().points.len(), a.model().grid.num_nodes() * 2)
+                }
+            };
+            println!(
+                "{}: ok — {}D, {points} material points, grid of {dofs} nodal dofs at most",
+                scene.display(),
+                loaded.scene.dimension
+            );
+            Ok(())
+        }
+        Command::Run { scene, out, quiet } => {
+            let loaded = LoadedScene::read(&scene)?;
+            let out = out.unwrap_or_else(|| {
+                PathBuf::from("out").join(scene.file_stem().map(|s| s.to_owned()).unwrap_or_default())
+            });
+            let bar = if quiet { ProgressBar::hidden() } else { ProgressBar::new(0) };
+            bar.set_style(
+                ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:40} step {pos}/{len} {msg}")
+                    .expect("valid template"),
+            );
+            let summary = run_scene(&loaded, &out, &mut |r, total| {
+                bar.set_length(total as u64);
+                bar.set_position(r.step as u64);
+                bar.set_message(format!(
+                    "λ={:.3} its={} res={:.1e}{}",
+                    r.load_factor,
+                    r.iterations,
+                    r.final_residual(),
+                    if r.cutbacks > 0 { format!(" cut-backs={}", r.cutbacks) } else { String::new() }
+                ));
+            })
+            .with_context(|| format!("running {}", scene.display()))?;
+            bar.finish_and_clear();
+            println!(
+                "{}: {} steps, {} points, {} Newton iterations (max {} per step), {} cut-backs, {}, {:.3} s; outputs in {}",
+                scene.display(),
+                summary.steps,
+                summary.points,
+                summary.newton_iterations,
+                summary.max_iterations_per_step,
+                summary.cutbacks,
+                summary.solver,
+                summary.wall_time.as_secs_f64(),
+                summary.output_dir.display()
+            );
+            Ok(())
+        }
+    }
+}

@@ -1,3 +1,10 @@
-//! loam-io
+//! Everything that knows a file format: the RON scene schema and its validation
+//! (`scene`), the output writers (`output`: VTU, PVD, CSV) and the runner that ties a scene
+//! to an analysis and its outputs (`runner`).
 
 pub mod output;
+pub mod runner;
+pub mod scene;
+
+pub use runner::{run_scene, write_points_csv, RunFailure, RunSummary};
+pub use scene::{LoadedScene, Scene, SceneError};

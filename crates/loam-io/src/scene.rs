@@ -1,0 +1,538 @@
+//! Scene files: the RON schema of a run (`docs/scene-format.md`), its parsing and its
+//! validation. Every error names the file, the line and column, and what would be valid;
+//! a scene is checked completely — down to points outside the grid and constraints that
+//! hold no node — before the first step runs.
+
+use loam_constitutive::{ConstitutiveLaw, Elastic};
+use loam_grid::{BasisKind, Grid};
+use loam_implicit::{Kinematics, Model, PlaneConstraint, QuasiStatic, QuasiStaticSettings, StepError};
+use loam_points::{PointStore, Shape};
+use loam_solve::{LinearSolverKind, NewtonSettings};
+use nalgebra::{SVector, Vector2};
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// A scene as written in the file.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// One line saying what the scene is.
+    #[serde(default)]
+    pub title: String,
+    /// 2 (plane strain) or 3.
+    pub dimension: usize,
+    pub grid: GridSpec,
+    #[serde(default = "default_basis")]
+    pub basis: BasisSpec,
+    #[serde(default = "default_kinematics")]
+    pub kinematics: KinematicsSpec,
+    pub materials: Vec<MaterialSpec>,
+    pub bodies: Vec<BodySpec>,
+    /// Body force per unit mass at full load; D components.
+    pub gravity: Vec<f64>,
+    #[serde(default)]
+    pub constraints: Vec<ConstraintSpec>,
+    pub analysis: AnalysisSpec,
+    #[serde(default)]
+    pub solver: SolverSpec,
+    #[serde(default)]
+    pub output: OutputSpec,
+}
+
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct GridSpec {
+    pub origin: Vec<f64>,
+    pub cell_size: Vec<f64>,
+    pub cells: Vec<usize>,
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+pub enum BasisSpec {
+    Linear,
+    Gimp,
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+pub enum KinematicsSpec {
+    SmallStrain,
+    FiniteStrain,
+}
+
+fn default_basis() -> BasisSpec {
+    BasisSpec::Gimp
+}
+
+fn default_kinematics() -> KinematicsSpec {
+    KinematicsSpec::FiniteStrain
+}
+
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialSpec {
+    pub name: String,
+    pub density: f64,
+    pub law: LawSpec,
+}
+
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub enum LawSpec {
+    /// Linear elasticity in small strain; Hencky elasticity in finite strain.
+    Elastic { young: f64, poisson: f64 },
+}
+
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct BodySpec {
+    /// Name of a material in `materials`.
+    pub material: String,
+    pub shape: ShapeSpec,
+    #[serde(default = "default_ppc")]
+    pub points_per_cell: usize,
+}
+
+fn default_ppc() -> usize {
+    2
+}
+
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub enum ShapeSpec {
+    Box { min: Vec<f64>, max: Vec<f64> },
+    /// 2D only: vertices [x, y] in order.
+    Polygon { vertices: Vec<[f64; 2]> },
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+pub enum Axis {
+    X,
+    Y,
+    Z,
+}
+
+impl Axis {
+    fn index(self) -> usize {
+        match self {
+            Axis::X => 0,
+            Axis::Y => 1,
+            Axis::Z => 2,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub enum ConstraintSpec {
+    /// The displacement normal to the grid plane `axis = at` is zero.
+    Roller { axis: Axis, at: f64 },
+    /// All displacement components on the grid plane `axis = at` are zero.
+    Fixed { axis: Axis, at: f64 },
+}
+
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub enum AnalysisSpec {
+    /// Loads applied in `load_steps` equal steps with Newton's method per step.
+    QuasiStatic {
+        load_steps: usize,
+        #[serde(default = "default_cutbacks")]
+        max_cutbacks: usize,
+    },
+}
+
+fn default_cutbacks() -> usize {
+    8
+}
+
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct SolverSpec {
+    pub residual_tolerance: f64,
+    pub increment_tolerance: f64,
+    pub max_iterations: usize,
+    /// `None`: chosen from the tangent's symmetry.
+    pub linear: Option<LinearSpec>,
+}
+
+impl Default for SolverSpec {
+    fn default() -> Self {
+        let n = NewtonSettings::default();
+        Self {
+            residual_tolerance: n.residual_tolerance,
+            increment_tolerance: n.increment_tolerance,
+            max_iterations: n.max_iterations,
+            linear: None,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+pub enum LinearSpec {
+    Cholesky,
+    Lu,
+}
+
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct OutputSpec {
+    /// Write a VTU frame every this many steps (and always after the last); 0 = none.
+    pub vtu_every: usize,
+    /// Write `points_final.csv` after the last step.
+    pub final_csv: bool,
+}
+
+impl Default for OutputSpec {
+    fn default() -> Self {
+        Self { vtu_every: 1, final_csv: true }
+    }
+}
+
+/// A scene error, located in its file.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{}:{line}:{column}: {message}", file.display())]
+pub struct SceneError {
+    pub file: PathBuf,
+    pub line: usize,
+    pub column: usize,
+    pub message: String,
+}
+
+/// One step of a path into the scene, for locating an error in the text.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Seg<'a> {
+    Key(&'a str),
+    Index(usize),
+}
+
+/// A parsed scene with its source, so that later errors can point into the file.
+#[derive(Debug, Clone)]
+pub struct LoadedScene {
+    pub path: PathBuf,
+    pub source: String,
+    pub scene: Scene,
+}
+
+impl LoadedScene {
+    /// Read and parse a scene file (syntax, unknown keys, missing fields, wrong types).
+    pub fn read(path: &Path) -> Result<Self, SceneError> {
+        let source = std::fs::read_to_string(path).map_err(|e| SceneError {
+            file: path.to_owned(),
+            line: 0,
+            column: 0,
+            message: format!("cannot read the scene file: {e}"),
+        })?;
+        Self::parse(path, source)
+    }
+
+    /// Parse scene text; `path` is only used in error messages.
+    pub fn parse(path: &Path, source: String) -> Result<Self, SceneError> {
+        let scene: Scene = ron::from_str(&source).map_err(|e| SceneError {
+            file: path.to_owned(),
+            line: e.span.start.line,
+            column: e.span.start.col,
+            message: e.code.to_string(),
+        })?;
+        Ok(Self { path: path.to_owned(), source, scene })
+    }
+
+    fn error(&self, path: &[Seg], message: impl Into<String>) -> SceneError {
+        let (line, column) = locate(&self.source, path);
+        SceneError { file: self.path.clone(), line, column, message: message.into() }
+    }
+
+    /// Build the model and analysis of a `D`-dimensional scene, checking everything that can
+    /// be checked before the first step. `D` must equal the scene's `dimension`.
+    pub fn build<const D: usize>(&self) -> Result<QuasiStatic<D>, SceneError> {
+        let s = &self.scene;
+        if s.dimension != D {
+            return Err(self.error(&[Seg::Key("dimension")], format!("dimension is {}; loam runs 2 (plane strain) or 3", s.dimension)));
+        }
+        let vec_d = |v: &[f64], path: &[Seg], what: &str| -> Result<SVector<f64, D>, SceneError> {
+            if v.len() != D {
+                return Err(self.error(path, format!("{what} has {} components; a {D}D scene needs {D}", v.len())));
+            }
+            if let Some(x) = v.iter().find(|x| !x.is_finite()) {
+                return Err(self.error(path, format!("{what} has the value {x}; every component must be finite")));
+            }
+            Ok(SVector::from_column_slice(v))
+        };
+        // Grid.
+        let origin = vec_d(&s.grid.origin, &[Seg::Key("grid"), Seg::Key("origin")], "grid.origin")?;
+        let cell = vec_d(&s.grid.cell_size, &[Seg::Key("grid"), Seg::Key("cell_size")], "grid.cell_size")?;
+        if s.grid.cells.len() != D {
+            return Err(self.error(&[Seg::Key("grid"), Seg::Key("cells")], format!("grid.cells has {} entries; a {D}D scene needs {D}", s.grid.cells.len())));
+        }
+        let mut cells = [0usize; D];
+        cells.copy_from_slice(&s.grid.cells);
+        let grid = Grid::new(origin, cell, cells).map_err(|e| {
+            let key = match e {
+                loam_grid::GridError::CellSize { .. } => "cell_size",
+                loam_grid::GridError::CellCount { .. } | loam_grid::GridError::TooLarge { .. } => "cells",
+                loam_grid::GridError::Origin { .. } => "origin",
+            };
+            self.error(&[Seg::Key("grid"), Seg::Key(key)], e.to_string())
+        })?;
+        // Materials.
+        if s.materials.is_empty() {
+            return Err(self.error(&[Seg::Key("materials")], "no materials: define at least one, e.g. Material(name: \"soil\", density: 2000.0, law: Elastic(young: 1e5, poisson: 0.3))"));
+        }
+        let mut laws: Vec<Arc<dyn ConstitutiveLaw>> = Vec::new();
+        for (i, m) in s.materials.iter().enumerate() {
+            let at = |key| [Seg::Key("materials"), Seg::Index(i), Seg::Key(key)];
+            if !(m.density.is_finite() && m.density > 0.0) {
+                return Err(self.error(&at("density"), format!("material \"{}\": density is {}; it must be a positive number", m.name, m.density)));
+            }
+            if s.materials[..i].iter().any(|o| o.name == m.name) {
+                return Err(self.error(&at("name"), format!("material name \"{}\" is used twice; names must be unique", m.name)));
+            }
+            match m.law {
+                LawSpec::Elastic { young, poisson } => {
+                    if !(young.is_finite() && young > 0.0) {
+                        return Err(self.error(&[Seg::Key("materials"), Seg::Index(i), Seg::Key("law"), Seg::Key("young")], format!("material \"{}\": Young's modulus is {young}; it must be positive", m.name)));
+                    }
+                    if !(poisson.is_finite() && poisson > -1.0 && poisson < 0.5) {
+                        return Err(self.error(&[Seg::Key("materials"), Seg::Index(i), Seg::Key("law"), Seg::Key("poisson")], format!("material \"{}\": Poisson's ratio is {poisson}; it must lie in (-1, 0.5)", m.name)));
+                    }
+                    let law = Elastic::new(young, poisson).map_err(|e| self.error(&at("law"), e.to_string()))?;
+                    laws.push(Arc::new(law));
+                }
+            }
+        }
+        // Bodies.
+        if s.bodies.is_empty() {
+            return Err(self.error(&[Seg::Key("bodies")], "no bodies: add at least one Body(material: ..., shape: Box(min: [...], max: [...]))"));
+        }
+        let mut points = PointStore::<D>::new();
+        for (i, b) in s.bodies.iter().enumerate() {
+            let at = |key| [Seg::Key("bodies"), Seg::Index(i), Seg::Key(key)];
+            let Some(mi) = s.materials.iter().position(|m| m.name == b.material) else {
+                let names: Vec<&str> = s.materials.iter().map(|m| m.name.as_str()).collect();
+                return Err(self.error(&at("material"), format!("body {i} uses material \"{}\", which is not defined; defined: {names:?}", b.material)));
+            };
+            let shape = match &b.shape {
+                ShapeSpec::Box { min, max } => Shape::Box {
+                    min: vec_d(min, &[Seg::Key("bodies"), Seg::Index(i), Seg::Key("shape"), Seg::Key("min")], "Box min")?,
+                    max: vec_d(max, &[Seg::Key("bodies"), Seg::Index(i), Seg::Key("shape"), Seg::Key("max")], "Box max")?,
+                },
+                ShapeSpec::Polygon { vertices } => {
+                    if D != 2 {
+                        return Err(self.error(&at("shape"), "Polygon shapes are 2D only; use Box in 3D"));
+                    }
+                    Shape::Polygon(vertices.iter().map(|v| Vector2::new(v[0], v[1])).collect())
+                }
+            };
+            points
+                .fill(&grid, &shape, b.points_per_cell, s.materials[mi].density, mi as u32)
+                .map_err(|e| self.error(&at("shape"), format!("body {i}: {e}")))?;
+        }
+        // Loads and constraints.
+        let gravity = vec_d(&s.gravity, &[Seg::Key("gravity")], "gravity")?;
+        let mut constraints = Vec::new();
+        for (i, c) in s.constraints.iter().enumerate() {
+            let (axis, at, all) = match *c {
+                ConstraintSpec::Roller { axis, at } => (axis, at, false),
+                ConstraintSpec::Fixed { axis, at } => (axis, at, true),
+            };
+            let here = [Seg::Key("constraints"), Seg::Index(i)];
+            let a = axis.index();
+            if a >= D {
+                return Err(self.error(&here, format!("constraint {i} is on axis {axis:?}, which a {D}D scene does not have")));
+            }
+            let Some(plane) = grid.node_plane(a, at) else {
+                let h = grid.cell_size()[a];
+                let o = grid.origin()[a];
+                return Err(self.error(&here, format!(
+                    "constraint {i}: {axis:?} = {at} is not a plane of grid nodes; planes lie at {o} + k·{h} for k = 0..={}",
+                    grid.cells()[a]
+                )));
+            };
+            let mut fixed = [all; 3];
+            if !all {
+                fixed = [false; 3];
+                fixed[a] = true;
+            }
+            constraints.push(PlaneConstraint { axis: a, plane, fixed });
+        }
+        let (load_steps, max_cutbacks) = match s.analysis {
+            AnalysisSpec::QuasiStatic { load_steps, max_cutbacks } => (load_steps, max_cutbacks),
+        };
+        if load_steps == 0 {
+            return Err(self.error(&[Seg::Key("analysis"), Seg::Key("load_steps")], "load_steps is 0; it must be at least 1"));
+        }
+        let sv = &s.solver;
+        if !(sv.residual_tolerance > 0.0 && sv.residual_tolerance < 1.0) {
+            return Err(self.error(&[Seg::Key("solver"), Seg::Key("residual_tolerance")], format!("residual_tolerance is {}; it must lie in (0, 1)", sv.residual_tolerance)));
+        }
+        if !(sv.increment_tolerance > 0.0 && sv.increment_tolerance < 1.0) {
+            return Err(self.error(&[Seg::Key("solver"), Seg::Key("increment_tolerance")], format!("increment_tolerance is {}; it must lie in (0, 1)", sv.increment_tolerance)));
+        }
+        if sv.max_iterations == 0 {
+            return Err(self.error(&[Seg::Key("solver"), Seg::Key("max_iterations")], "max_iterations is 0; it must be at least 1"));
+        }
+        let basis = match s.basis {
+            BasisSpec::Linear => BasisKind::Linear,
+            BasisSpec::Gimp => BasisKind::Gimp,
+        };
+        let kinematics = match s.kinematics {
+            KinematicsSpec::SmallStrain => Kinematics::SmallStrain,
+            KinematicsSpec::FiniteStrain => Kinematics::FiniteStrain,
+        };
+        let model = Model::new(grid, basis, kinematics, points, laws, constraints, gravity)
+            .map_err(|e| self.error(&[Seg::Key("bodies")], e.to_string()))?;
+        let settings = QuasiStaticSettings {
+            load_steps,
+            newton: NewtonSettings {
+                residual_tolerance: sv.residual_tolerance,
+                increment_tolerance: sv.increment_tolerance,
+                max_iterations: sv.max_iterations,
+                ..NewtonSettings::default()
+            },
+            max_cutbacks,
+            linear_solver: sv.linear.map(|l| match l {
+                LinearSpec::Cholesky => LinearSolverKind::Cholesky,
+                LinearSpec::Lu => LinearSolverKind::Lu,
+            }),
+        };
+        let mut analysis = QuasiStatic::new(model, settings);
+        analysis.check().map_err(|e| match e {
+            StepError::ConstraintTouchesNoNode { index, .. } => {
+                self.error(&[Seg::Key("constraints"), Seg::Index(index)], format!("constraint {index}: {e}"))
+            }
+            StepError::PointOutsideGrid { ref source, .. } => self.error(
+                &[Seg::Key("bodies")],
+                format!("material point {} at {:?}: its basis reaches outside the grid ({}); enlarge the grid or move the body", source.point, source.position, source.source),
+            ),
+            other => self.error(&[], other.to_string()),
+        })?;
+        Ok(analysis)
+    }
+}
+
+/// Line and column (1-based) of the value at `path` in RON `source`, found by scanning:
+/// a key is `name:` inside the current range, an index the n-th top-level element of the
+/// list or tuple that follows. Falls back to the deepest part found.
+fn locate(source: &str, path: &[Seg]) -> (usize, usize) {
+    let bytes = source.as_bytes();
+    let (mut start, mut end) = (0usize, bytes.len());
+    for seg in path {
+        match *seg {
+            Seg::Key(k) => match find_key(source, start, end, k) {
+                Some(pos) => {
+                    start = pos;
+                    end = value_end(bytes, pos + k.len(), end);
+                }
+                None => break,
+            },
+            Seg::Index(i) => match nth_element(bytes, start, end, i) {
+                Some((s, e)) => {
+                    start = s;
+                    end = e;
+                }
+                None => break,
+            },
+        }
+    }
+    let line = source[..start].matches('\n').count() + 1;
+    let column = start - source[..start].rfind('\n').map_or(0, |p| p + 1) + 1;
+    (line, column)
+}
+
+/// Position of `key` followed by `:` at nesting depth 0 relative to `start`, within
+/// [start, end), skipping strings and comments.
+fn find_key(source: &str, start: usize, end: usize, key: &str) -> Option<usize> {
+    let bytes = source.as_bytes();
+    let mut depth = 0i32;
+    let mut i = start;
+    // If the range starts at `name:` or an opening bracket, look inside it.
+    while i < end {
+        match bytes[i] {
+            b'"' => i = skip_string(bytes, i),
+            b'/' if bytes.get(i + 1) == Some(&b'/') => {
+                while i < end && bytes[i] != b'\n' {
+                    i += 1;
+                }
+            }
+            b'(' | b'[' | b'{' => depth += 1,
+            b')' | b']' | b'}' => depth -= 1,
+            _ => {
+                if depth <= 1
+                    && source[i..end].starts_with(key)
+                    && (i == 0 || !(bytes[i - 1].is_ascii_alphanumeric() || bytes[i - 1] == b'_'))
+                {
+                    let rest = source[i + key.len()..end].trim_start();
+                    if rest.starts_with(':') {
+                        return Some(i);
+                    }
+                }
+            }
+        }
+        i += 1;
+    }
+    None
+}
+
+fn skip_string(bytes: &[u8], mut i: usize) -> usize {
+    i += 1;
+    while i < bytes.len() && bytes[i] != b'"' {
+        if bytes[i] == b'\\' {
+            i += 1;
+        }
+        i += 1;
+    }
+    i
+}
+
+/// End of the value that follows `key:` at `from`: the next top-level comma or closing
+/// bracket.
+fn value_end(bytes: &[u8], from: usize, end: usize) -> usize {
+    let mut depth = 0i32;
+    let mut i = from;
+    while i < end {
+        match bytes[i] {
+            b'"' => i = skip_string(bytes, i),
+            b'(' | b'[' | b'{' => depth += 1,
+            b')' | b']' | b'}' => {
+                if depth == 0 {
+                    return i;
+                }
+                depth -= 1;
+            }
+            b',' if depth == 0 => return i,
+            _ => {}
+        }
+        i += 1;
+    }
+    end
+}
+
+/// Range of the n-th top-level element of the first list in [start, end).
+fn nth_element(bytes: &[u8], start: usize, end: usize, n: usize) -> Option<(usize, usize)> {
+    let mut i = start;
+    while i < end && bytes[i] != b'[' {
+        if bytes[i] == b'"' {
+            i = skip_string(bytes, i);
+        }
+        i += 1;
+    }
+    i += 1;
+    let mut k = 0;
+    loop {
+        while i < end && (bytes[i].is_ascii_whitespace() || bytes[i] == b',') {
+            i += 1;
+        }
+        if i >= end || bytes[i] == b']' {
+            return None;
+        }
+        let e = value_end(bytes, i, end);
+        if k == n {
+            return Some((i, e));
+        }
+        k += 1;
+        i = e;
+        if i < end && bytes[i] == b']' {
+            return None;
+        }
+    }
+}
