@@ -1,0 +1,134 @@
+//! Bad scenes are refused before any step runs, with an error that names the file, the line
+//! and column of the offending value, and what would be valid. One test per kind of
+//! mistake; each mutates the valid example scene in one place.
+
+use loam::io::{LoadedScene, SceneError};
+use std::path::Path;
+
+const GOOD: &str = include_str!("../examples/column.ron");
+
+fn check(source: &str) -> Result<(), SceneError> {
+    let scene = LoadedScene::parse(Path::new("bad.ron"), source.to_string())?;
+    scene.build::<2>().map(|_| ())
+}
+
+/// Replace `from` (which must occur) by `to` in the good scene and expect an error at
+/// `line` (1-based) whose message contains every string of `says`.
+fn refused(from: &str, to: &str, line: usize, says: &[&str]) -> SceneError {
+    assert!(GOOD.contains(from), "test setup: {from:?} not in the example");
+    let e = check(&GOOD.replacen(from, to, 1)).expect_err("scene must be refused");
+    assert_eq!(e.file, Path::new("bad.ron"));
+    assert_eq!(e.line, line, "wrong line for {e}");
+    assert!(e.column >= 1, "{e}");
+    for s in says {
+        assert!(e.to_string().contains(s), "{e} should say {s:?}");
+    }
+    e
+}
+
+fn line_of(pat: &str) -> usize {
+    GOOD.lines().position(|l| l.contains(pat)).expect("pattern in example") + 1
+}
+
+#[test]
+fn the_example_itself_is_valid() {
+    check(GOOD).unwrap();
+}
+
+#[test]
+fn syntax_error() {
+    refused("cell_size: [0.3125, 0.3125]", "cell_size: [0.3125 0.3125]", line_of("cell_size"), &["bad.ron:"]);
+}
+
+#[test]
+fn unknown_key() {
+    refused("basis: Gimp,", "basis: Gimp, bass: 1,", line_of("basis: Gimp"), &["bass", "title"]);
+}
+
+#[test]
+fn unknown_enum_variant_lists_the_valid_ones() {
+    refused("basis: Gimp,", "basis: Cubic,", line_of("basis: Gimp"), &["Cubic", "Linear", "Gimp"]);
+}
+
+#[test]
+fn missing_field() {
+    let e = check(&GOOD.replacen("    gravity: [0.0, -10.0],\n", "", 1)).unwrap_err();
+    assert!(e.to_string().contains("gravity"), "{e}");
+    assert!(e.line > 1);
+}
+
+#[test]
+fn non_positive_young_modulus() {
+    refused("young: 1e5", "young: -1e5", line_of("young"), &["Young's modulus", "positive"]);
+    let e = refused("young: 1e5", "young: 0.0", line_of("young"), &["must be positive"]);
+    // The column points at the value's key inside the material line.
+    let col = GOOD.lines().nth(e.line - 1).unwrap().find("young").unwrap() + 1;
+    assert_eq!(e.column, col);
+}
+
+#[test]
+fn poisson_ratio_at_or_above_one_half() {
+    refused("poisson: 0.0", "poisson: 0.5", line_of("poisson"), &["Poisson", "(-1, 0.5)"]);
+}
+
+#[test]
+fn non_positive_density() {
+    refused("density: 2000.0", "density: 0.0", line_of("density"), &["density", "positive"]);
+}
+
+#[test]
+fn points_outside_the_grid() {
+    refused("max: [0.3125, 10.0]", "max: [0.3125, 12.0]", line_of("max: [0.3125"), &["outside the grid"]);
+}
+
+#[test]
+fn empty_material_region() {
+    refused(
+        "min: [0.0, 0.0], max: [0.3125, 10.0]",
+        "min: [0.0, 5.0], max: [0.3125, 5.01]",
+        line_of("max: [0.3125"),
+        &["contains no point"],
+    );
+}
+
+#[test]
+fn constraint_on_no_node_plane() {
+    refused("Roller(axis: Y, at: 0.0)", "Roller(axis: Y, at: 0.1)", line_of("axis: Y"), &["not a plane of grid nodes"]);
+}
+
+#[test]
+fn constraint_that_touches_no_active_node() {
+    // The top node plane (y = 33 cells) lies above the column: no point has support there.
+    refused(
+        "Roller(axis: Y, at: 0.0)",
+        "Roller(axis: Y, at: 10.3125)",
+        line_of("axis: Y"),
+        &["touches no active node"],
+    );
+}
+
+#[test]
+fn zero_load_steps() {
+    refused("load_steps: 40", "load_steps: 0", line_of("load_steps"), &["at least 1"]);
+}
+
+#[test]
+fn unknown_material_name() {
+    refused("(material: \"soil\"", "(material: \"clay\"", line_of("(material:"), &["clay", "not defined", "soil"]);
+}
+
+#[test]
+fn wrong_vector_length_for_the_dimension() {
+    refused("gravity: [0.0, -10.0]", "gravity: [0.0, -10.0, 0.0]", line_of("gravity"), &["2D scene needs 2"]);
+}
+
+#[test]
+fn non_positive_cell_size() {
+    refused("cell_size: [0.3125, 0.3125]", "cell_size: [0.3125, -0.3125]", line_of("cell_size"), &["cell size", "positive"]);
+}
+
+#[test]
+fn unreadable_file_names_the_path() {
+    let e = LoadedScene::read(Path::new("/nonexistent/scene.ron")).unwrap_err();
+    assert!(e.to_string().contains("/nonexistent/scene.ron"), "{e}");
+}
