@@ -80,6 +80,11 @@ impl BasisKind {
                 return Err(BasisError::NonFinite { axis: a });
             }
             let n_cells = grid.cells()[a];
+            // A domain is clipped at the grid faces: material cannot lie beyond the grid,
+            // and a point resting on a constrained grid face would otherwise need a node
+            // outside it after any rounding of its stretched domain. GIMP remains a
+            // partition of unity for any half-length, so clipping costs no consistency.
+            let l = l.min(xi).min(n_cells as f64 - xi);
             let outside = || BasisError::OutsideGrid {
                 axis: a,
                 coordinate: x[a],
@@ -88,7 +93,7 @@ impl BasisKind {
             };
             count[a] = match self {
                 BasisKind::Linear => linear_1d(xi, n_cells, &mut idx[a], &mut w[a], &mut dw[a]),
-                BasisKind::Gimp if l < MIN_HALF_LENGTH => {
+                BasisKind::Gimp if l < MIN_HALF_LENGTH || xi < 0.0 || xi >= n_cells as f64 => {
                     linear_1d(xi, n_cells, &mut idx[a], &mut w[a], &mut dw[a])
                 }
                 BasisKind::Gimp => gimp_1d(
@@ -337,13 +342,16 @@ mod tests {
         let g = grid2(4);
         let m = 16;
         let (mut nodes, mut n, mut dn) = (vec![0; m], vec![0.0; m], vec![Vector2::zeros(); m]);
-        // A quarter-cell point at the grid edge touches only inner nodes...
-        assert!(BasisKind::Gimp
-            .evaluate(&g, &Vector2::new(0.25, 1.5), &Vector2::repeat(0.25), &mut nodes, &mut n, &mut dn)
-            .is_ok());
-        // ...but a domain crossing the edge would need a node outside the grid.
-        let err = BasisKind::Gimp
+        // A domain crossing the grid edge is clipped there: no node outside the grid is
+        // needed, and the clipped basis is still a partition of unity.
+        let c = BasisKind::Gimp
             .evaluate(&g, &Vector2::new(0.1, 1.5), &Vector2::repeat(0.25), &mut nodes, &mut n, &mut dn)
+            .unwrap();
+        assert!((n[..c].iter().sum::<f64>() - 1.0).abs() < 1e-14);
+        assert!(nodes[..c].iter().all(|&k| g.node_coords(k as usize)[0] <= 2));
+        // A point centre outside the grid is an error.
+        let err = BasisKind::Gimp
+            .evaluate(&g, &Vector2::new(-0.1, 1.5), &Vector2::repeat(0.25), &mut nodes, &mut n, &mut dn)
             .unwrap_err();
         assert!(matches!(err, BasisError::OutsideGrid { axis: 0, .. }));
         assert!(BasisKind::Linear
