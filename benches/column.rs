@@ -1,1 +1,67 @@
-fn main() {}
+//! Benchmarks of the implicit MPM (criterion; `cargo xtask bench`).
+//!
+//! - `v1c_column_64_cells_40_steps`: the V1c column, GIMP, 64 cells high, 2x2 points per
+//!   cell, 40 load steps, from model construction to the last step (issue target ≤ 50 ms;
+//!   the AMPLE peer takes about 90 s on that size).
+//! - `block_256_one_iteration`: a 256 × 256-cell elastic block, 2x2 points per cell, under
+//!   gravity: one Newton iteration (point update + residual + assembly + symbolic and
+//!   numeric factorisation + solve), target ≤ 2 s. The phase split is printed first.
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use loam::constitutive::Elastic;
+use loam::grid::{BasisKind, Grid};
+use loam::implicit::{Kinematics, Model, PlaneConstraint, QuasiStatic, QuasiStaticSettings};
+use loam::points::{PointStore, Shape};
+use loam::verification::{column_model, Column};
+use nalgebra::Vector2;
+use std::hint::black_box;
+use std::sync::Arc;
+
+fn column(c: &mut Criterion) {
+    let col = Column::V1C;
+    c.bench_function("v1c_column_64_cells_40_steps", |b| {
+        b.iter(|| {
+            let m = column_model::<2>(&col, col.height / 64.0, 64, 2, BasisKind::Gimp, Kinematics::FiniteStrain);
+            let mut qs = QuasiStatic::new(m, QuasiStaticSettings { load_steps: 40, ..Default::default() });
+            while !qs.is_finished() {
+                black_box(qs.step().unwrap());
+            }
+            qs
+        })
+    });
+}
+
+fn block(n: usize) -> QuasiStatic<2> {
+    let grid = Grid::new(Vector2::zeros(), Vector2::new(1.0, 1.0), [n + 2, n + 2]).unwrap();
+    let mut points = PointStore::new();
+    let shape = Shape::Box { min: Vector2::new(1.0, 0.0), max: Vector2::new(n as f64 + 1.0, n as f64) };
+    points.fill(&grid, &shape, 2, 2000.0, 0).unwrap();
+    let law = Elastic::new(1e7, 0.3).unwrap();
+    let constraints = vec![
+        PlaneConstraint { axis: 1, plane: 0, fixed: [true, true, false] },
+        PlaneConstraint { axis: 0, plane: 1, fixed: [true, false, false] },
+        PlaneConstraint { axis: 0, plane: n + 1, fixed: [true, false, false] },
+    ];
+    let m = Model::new(grid, BasisKind::Gimp, Kinematics::FiniteStrain, points, vec![Arc::new(law)], constraints, Vector2::new(0.0, -10.0))
+        .unwrap();
+    QuasiStatic::new(m, QuasiStaticSettings { load_steps: 1, ..Default::default() })
+}
+
+fn block_iteration(c: &mut Criterion) {
+    let n = 256;
+    let mut qs = block(n);
+    let p = qs.profile_iteration().unwrap();
+    println!(
+        "block {n}x{n}, {} points, {} dofs, {} nonzeros, {} threads: connectivity {:.3} s | points+residual {:.3} s | assembly {:.3} s | symbolic {:.3} s | numeric {:.3} s | solve {:.3} s | one iteration {:.3} s",
+        qs.model().points.len(), p.dofs, p.nonzeros, rayon::current_num_threads(),
+        p.connectivity.as_secs_f64(), p.points_and_residual.as_secs_f64(), p.assembly.as_secs_f64(),
+        p.symbolic.as_secs_f64(), p.numeric.as_secs_f64(), p.solve.as_secs_f64(), p.iteration().as_secs_f64()
+    );
+    let mut g = c.benchmark_group("block");
+    g.sample_size(10);
+    g.bench_function("block_256_one_iteration", |b| b.iter(|| black_box(qs.profile_iteration().unwrap())));
+    g.finish();
+}
+
+criterion_group!(benches, column, block_iteration);
+criterion_main!(benches);

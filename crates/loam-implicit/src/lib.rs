@@ -8,5 +8,5 @@ mod quasi_static;
 mod step;
 
 pub use model::{Kinematics, Model, ModelError, PlaneConstraint};
-pub use quasi_static::{QuasiStatic, QuasiStaticSettings, RunError, StepError, StepReport};
+pub use quasi_static::{IterationProfile, QuasiStatic, QuasiStaticSettings, RunError, StepError, StepReport};
 pub use step::PointUpdateError;

@@ -278,6 +278,66 @@ impl<const D: usize> QuasiStatic<D> {
         self.conn_current = false;
     }
 
+    /// Time the phases of one Newton iteration of the next load step from the committed
+    /// state, with a fresh linear solver (so the symbolic factorisation is included), and
+    /// commit nothing. For benchmarks and for sizing a run.
+    pub fn profile_iteration(&mut self) -> Result<IterationProfile, StepError> {
+        let t = Instant::now();
+        self.conn_current = false;
+        self.connect()?;
+        let connectivity = t.elapsed();
+        let lambda = ((self.step + 1) as f64 / self.settings.load_steps as f64).min(1.0);
+        self.external_forces(lambda);
+        let n = self.conn.active_nodes().len() * D;
+        self.du.clear();
+        self.du.resize(n, 0.0);
+        self.trial.resize(self.model.points.len(), self.conn.stride(), self.model.points.history_stride());
+        let mut r = vec![0.0; n];
+        let mut system = StepSystem {
+            model: &self.model,
+            conn: &self.conn,
+            pattern: &self.pattern,
+            values: &mut self.values,
+            constrained: &self.constrained,
+            f_ext: &self.f_ext,
+            trial: &mut self.trial,
+        };
+        let t = Instant::now();
+        loam_solve::NewtonProblem::evaluate(&mut system, &self.du, &mut r).map_err(|e| StepError::NotConverged {
+            step: self.step + 1,
+            load_factor: lambda,
+            cutbacks: 0,
+            reason: e.to_string(),
+            residuals: vec![],
+        })?;
+        let points_and_residual = t.elapsed();
+        let t = Instant::now();
+        loam_solve::NewtonProblem::assemble(&mut system);
+        let assembly = t.elapsed();
+        let mut solver = SparseDirectSolver::new(self.newton.linear_solver().kind());
+        let fail = |e: loam_solve::LinearSolveError| StepError::NotConverged {
+            step: self.step + 1,
+            load_factor: lambda,
+            cutbacks: 0,
+            reason: e.to_string(),
+            residuals: vec![],
+        };
+        solver.factorize(&self.pattern, &self.values).map_err(fail)?;
+        r.iter_mut().for_each(|v| *v = -*v);
+        solver.solve_in_place(&mut r).map_err(fail)?;
+        let lt = solver.timings();
+        Ok(IterationProfile {
+            dofs: n,
+            nonzeros: self.pattern.nnz(),
+            connectivity,
+            points_and_residual,
+            assembly,
+            symbolic: lt.symbolic,
+            numeric: lt.numeric,
+            solve: lt.solve,
+        })
+    }
+
     /// Advance one load step, cutting back as needed.
     pub fn step(&mut self) -> Result<StepReport, StepError> {
         if self.is_finished() {
@@ -344,6 +404,29 @@ impl<const D: usize> QuasiStatic<D> {
             on_step(&report, &self.model).map_err(RunError::Observer)?;
         }
         Ok(())
+    }
+}
+
+/// Wall time of the phases of one Newton iteration (see `QuasiStatic::profile_iteration`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct IterationProfile {
+    pub dofs: usize,
+    pub nonzeros: usize,
+    /// Basis evaluation, active nodes, adjacency, sparsity pattern.
+    pub connectivity: Duration,
+    /// Point kinematics, stress update and tangent, internal force gather.
+    pub points_and_residual: Duration,
+    /// Global tangent assembly.
+    pub assembly: Duration,
+    pub symbolic: Duration,
+    pub numeric: Duration,
+    pub solve: Duration,
+}
+
+impl IterationProfile {
+    /// Assembly (points, residual, tangent) plus factorisation and solve: one iteration.
+    pub fn iteration(&self) -> Duration {
+        self.points_and_residual + self.assembly + self.symbolic + self.numeric + self.solve
     }
 }
 
