@@ -174,18 +174,28 @@ fn tent(s: f64) -> f64 {
     (1.0 - s.abs()).max(0.0)
 }
 
-/// Antiderivative of the tent, M(s) = ∫_{−∞}^{s} N.
+/// GIMP weight and its derivative in cell units: the average of the tent over the domain
+/// [d − l, d + l], S = (1/2l) ∫ N, and dS/dd = (N(d + l) − N(d − l)) / (2l).
+///
+/// The tent is linear on [−1, 0] (slope +1) and [0, 1] (slope −1), so the integral is the
+/// sum over those pieces of (length × tent at the piece's midpoint). Lengths are measured
+/// in the coordinate t = s − d ∈ [−l, l], so for a small domain they are exact multiples of
+/// l and nothing cancels: the difference of antiderivatives, M(d + l) − M(d − l), loses
+/// all digits of l below 1e-16 · M and breaks the partition of unity for small l.
 #[inline]
-fn tent_integral(s: f64) -> f64 {
-    if s <= -1.0 {
-        0.0
-    } else if s <= 0.0 {
-        0.5 * (1.0 + s) * (1.0 + s)
-    } else if s <= 1.0 {
-        1.0 - 0.5 * (1.0 - s) * (1.0 - s)
-    } else {
-        1.0
+fn gimp_weight(d: f64, l: f64) -> (f64, f64) {
+    // Rising piece [−1, 0] and falling piece [0, 1], shifted to t = s − d.
+    let rise = (l.min(-d) - (-l).max(-1.0 - d)).max(0.0);
+    let fall = (l.min(1.0 - d) - (-l).max(-d)).max(0.0);
+    let mid = |lo: f64, hi: f64| d + 0.5 * (lo + hi);
+    let mut s = 0.0;
+    if rise > 0.0 {
+        s += rise * tent(mid((-l).max(-1.0 - d), l.min(-d)));
     }
+    if fall > 0.0 {
+        s += fall * tent(mid((-l).max(-d), l.min(1.0 - d)));
+    }
+    (s / (2.0 * l), (rise - fall) / (2.0 * l))
 }
 
 /// GIMP in cell units: nodes i with |xi − i| < 1 + l. A node beyond the grid that would
@@ -211,8 +221,7 @@ fn gimp_1d(
             return None;
         }
         idx[count] = i as usize;
-        w[count] = (tent_integral(d + l) - tent_integral(d - l)) / (2.0 * l);
-        dw[count] = (tent(d + l) - tent(d - l)) / (2.0 * l);
+        (w[count], dw[count]) = gimp_weight(d, l);
         count += 1;
     }
     Some(count)
@@ -259,8 +268,7 @@ mod tests {
             for k in 0..400 {
                 let d = -1.6 + 3.2 * k as f64 / 399.0;
                 let (s, ds) = gimp_table(d, l);
-                let s2 = (tent_integral(d + l) - tent_integral(d - l)) / (2.0 * l);
-                let ds2 = (tent(d + l) - tent(d - l)) / (2.0 * l);
+                let (s2, ds2) = gimp_weight(d, l);
                 // Both are closed forms of the same function: equal to rounding.
                 assert!((s - s2).abs() < 1e-14, "S at d={d}, l={l}: {s} vs {s2}");
                 assert!((ds - ds2).abs() < 1e-12, "dS at d={d}, l={l}: {ds} vs {ds2}");
@@ -314,6 +322,21 @@ mod tests {
                     prop_assert!((fd - t.2[axis]).abs() < 1e-6, "node {} axis {axis}: {fd} vs {}", t.0, t.2[axis]);
                 }
             }
+        }
+    }
+
+    /// Small domains (clipped at a grid face, or tiny by choice) keep the partition of
+    /// unity to rounding: the case proptest found with the antiderivative form, where
+    /// M(d + l) − M(d − l) cancelled (error ~1e-16 / l).
+    #[test]
+    fn small_domains_keep_the_partition_of_unity() {
+        let g = grid2(8);
+        for &l in &[1.425_279_387_573_835e-4, 1e-6, 2e-9] {
+            let s = eval2(BasisKind::Gimp, &g, Vector2::new(1.3, 1.3), l);
+            let sum: f64 = s.iter().map(|t| t.1).sum();
+            let gsum: Vector2<f64> = s.iter().map(|t| t.2).sum();
+            assert!((sum - 1.0).abs() < 1e-14, "l = {l}: sum {sum}");
+            assert!(gsum.norm() < 1e-12, "l = {l}: gradient sum {gsum}");
         }
     }
 
