@@ -8,6 +8,7 @@
 //! infinities, non-positive values on a log axis) are skipped, so the SVG
 //! never contains NaN coordinates.
 
+use loam::io::output::xml_escape;
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -225,19 +226,6 @@ fn tick_label(v: f64, step: f64, max_abs: f64) -> String {
     }
 }
 
-fn escape(s: &str) -> String {
-    let mut out = String::with_capacity(s.len());
-    for c in s.chars() {
-        match c {
-            '&' => out.push_str("&amp;"),
-            '<' => out.push_str("&lt;"),
-            '>' => out.push_str("&gt;"),
-            '"' => out.push_str("&quot;"),
-            _ => out.push(c),
-        }
-    }
-    out
-}
 
 /// Pixel coordinate, or `None` if it would not be finite.
 fn px(v: f64) -> Option<String> {
@@ -456,7 +444,7 @@ impl Plot {
                 r#"<text x="{:.2}" y="{:.2}" text-anchor="middle">{}</text>"#,
                 sx(*t),
                 BOTTOM + 20.0,
-                escape(label)
+                xml_escape(label)
             );
         }
         for (t, label) in &ya.ticks {
@@ -465,7 +453,7 @@ impl Plot {
                 r#"<text x="{:.2}" y="{:.2}" text-anchor="end">{}</text>"#,
                 LEFT - 9.0,
                 sy(*t) + 4.0,
-                escape(label)
+                xml_escape(label)
             );
         }
 
@@ -475,20 +463,20 @@ impl Plot {
             r#"<text x="{:.2}" y="{:.2}" text-anchor="middle" font-size="15">{}</text>"#,
             (LEFT + RIGHT) / 2.0,
             TOP - 15.0,
-            escape(&self.title)
+            xml_escape(&self.title)
         );
         let _ = writeln!(
             o,
             r#"<text x="{:.2}" y="{:.2}" text-anchor="middle">{}</text>"#,
             (LEFT + RIGHT) / 2.0,
             BOTTOM + 45.0,
-            escape(&self.x_label)
+            xml_escape(&self.x_label)
         );
         let (yl_x, yl_y) = (20.0, (TOP + BOTTOM) / 2.0);
         let _ = writeln!(
             o,
             r#"<text x="{yl_x}" y="{yl_y}" text-anchor="middle" transform="rotate(-90 {yl_x} {yl_y})">{}</text>"#,
-            escape(&self.y_label)
+            xml_escape(&self.y_label)
         );
 
         // Data.
@@ -544,7 +532,7 @@ impl Plot {
                 r#"<text x="{:.2}" y="{:.2}">{}</text>"#,
                 LEGEND_X + 38.0,
                 y + 4.0,
-                escape(&s.label)
+                xml_escape(&s.label)
             );
         }
         let _ = writeln!(o, "</svg>");
@@ -640,7 +628,7 @@ impl Plot {
                 lab.0,
                 lab.1 + 4.0,
                 if up { "start" } else { "end" },
-                escape(label)
+                xml_escape(label)
             );
             let mut closed = tri.to_vec();
             closed.push(tri[0]);

@@ -212,14 +212,15 @@ impl<const D: usize> QuasiStatic<D> {
         });
     }
 
-    /// Try to reach `lambda` from the committed state. On success the state is committed.
-    fn attempt(&mut self, lambda: f64) -> Result<loam_solve::NewtonReport, NewtonError<PointUpdateError>> {
+    /// Set up the Newton system of a step to `lambda` from the committed state: external
+    /// forces, a zero increment, sized trial buffers. Returns the system with the increment
+    /// and the Newton solver borrowed beside it.
+    fn prepare(&mut self, lambda: f64) -> (StepSystem<'_, D>, &mut Vec<f64>, &mut NewtonSolver) {
         self.external_forces(lambda);
-        let n_dofs = self.conn.active_nodes().len() * D;
         self.du.clear();
-        self.du.resize(n_dofs, 0.0);
+        self.du.resize(self.conn.active_nodes().len() * D, 0.0);
         self.trial.resize(self.model.points.len(), self.conn.stride(), self.model.points.history_stride());
-        let mut system = StepSystem {
+        let system = StepSystem {
             model: &self.model,
             conn: &self.conn,
             pattern: &self.pattern,
@@ -228,7 +229,13 @@ impl<const D: usize> QuasiStatic<D> {
             f_ext: &self.f_ext,
             trial: &mut self.trial,
         };
-        let report = self.newton.solve(&mut system, &mut self.du)?;
+        (system, &mut self.du, &mut self.newton)
+    }
+
+    /// Try to reach `lambda` from the committed state. On success the state is committed.
+    fn attempt(&mut self, lambda: f64) -> Result<loam_solve::NewtonReport, NewtonError<PointUpdateError>> {
+        let (mut system, du, newton) = self.prepare(lambda);
+        let report = newton.solve(&mut system, du)?;
         self.commit();
         self.load_factor = lambda;
         Ok(report)
@@ -286,45 +293,29 @@ impl<const D: usize> QuasiStatic<D> {
         self.conn_current = false;
         self.connect()?;
         let connectivity = t.elapsed();
-        let lambda = ((self.step + 1) as f64 / self.settings.load_steps as f64).min(1.0);
-        self.external_forces(lambda);
-        let n = self.conn.active_nodes().len() * D;
-        self.du.clear();
-        self.du.resize(n, 0.0);
-        self.trial.resize(self.model.points.len(), self.conn.stride(), self.model.points.history_stride());
-        let mut r = vec![0.0; n];
-        let mut system = StepSystem {
-            model: &self.model,
-            conn: &self.conn,
-            pattern: &self.pattern,
-            values: &mut self.values,
-            constrained: &self.constrained,
-            f_ext: &self.f_ext,
-            trial: &mut self.trial,
-        };
-        let t = Instant::now();
-        loam_solve::NewtonProblem::evaluate(&mut system, &self.du, &mut r).map_err(|e| StepError::NotConverged {
-            step: self.step + 1,
+        let step = self.step + 1;
+        let lambda = (step as f64 / self.settings.load_steps as f64).min(1.0);
+        let not_converged = |reason: String| StepError::NotConverged {
+            step,
             load_factor: lambda,
             cutbacks: 0,
-            reason: e.to_string(),
+            reason,
             residuals: vec![],
-        })?;
+        };
+        let (mut system, du, newton) = self.prepare(lambda);
+        let kind = newton.linear_solver().kind();
+        let n = du.len();
+        let mut r = vec![0.0; n];
+        let t = Instant::now();
+        loam_solve::NewtonProblem::evaluate(&mut system, du, &mut r).map_err(|e| not_converged(e.to_string()))?;
         let points_and_residual = t.elapsed();
         let t = Instant::now();
         loam_solve::NewtonProblem::assemble(&mut system);
         let assembly = t.elapsed();
-        let mut solver = SparseDirectSolver::new(self.newton.linear_solver().kind());
-        let fail = |e: loam_solve::LinearSolveError| StepError::NotConverged {
-            step: self.step + 1,
-            load_factor: lambda,
-            cutbacks: 0,
-            reason: e.to_string(),
-            residuals: vec![],
-        };
-        solver.factorize(&self.pattern, &self.values).map_err(fail)?;
+        let mut solver = SparseDirectSolver::new(kind);
+        solver.factorize(&self.pattern, &self.values).map_err(|e| not_converged(e.to_string()))?;
         r.iter_mut().for_each(|v| *v = -*v);
-        solver.solve_in_place(&mut r).map_err(fail)?;
+        solver.solve_in_place(&mut r).map_err(|e| not_converged(e.to_string()))?;
         let lt = solver.timings();
         Ok(IterationProfile {
             dofs: n,

@@ -245,7 +245,7 @@ where
 }
 
 /// Escapes a string for use inside an XML attribute value or text node.
-pub(crate) fn xml_escape(s: &str) -> String {
+pub fn xml_escape(s: &str) -> String {
     let mut out = String::with_capacity(s.len());
     for c in s.chars() {
         match c {
