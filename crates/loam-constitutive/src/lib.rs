@@ -72,8 +72,13 @@ pub trait ConstitutiveLaw: Send + Sync + std::fmt::Debug {
         h_n: &[f64],
         h_out: &mut [f64],
     ) -> Result<StressUpdate, ConstitutiveError>;
-    /// P-wave (constrained) modulus, used for stiffness scaling and explicit CFL later
+    /// P-wave (constrained) modulus λ + 2μ: the stiffness of the explicit CFL condition
+    /// (THEORY §9) and of stiffness scaling.
     fn p_wave_modulus(&self) -> f64;
+    /// Stored (elastic) energy per unit volume at elastic strain ε^e: ½ ε^e : C : ε^e for
+    /// isotropic linear elasticity. With logarithmic strain it is the Hencky energy per unit
+    /// reference volume. Energy histories (kinetic + stored − external work) use it.
+    fn stored_energy(&self, elastic_strain: &Matrix3<f64>) -> f64;
 }
 
 pub(crate) fn check_finite(m: &Matrix3<f64>, what: &'static str) -> Result<(), ConstitutiveError> {

@@ -84,6 +84,10 @@ impl ConstitutiveLaw for Quadratic {
     fn p_wave_modulus(&self) -> f64 {
         self.lambda + 2.0 * self.mu
     }
+    fn stored_energy(&self, e: &Matrix3<f64>) -> f64 {
+        // W with ∂W/∂ε = τ: the c ε² term integrates to (c/3) tr(ε³).
+        0.5 * self.lambda * e.trace().powi(2) + self.mu * e.component_mul(e).sum() + self.c * (e * e * e).trace() / 3.0
+    }
 }
 
 /// A "return mapping" that removes a fixed fraction β of the trial strain along a fixed
@@ -127,6 +131,9 @@ impl ConstitutiveLaw for Relax {
     }
     fn p_wave_modulus(&self) -> f64 {
         self.el.p_wave_modulus()
+    }
+    fn stored_energy(&self, e: &Matrix3<f64>) -> f64 {
+        self.el.stored_energy(e)
     }
 }
 
