@@ -3,10 +3,9 @@
 //! cut-back (`quasi_static`). The formulation is the seed paper's (Wang et al. 2016) with
 //! the finite-strain extension of THEORY.md §2.
 
-mod model;
 mod quasi_static;
 mod step;
 
-pub use model::{Kinematics, Model, ModelError, PlaneConstraint};
+pub use loam_model::{Kinematics, Model, ModelError, PlaneConstraint};
 pub use quasi_static::{IterationProfile, QuasiStatic, QuasiStaticSettings, RunError, StepError, StepReport};
 pub use step::PointUpdateError;

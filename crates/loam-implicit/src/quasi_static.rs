@@ -6,14 +6,14 @@
 //! error naming the step, the load factor and the residual history. An unconverged state is
 //! never committed.
 
-use crate::model::Model;
+use loam_model::Model;
 use crate::step::{PointCouplings, PointUpdateError, StepSystem, TrialState};
 use loam_grid::{Connectivity, PointBasisError};
 use loam_solve::{
     gather_nodal, BlockPattern, LinearSolverKind, LinearSolverTimings, NewtonError, NewtonSettings, NewtonSolver,
     SparseDirectSolver,
 };
-use nalgebra::{Matrix3, SVector};
+use loam_points::stretched_half_length;
 use rayon::prelude::*;
 use std::time::{Duration, Instant};
 
@@ -158,19 +158,7 @@ impl<const D: usize> QuasiStatic<D> {
             .compute(&self.model.grid, &pts.position, &pts.half_length)
             .map_err(|source| StepError::PointOutsideGrid { step: self.step + 1, source })?;
         self.pattern.update(&PointCouplings(&self.conn));
-        let an = self.conn.active_nodes();
-        self.constrained.clear();
-        self.constrained.resize(an.len() * D, false);
-        for (a, &g) in an.active_to_grid.iter().enumerate() {
-            let ijk = self.model.grid.node_coords(g as usize);
-            for c in &self.model.constraints {
-                if ijk[c.axis] == c.plane {
-                    for i in 0..D {
-                        self.constrained[a * D + i] |= c.fixed[i];
-                    }
-                }
-            }
-        }
+        self.model.constrained_dofs(self.conn.active_nodes(), &mut self.constrained);
         self.conn_current = true;
         Ok(())
     }
@@ -195,17 +183,12 @@ impl<const D: usize> QuasiStatic<D> {
     /// External nodal forces at load factor `lambda`: gravity on point masses and point
     /// forces, both dead loads.
     fn external_forces(&mut self, lambda: f64) {
-        let pts = &self.model.points;
-        let g = self.model.gravity;
-        let forces = &self.model.point_forces;
+        let model = &self.model;
         let conn = &self.conn;
         self.f_ext.resize(conn.active_nodes().len() * D, 0.0);
         gather_nodal(&PointCouplings(conn), D, &mut self.f_ext, |p, a, out| {
             let n = conn.support_values(p)[a];
-            let mut f = g * pts.mass[p];
-            if let Some(fp) = forces.get(p) {
-                f += fp;
-            }
+            let f = model.point_load(p);
             for i in 0..D {
                 out[i] += lambda * n * f[i];
             }
@@ -267,13 +250,7 @@ impl<const D: usize> QuasiStatic<D> {
                 let df = trial.delta_f[p];
                 *v *= df.determinant();
                 *f = df * *f;
-                // Right stretch U = √(FᵀF); in plane strain F is block-diagonal, so the
-                // in-plane block of the 3×3 U is the in-plane stretch.
-                let eig = (f.transpose() * *f).symmetric_eigen();
-                let u = eig.eigenvectors
-                    * Matrix3::from_diagonal(&eig.eigenvalues.map(|e| e.max(0.0).sqrt()))
-                    * eig.eigenvectors.transpose();
-                *l = SVector::from_fn(|i, _| l0[i] * u[(i, i)]);
+                *l = stretched_half_length(l0, f);
             });
         pts.stress.copy_from_slice(&trial.stress);
         pts.elastic_strain.copy_from_slice(&trial.elastic_strain);

@@ -7,27 +7,13 @@
 //!   f_int,I = Σ_p v_p σ_p ∂N_I/∂x,   K_IJ = Σ_p v_p (∂N_I/∂x)_j a_ijkl (∂N_J/∂x)_l
 //! with a the spatial tangent (finite strain, THEORY.md §2) or D (small strain, §3).
 
-use crate::model::{Kinematics, Model};
+use loam_model::{Kinematics, Model};
 use loam_constitutive::{finite_strain_update, small_strain_update, ConstitutiveError, Tensor4};
 use loam_grid::Connectivity;
-use loam_solve::{gather_nodal, BlockPattern, Couplings, NewtonProblem};
+pub(crate) use loam_model::PointCouplings;
+use loam_solve::{gather_nodal, BlockPattern, NewtonProblem};
 use nalgebra::{Matrix3, SMatrix, SVector};
 use rayon::prelude::*;
-
-/// Connectivity seen as the coupling structure of the assembly: points are elements.
-pub(crate) struct PointCouplings<'a, const D: usize>(pub &'a Connectivity<D>);
-
-impl<const D: usize> Couplings for PointCouplings<'_, D> {
-    fn num_nodes(&self) -> usize {
-        self.0.active_nodes().len()
-    }
-    fn elements_of(&self, node: usize) -> &[(u32, u32)] {
-        self.0.node_points().of(node)
-    }
-    fn nodes_of(&self, element: usize) -> &[u32] {
-        self.0.support_nodes(element)
-    }
-}
 
 /// A material point whose update failed inside a Newton iteration.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -9,6 +9,15 @@
 use loam_grid::Grid;
 use nalgebra::{Matrix3, SVector, Vector2};
 
+/// GIMP half-lengths of a deformed point, l = l₀ ⊙ diag(U) with U = √(FᵀF) the right
+/// stretch (iGIMP, Charlton et al. 2017). In plane strain F is block-diagonal, so the
+/// in-plane block of the 3×3 U is the in-plane stretch.
+pub fn stretched_half_length<const D: usize>(l0: &SVector<f64, D>, f: &Matrix3<f64>) -> SVector<f64, D> {
+    let eig = (f.transpose() * f).symmetric_eigen();
+    let u = eig.eigenvectors * Matrix3::from_diagonal(&eig.eigenvalues.map(|e| e.max(0.0).sqrt())) * eig.eigenvectors.transpose();
+    SVector::from_fn(|i, _| l0[i] * u[(i, i)])
+}
+
 /// Errors in generating points.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum PointsError {
@@ -103,6 +112,10 @@ pub struct PointStore<const D: usize> {
     pub volume0: Vec<f64>,
     /// Mass (constant).
     pub mass: Vec<f64>,
+    /// Velocity v_p (dynamic analyses; zero and unused in quasi-static ones).
+    pub velocity: Vec<SVector<f64, D>>,
+    /// Acceleration a_p (implicit Newmark dynamics).
+    pub acceleration: Vec<SVector<f64, D>>,
     /// Deformation gradient F (3×3 also in plane strain, where F_zz = 1).
     pub deformation_gradient: Vec<Matrix3<f64>>,
     /// Elastic strain state: b^e (finite strain, identity when unstrained) or ε^e (small
@@ -166,6 +179,16 @@ impl<const D: usize> PointStore<D> {
         self.mass.iter().sum()
     }
 
+    /// Linear momentum Σ m_p v_p.
+    pub fn momentum(&self) -> SVector<f64, D> {
+        self.mass.iter().zip(&self.velocity).map(|(m, v)| v * *m).sum()
+    }
+
+    /// Kinetic energy ½ Σ m_p |v_p|².
+    pub fn kinetic_energy(&self) -> f64 {
+        0.5 * self.mass.iter().zip(&self.velocity).map(|(m, v)| m * v.norm_squared()).sum::<f64>()
+    }
+
     /// Add one point.
     pub fn push(&mut self, x: SVector<f64, D>, volume: f64, density: f64, half_length: SVector<f64, D>, material: u32) {
         self.position.push(x);
@@ -173,6 +196,8 @@ impl<const D: usize> PointStore<D> {
         self.volume.push(volume);
         self.volume0.push(volume);
         self.mass.push(density * volume);
+        self.velocity.push(SVector::zeros());
+        self.acceleration.push(SVector::zeros());
         self.deformation_gradient.push(Matrix3::identity());
         self.elastic_strain.push(Matrix3::identity());
         self.stress.push(Matrix3::zeros());

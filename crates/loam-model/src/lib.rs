@@ -1,10 +1,15 @@
 //! What a run is made of: the grid and basis, the points and their materials, the
-//! kinematics, the constraints on grid planes and the loads.
+//! kinematics, the constraints on grid planes and the loads. The implicit and explicit
+//! analyses both take a [`Model`]; quantities that do not depend on the integrator
+//! (constrained dofs, stored energy, external work of dead loads) live here once.
 
 use loam_constitutive::ConstitutiveLaw;
-use loam_grid::{BasisKind, Grid};
+use loam_grid::{ActiveNodes, BasisKind, Connectivity, Grid};
+use loam_solve::Couplings;
 use loam_points::PointStore;
 use nalgebra::{Matrix3, SVector};
+use loam_constitutive::tensor::sym_log;
+use rayon::prelude::*;
 use std::sync::Arc;
 
 /// Kinematics of the step update (THEORY.md §2 and §3): one pipeline, two strain measures.
@@ -99,5 +104,102 @@ impl<const D: usize> Model<D> {
     /// applies) — the hyperelastic finite-strain tangent is symmetric as a whole.
     pub fn symmetric_tangent(&self) -> bool {
         self.materials.iter().all(|m| m.symmetric_tangent())
+    }
+
+    /// Mark the constrained dofs (`active node · D + component`) of the active nodes.
+    pub fn constrained_dofs(&self, active: &ActiveNodes, out: &mut Vec<bool>) {
+        out.clear();
+        out.resize(active.len() * D, false);
+        for (a, &g) in active.active_to_grid.iter().enumerate() {
+            let ijk = self.grid.node_coords(g as usize);
+            for c in &self.constraints {
+                if ijk[c.axis] == c.plane {
+                    for i in 0..D {
+                        out[a * D + i] |= c.fixed[i];
+                    }
+                }
+            }
+        }
+    }
+
+    /// Dead load on point `p` at full load: gravity on its mass plus its point force.
+    #[inline]
+    pub fn point_load(&self, p: usize) -> SVector<f64, D> {
+        let f = self.gravity * self.points.mass[p];
+        match self.point_forces.get(p) {
+            Some(fp) => f + fp,
+            None => f,
+        }
+    }
+
+    /// Stored elastic energy Σ_p V⁰_p W(ε^e_p): with finite strain ε^e = ½ ln b^e and W
+    /// per unit reference volume (Hencky); with small strain W(ε^e) on the initial volume.
+    pub fn stored_energy(&self) -> f64 {
+        let pts = &self.points;
+        (0..pts.len())
+            .into_par_iter()
+            .map(|p| {
+                let law = &self.materials[pts.material[p] as usize];
+                let eps = match self.kinematics {
+                    Kinematics::SmallStrain => pts.elastic_strain[p],
+                    Kinematics::FiniteStrain => match sym_log(&pts.elastic_strain[p]) {
+                        Ok(l) => l * 0.5,
+                        Err(_) => return f64::NAN,
+                    },
+                };
+                pts.volume0[p] * law.stored_energy(&eps)
+            })
+            .collect::<Vec<_>>()
+            .iter()
+            .sum()
+    }
+}
+
+/// Work of the dead loads (gravity, point forces) on the points' motion, accumulated
+/// step by step with the trapezoidal rule in the load factor: exact for loads held
+/// constant, and for loads ramped linearly with displacement increments of one step.
+#[derive(Debug, Clone, Default)]
+pub struct ExternalWork<const D: usize> {
+    previous: Vec<SVector<f64, D>>,
+    previous_factor: f64,
+    work: f64,
+}
+
+impl<const D: usize> ExternalWork<D> {
+    /// Start at the model's current positions and load factor.
+    pub fn new(model: &Model<D>, load_factor: f64) -> Self {
+        Self { previous: model.points.position.clone(), previous_factor: load_factor, work: 0.0 }
+    }
+
+    /// Add the work done since the last call; the load factor went linearly from the last
+    /// one to `load_factor`. Returns the accumulated work.
+    pub fn advance(&mut self, model: &Model<D>, load_factor: f64) -> f64 {
+        let mean = 0.5 * (self.previous_factor + load_factor);
+        let pts = &model.points;
+        let dw: f64 = (0..pts.len()).map(|p| model.point_load(p).dot(&(pts.position[p] - self.previous[p]))).sum();
+        self.work += mean * dw;
+        self.previous.copy_from_slice(&pts.position);
+        self.previous_factor = load_factor;
+        self.work
+    }
+
+    pub fn work(&self) -> f64 {
+        self.work
+    }
+}
+
+/// Point–node connectivity seen as the coupling structure of assembly and gathers:
+/// points are the elements.
+pub struct PointCouplings<'a, const D: usize>(pub &'a Connectivity<D>);
+
+impl<const D: usize> Couplings for PointCouplings<'_, D> {
+    fn num_nodes(&self) -> usize {
+        self.0.active_nodes().len()
+    }
+    fn elements_of(&self, node: usize) -> &[(u32, u32)] {
+        self.0.node_points().of(node)
+    }
+    fn nodes_of(&self, element: usize) -> &[u32] {
+        self.0.support_nodes(element)
     }
 }

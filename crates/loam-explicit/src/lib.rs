@@ -1,0 +1,1 @@
+//! Explicit MPM (placeholder; being written).
