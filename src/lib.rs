@@ -5,15 +5,19 @@
 //! - [`points`]: the material point store and its generation;
 //! - [`constitutive`]: constitutive laws and the small/finite strain updates;
 //! - [`solve`]: sparse assembly, linear solvers, Newton's method;
-//! - [`implicit`]: quasi-static implicit analysis;
+//! - [`model`]: what a run is made of (grid, points, materials, constraints, loads);
+//! - [`implicit`]: quasi-static and Newmark-dynamic implicit analysis;
+//! - [`explicit`]: explicit MPM (USF, USL, MUSL) for comparison;
 //! - [`io`]: scenes, output writers.
 //!
 //! [`verification`] holds the closed-form references of the verification problems.
 
 pub use loam_constitutive as constitutive;
+pub use loam_explicit as explicit;
 pub use loam_grid as grid;
 pub use loam_implicit as implicit;
 pub use loam_io as io;
+pub use loam_model as model;
 pub use loam_points as points;
 pub use loam_solve as solve;
 

@@ -206,3 +206,130 @@ pub fn column_model<const D: usize>(
     let law = Elastic::new(column.young, 0.0).expect("valid elastic constants");
     Model::new(grid, basis, kinematics, points, vec![Arc::new(law)], constraints, gravity).expect("valid column model")
 }
+
+/// V2: the axially vibrating bar (VERIFICATION.md V2). Fixed at x = 0, free at x = L,
+/// ν = 0, initial velocity v₀ sin(β₁ x) along x; one cell thick with rollers, so 1D.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VibratingBar {
+    pub length: f64,
+    pub young: f64,
+    pub density: f64,
+    pub amplitude: f64,
+    pub cell_size: f64,
+}
+
+impl VibratingBar {
+    /// Reference parameters: L = 25, E = 100, ρ = 1, v₀ = 0.1, h = 1 (T = 10).
+    pub const REFERENCE: Self = Self { length: 25.0, young: 100.0, density: 1.0, amplitude: 0.1, cell_size: 1.0 };
+
+    /// Bar wave speed c = √(E/ρ).
+    pub fn wave_speed(&self) -> f64 {
+        (self.young / self.density).sqrt()
+    }
+
+    /// β₁ = π / (2L).
+    pub fn wavenumber(&self) -> f64 {
+        std::f64::consts::PI / (2.0 * self.length)
+    }
+
+    /// ω₁ = β₁ c.
+    pub fn omega(&self) -> f64 {
+        self.wavenumber() * self.wave_speed()
+    }
+
+    /// T = 4L / c.
+    pub fn period(&self) -> f64 {
+        4.0 * self.length / self.wave_speed()
+    }
+
+    /// Centre-of-mass velocity (2v₀/π) cos(ω₁ t).
+    pub fn centre_of_mass_velocity(&self, t: f64) -> f64 {
+        2.0 * self.amplitude / std::f64::consts::PI * (self.omega() * t).cos()
+    }
+
+    /// Total energy per unit thickness ρ v₀² L / 4 (times the cell thickness h).
+    pub fn energy(&self) -> f64 {
+        self.density * self.amplitude.powi(2) * self.length / 4.0 * self.cell_size
+    }
+
+    /// The trapezoidal rule's period elongation ωΔt / (2 arctan(ωΔt/2)).
+    pub fn trapezoidal_period_factor(&self, dt: f64) -> f64 {
+        let w = self.omega() * dt;
+        w / (2.0 * (w / 2.0).atan())
+    }
+
+    /// Explicit critical step h / c.
+    pub fn critical_time_step(&self) -> f64 {
+        self.cell_size / self.wave_speed()
+    }
+
+    /// The bar as a 2D model: grid from x = 0 over L plus 4 empty cells, one cell high;
+    /// x fixed at x = 0, y fixed on both y planes; `points_per_cell`² points per cell with
+    /// the initial velocity v₀ sin(β₁ x).
+    pub fn model(
+        &self,
+        points_per_cell: usize,
+        basis: crate::grid::BasisKind,
+        kinematics: crate::implicit::Kinematics,
+    ) -> crate::implicit::Model<2> {
+        use crate::constitutive::Elastic;
+        use crate::grid::Grid;
+        use crate::implicit::{Model, PlaneConstraint};
+        use crate::points::Shape;
+        use nalgebra::Vector2;
+        use std::sync::Arc;
+        let h = self.cell_size;
+        let cells_long = (self.length / h).round() as usize + 4;
+        let grid = Grid::new(Vector2::zeros(), Vector2::new(h, h), [cells_long, 1]).expect("valid bar grid");
+        let mut points = PointStore::new();
+        let shape = Shape::Box { min: Vector2::zeros(), max: Vector2::new(self.length, h) };
+        points.fill(&grid, &shape, points_per_cell, self.density, 0).expect("bar fits the grid");
+        let k = self.wavenumber();
+        for (v, x) in points.velocity.iter_mut().zip(&points.position) {
+            *v = Vector2::new(self.amplitude * (k * x[0]).sin(), 0.0);
+        }
+        let constraints = vec![
+            PlaneConstraint { axis: 0, plane: 0, fixed: [true, false, false] },
+            PlaneConstraint { axis: 1, plane: 0, fixed: [false, true, false] },
+            PlaneConstraint { axis: 1, plane: 1, fixed: [false, true, false] },
+        ];
+        let law = Elastic::new(self.young, 0.0).expect("valid elastic constants");
+        Model::new(grid, basis, kinematics, points, vec![Arc::new(law)], constraints, Vector2::zeros())
+            .expect("valid bar model")
+    }
+}
+
+/// Centre-of-mass velocity along `axis`.
+pub fn centre_of_mass_velocity<const D: usize>(points: &PointStore<D>, axis: usize) -> f64 {
+    points.momentum()[axis] / points.total_mass()
+}
+
+/// Times where a sampled signal changes sign, by linear interpolation between samples.
+pub fn zero_crossings(times: &[f64], values: &[f64]) -> Vec<f64> {
+    let mut out = Vec::new();
+    for k in 1..times.len().min(values.len()) {
+        let (a, b) = (values[k - 1], values[k]);
+        if a == 0.0 && k == 1 {
+            out.push(times[0]);
+        }
+        if (a < 0.0 && b >= 0.0) || (a > 0.0 && b <= 0.0) {
+            if b == 0.0 {
+                out.push(times[k]);
+            } else {
+                out.push(times[k - 1] + (times[k] - times[k - 1]) * a / (a - b));
+            }
+        }
+    }
+    out.dedup();
+    out
+}
+
+/// Period of an oscillation from its zero crossings: twice the mean spacing from the first
+/// crossing to the last. `None` with fewer than two crossings.
+pub fn period_from_crossings(crossings: &[f64]) -> Option<f64> {
+    if crossings.len() < 2 {
+        return None;
+    }
+    let n = crossings.len() - 1;
+    Some(2.0 * (crossings[n] - crossings[0]) / n as f64)
+}

@@ -3,9 +3,12 @@
 //! cut-back (`quasi_static`). The formulation is the seed paper's (Wang et al. 2016) with
 //! the finite-strain extension of THEORY.md §2.
 
+mod dynamic;
+mod engine;
 mod quasi_static;
 mod step;
 
 pub use loam_model::{Kinematics, Model, ModelError, PlaneConstraint};
+pub use dynamic::{Dynamic, DynamicSettings, MassMatrix};
 pub use quasi_static::{IterationProfile, QuasiStatic, QuasiStaticSettings, RunError, StepError, StepReport};
 pub use step::PointUpdateError;

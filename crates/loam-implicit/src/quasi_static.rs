@@ -7,14 +7,10 @@
 //! never committed.
 
 use loam_model::Model;
-use crate::step::{PointCouplings, PointUpdateError, StepSystem, TrialState};
-use loam_grid::{Connectivity, PointBasisError};
-use loam_solve::{
-    gather_nodal, BlockPattern, LinearSolverKind, LinearSolverTimings, NewtonError, NewtonSettings, NewtonSolver,
-    SparseDirectSolver,
-};
-use loam_points::stretched_half_length;
-use rayon::prelude::*;
+use crate::engine::Engine;
+use crate::step::PointUpdateError;
+use loam_grid::PointBasisError;
+use loam_solve::{LinearSolverKind, LinearSolverTimings, NewtonError, NewtonSettings, SparseDirectSolver};
 use std::time::{Duration, Instant};
 
 /// Settings of a quasi-static analysis.
@@ -41,6 +37,9 @@ pub struct StepReport {
     /// 1-based step number.
     pub step: usize,
     pub load_factor: f64,
+    /// Time reached (dynamics); in quasi-static analysis the pseudo-time, equal to the load
+    /// factor.
+    pub time: f64,
     /// Sub-steps the step needed (1 without cut-back).
     pub substeps: usize,
     /// Failed attempts that were cut back.
@@ -69,59 +68,31 @@ pub enum StepError {
     ConstraintTouchesNoNode { index: usize, axis: usize, plane: usize },
     #[error("step {step} did not converge at load factor {load_factor:.6} after {cutbacks} cut-backs: {reason}")]
     NotConverged { step: usize, load_factor: f64, cutbacks: usize, reason: String, residuals: Vec<f64> },
+    #[error("invalid analysis setting {field} = {value}: valid is {valid}")]
+    InvalidSettings { field: &'static str, value: f64, valid: &'static str },
     #[error("the analysis is already finished ({0} steps)")]
     Finished(usize),
 }
 
 /// Quasi-static implicit analysis of a model. See the module docs.
 pub struct QuasiStatic<const D: usize> {
-    model: Model<D>,
+    engine: Engine<D>,
     settings: QuasiStaticSettings,
     step: usize,
     load_factor: f64,
-    conn: Connectivity<D>,
-    conn_current: bool,
-    pattern: BlockPattern,
-    values: Vec<f64>,
-    constrained: Vec<bool>,
-    f_ext: Vec<f64>,
-    du: Vec<f64>,
-    trial: TrialState<D>,
-    newton: NewtonSolver,
 }
 
 impl<const D: usize> QuasiStatic<D> {
     pub fn new(model: Model<D>, settings: QuasiStaticSettings) -> Self {
-        let kind = settings.linear_solver.unwrap_or(if model.symmetric_tangent() {
-            LinearSolverKind::Cholesky
-        } else {
-            LinearSolverKind::Lu
-        });
-        tracing::info!(solver = %kind, "linear solver chosen from the tangent's symmetry");
-        let newton = NewtonSolver::new(settings.newton, SparseDirectSolver::new(kind));
-        Self {
-            conn: Connectivity::new(model.basis),
-            model,
-            settings,
-            step: 0,
-            load_factor: 0.0,
-            conn_current: false,
-            pattern: BlockPattern::new(D),
-            values: Vec::new(),
-            constrained: Vec::new(),
-            f_ext: Vec::new(),
-            du: Vec::new(),
-            trial: TrialState::default(),
-            newton,
-        }
+        Self { engine: Engine::new(model, settings.newton, settings.linear_solver), settings, step: 0, load_factor: 0.0 }
     }
 
     pub fn model(&self) -> &Model<D> {
-        &self.model
+        &self.engine.model
     }
 
     pub fn into_model(self) -> Model<D> {
-        self.model
+        self.engine.model
     }
 
     pub fn settings(&self) -> &QuasiStaticSettings {
@@ -141,125 +112,28 @@ impl<const D: usize> QuasiStatic<D> {
     }
 
     pub fn linear_solver_kind(&self) -> LinearSolverKind {
-        self.newton.linear_solver().kind()
+        self.engine.newton.linear_solver().kind()
     }
 
     pub fn linear_solver_timings(&self) -> LinearSolverTimings {
-        self.newton.linear_solver().timings()
-    }
-
-    /// Connectivity of the committed configuration (computed once per committed state).
-    fn connect(&mut self) -> Result<(), StepError> {
-        if self.conn_current {
-            return Ok(());
-        }
-        let pts = &self.model.points;
-        self.conn
-            .compute(&self.model.grid, &pts.position, &pts.half_length)
-            .map_err(|source| StepError::PointOutsideGrid { step: self.step + 1, source })?;
-        self.pattern.update(&PointCouplings(&self.conn));
-        self.model.constrained_dofs(self.conn.active_nodes(), &mut self.constrained);
-        self.conn_current = true;
-        Ok(())
+        self.engine.newton.linear_solver().timings()
     }
 
     /// Check what can only be checked against the connectivity: every constraint must
     /// hold at least one active node. Scene validation calls this before the first step.
     pub fn check(&mut self) -> Result<(), StepError> {
-        self.connect()?;
-        let an = self.conn.active_nodes();
-        for (index, c) in self.model.constraints.iter().enumerate() {
-            let touches = an
-                .active_to_grid
-                .iter()
-                .any(|&g| self.model.grid.node_coords(g as usize)[c.axis] == c.plane);
-            if !touches {
-                return Err(StepError::ConstraintTouchesNoNode { index, axis: c.axis, plane: c.plane });
-            }
-        }
-        Ok(())
-    }
-
-    /// External nodal forces at load factor `lambda`: gravity on point masses and point
-    /// forces, both dead loads.
-    fn external_forces(&mut self, lambda: f64) {
-        let model = &self.model;
-        let conn = &self.conn;
-        self.f_ext.resize(conn.active_nodes().len() * D, 0.0);
-        gather_nodal(&PointCouplings(conn), D, &mut self.f_ext, |p, a, out| {
-            let n = conn.support_values(p)[a];
-            let f = model.point_load(p);
-            for i in 0..D {
-                out[i] += lambda * n * f[i];
-            }
-        });
-    }
-
-    /// Set up the Newton system of a step to `lambda` from the committed state: external
-    /// forces, a zero increment, sized trial buffers. Returns the system with the increment
-    /// and the Newton solver borrowed beside it.
-    fn prepare(&mut self, lambda: f64) -> (StepSystem<'_, D>, &mut Vec<f64>, &mut NewtonSolver) {
-        self.external_forces(lambda);
-        self.du.clear();
-        self.du.resize(self.conn.active_nodes().len() * D, 0.0);
-        self.trial.resize(self.model.points.len(), self.conn.stride(), self.model.points.history_stride());
-        let system = StepSystem {
-            model: &self.model,
-            conn: &self.conn,
-            pattern: &self.pattern,
-            values: &mut self.values,
-            constrained: &self.constrained,
-            f_ext: &self.f_ext,
-            trial: &mut self.trial,
-        };
-        (system, &mut self.du, &mut self.newton)
+        self.engine.check(self.step + 1)
     }
 
     /// Try to reach `lambda` from the committed state. On success the state is committed.
     fn attempt(&mut self, lambda: f64) -> Result<loam_solve::NewtonReport, NewtonError<PointUpdateError>> {
-        let (mut system, du, newton) = self.prepare(lambda);
+        self.engine.external_forces(lambda);
+        self.engine.du.clear();
+        let (mut system, du, newton) = self.engine.system(None);
         let report = newton.solve(&mut system, du)?;
-        self.commit();
+        self.engine.commit();
         self.load_factor = lambda;
         Ok(report)
-    }
-
-    /// Commit the converged trial state (THEORY.md §1): positions, F, volume, stress,
-    /// elastic strain, history, and GIMP half-lengths stretched with F (iGIMP).
-    fn commit(&mut self) {
-        let conn = &self.conn;
-        let du = &self.du;
-        let trial = &self.trial;
-        let pts = &mut self.model.points;
-        let hs = pts.history_stride();
-        (
-            pts.position.par_iter_mut(),
-            pts.deformation_gradient.par_iter_mut(),
-            pts.volume.par_iter_mut(),
-            pts.half_length.par_iter_mut(),
-            pts.half_length0.par_iter(),
-        )
-            .into_par_iter()
-            .enumerate()
-            .for_each(|(p, (x, f, v, l, l0))| {
-                for (&node, &n) in conn.support_nodes(p).iter().zip(conn.support_values(p)) {
-                    for i in 0..D {
-                        x[i] += n * du[node as usize * D + i];
-                    }
-                }
-                let df = trial.delta_f[p];
-                *v *= df.determinant();
-                *f = df * *f;
-                *l = stretched_half_length(l0, f);
-            });
-        pts.stress.copy_from_slice(&trial.stress);
-        pts.elastic_strain.copy_from_slice(&trial.elastic_strain);
-        if hs > 0 {
-            for p in 0..pts.len() {
-                pts.history[p * hs..(p + 1) * hs].copy_from_slice(&trial.history[p * hs..(p + 1) * hs]);
-            }
-        }
-        self.conn_current = false;
     }
 
     /// Time the phases of one Newton iteration of the next load step from the committed
@@ -267,8 +141,8 @@ impl<const D: usize> QuasiStatic<D> {
     /// commit nothing. For benchmarks and for sizing a run.
     pub fn profile_iteration(&mut self) -> Result<IterationProfile, StepError> {
         let t = Instant::now();
-        self.conn_current = false;
-        self.connect()?;
+        self.engine.invalidate();
+        self.engine.connect(self.step + 1)?;
         let connectivity = t.elapsed();
         let step = self.step + 1;
         let lambda = (step as f64 / self.settings.load_steps as f64).min(1.0);
@@ -279,7 +153,9 @@ impl<const D: usize> QuasiStatic<D> {
             reason,
             residuals: vec![],
         };
-        let (mut system, du, newton) = self.prepare(lambda);
+        self.engine.external_forces(lambda);
+        self.engine.du.clear();
+        let (mut system, du, newton) = self.engine.system(None);
         let kind = newton.linear_solver().kind();
         let n = du.len();
         let mut r = vec![0.0; n];
@@ -290,13 +166,13 @@ impl<const D: usize> QuasiStatic<D> {
         loam_solve::NewtonProblem::assemble(&mut system);
         let assembly = t.elapsed();
         let mut solver = SparseDirectSolver::new(kind);
-        solver.factorize(&self.pattern, &self.values).map_err(|e| not_converged(e.to_string()))?;
+        solver.factorize(&self.engine.pattern, &self.engine.values).map_err(|e| not_converged(e.to_string()))?;
         r.iter_mut().for_each(|v| *v = -*v);
         solver.solve_in_place(&mut r).map_err(|e| not_converged(e.to_string()))?;
         let lt = solver.timings();
         Ok(IterationProfile {
             dofs: n,
-            nonzeros: self.pattern.nnz(),
+            nonzeros: self.engine.pattern.nnz(),
             connectivity,
             points_and_residual,
             assembly,
@@ -319,8 +195,8 @@ impl<const D: usize> QuasiStatic<D> {
         let mut residuals = Vec::new();
         let (mut active_nodes, mut dofs) = (0, 0);
         while self.load_factor < target - 1e-12 * target.abs().max(1.0) {
-            self.connect()?;
-            active_nodes = self.conn.active_nodes().len();
+            self.engine.connect(step)?;
+            active_nodes = self.engine.conn.active_nodes().len();
             dofs = active_nodes * D;
             let lambda = (self.load_factor + increment).min(target);
             match self.attempt(lambda) {
@@ -349,6 +225,7 @@ impl<const D: usize> QuasiStatic<D> {
         Ok(StepReport {
             step,
             load_factor: self.load_factor,
+            time: self.load_factor,
             substeps,
             cutbacks,
             iterations,
@@ -369,7 +246,7 @@ impl<const D: usize> QuasiStatic<D> {
     {
         while !self.is_finished() {
             let report = self.step().map_err(RunError::Step)?;
-            on_step(&report, &self.model).map_err(RunError::Observer)?;
+            on_step(&report, &self.engine.model).map_err(RunError::Observer)?;
         }
         Ok(())
     }

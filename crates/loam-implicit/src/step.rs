@@ -51,7 +51,30 @@ impl<const D: usize> TrialState<D> {
     }
 }
 
-/// The Newton system of one load step.
+/// The inertial terms of a Newmark / Bossak step (THEORY.md §4). With the predictor
+/// increment Δũ = Δt vₙ + Δt² (½ − β) aₙ the new nodal acceleration is
+/// a_{n+1} = (Δu − Δũ) / (β Δt²), and the residual gains M [(1 − α_B) a_{n+1} + α_B aₙ]:
+/// with x = c (Δu − Δũ) + α_B aₙ and c = (1 − α_B) / (β Δt²), the force M x and the
+/// tangent c M.
+pub(crate) struct Inertia<'a> {
+    /// Consistent mass M_IJ = Σ_p m_p N_I N_J (times the identity per node) instead of the
+    /// lumped row sums.
+    pub consistent: bool,
+    /// Lumped nodal masses m_I = Σ_p m_p N_I, one per active node.
+    pub nodal_mass: &'a [f64],
+    /// c = (1 − α_B) / (β Δt²).
+    pub factor: f64,
+    /// Δũ per dof.
+    pub predictor: &'a [f64],
+    /// α_B aₙ per dof (zero for plain Newmark).
+    pub bossak_term: &'a [f64],
+    /// Scratch: x per dof, x interpolated to points, consistent inertial force per dof.
+    pub x: &'a mut Vec<f64>,
+    pub point_x: &'a mut Vec<f64>,
+    pub force: &'a mut Vec<f64>,
+}
+
+/// The Newton system of one load or time step.
 pub(crate) struct StepSystem<'a, const D: usize> {
     pub model: &'a Model<D>,
     pub conn: &'a Connectivity<D>,
@@ -60,6 +83,8 @@ pub(crate) struct StepSystem<'a, const D: usize> {
     pub constrained: &'a [bool],
     pub f_ext: &'a [f64],
     pub trial: &'a mut TrialState<D>,
+    /// Inertia of a dynamic step; `None` in quasi-static analysis.
+    pub inertia: Option<Inertia<'a>>,
 }
 
 /// Embed the in-plane displacement-increment gradient in 3×3 (plane strain: zero out of plane).
@@ -171,6 +196,40 @@ impl<const D: usize> StepSystem<'_, D> {
     }
 }
 
+impl Inertia<'_> {
+    /// The inertial force M x at the increment `du`, into `self.force`.
+    fn inertial_force<const D: usize>(&mut self, conn: &Connectivity<D>, mass: &[f64], du: &[f64]) {
+        let c = self.factor;
+        self.x.clear();
+        self.x.extend(du.iter().zip(self.predictor).zip(self.bossak_term).map(|((u, p), b)| c * (u - p) + b));
+        self.force.resize(du.len(), 0.0);
+        if !self.consistent {
+            for (k, (f, x)) in self.force.iter_mut().zip(self.x.iter()).enumerate() {
+                *f = self.nodal_mass[k / D] * x;
+            }
+            return;
+        }
+        // (M x)_I = Σ_p m_p N_I x_p with x_p = Σ_J N_J x_J: interpolate, then gather.
+        let x = &*self.x;
+        self.point_x.resize(conn.num_points() * D, 0.0);
+        self.point_x.par_chunks_mut(D).enumerate().for_each(|(p, xp)| {
+            xp.iter_mut().for_each(|v| *v = 0.0);
+            for (&node, &n) in conn.support_nodes(p).iter().zip(conn.support_values(p)) {
+                for i in 0..D {
+                    xp[i] += n * x[node as usize * D + i];
+                }
+            }
+        });
+        let point_x = &*self.point_x;
+        gather_nodal(&PointCouplings(conn), D, self.force, |p, a, out| {
+            let w = mass[p] * conn.support_values(p)[a];
+            for i in 0..D {
+                out[i] += w * point_x[p * D + i];
+            }
+        });
+    }
+}
+
 impl<const D: usize> NewtonProblem for StepSystem<'_, D> {
     type Error = PointUpdateError;
 
@@ -195,9 +254,19 @@ impl<const D: usize> NewtonProblem for StepSystem<'_, D> {
                 out[i] += v * f;
             }
         });
-        // r = f_int − f_ext; the reference is the external force on free dofs plus the
-        // support reactions (= f_int) on constrained ones (THEORY.md §7).
+        // r = M x + f_int − f_ext; the reference is the external and inertial force on
+        // free dofs plus the support reactions (= f_int) on constrained ones (THEORY.md §7):
+        // a free vibration has no external force, and must not be judged against zero.
         let mut reference = 0.0;
+        if let Some(inertia) = self.inertia.as_mut() {
+            inertia.inertial_force::<D>(self.conn, &self.model.points.mass, du);
+            for ((ri, &fi), &fixed) in r.iter_mut().zip(inertia.force.iter()).zip(self.constrained) {
+                if !fixed {
+                    *ri += fi;
+                    reference += fi * fi;
+                }
+            }
+        }
         for ((ri, &fe), &fixed) in r.iter_mut().zip(self.f_ext).zip(self.constrained) {
             if fixed {
                 reference += *ri * *ri;
@@ -212,8 +281,20 @@ impl<const D: usize> NewtonProblem for StepSystem<'_, D> {
 
     fn assemble(&mut self) {
         let trial = &*self.trial;
-        let stride = self.conn.stride();
-        self.pattern.assemble(&PointCouplings(self.conn), self.constrained, self.values, |p, a, b, out| {
+        let conn = self.conn;
+        let stride = conn.stride();
+        let mass = &self.model.points.mass;
+        // Inertia adds c m_p N_a N_b (consistent) or c m_p N_a on the diagonal block
+        // (lumped: the row sum) to every component.
+        let inertia = self.inertia.as_ref().map(|i| (i.factor, i.consistent));
+        self.pattern.assemble(&PointCouplings(conn), self.constrained, self.values, |p, a, b, out| {
+            if let Some((c, consistent)) = inertia {
+                let n = conn.support_values(p);
+                let m = c * mass[p] * if consistent { n[a] * n[b] } else if a == b { n[a] } else { 0.0 };
+                for i in 0..D {
+                    out[i * D + i] += m;
+                }
+            }
             let ga = &trial.grad_x[p * stride + a];
             let gb = &trial.grad_x[p * stride + b];
             let t = &trial.tangent[p];
@@ -299,6 +380,7 @@ mod tests {
                 constrained: &constrained,
                 f_ext: &f_ext,
                 trial: &mut trial,
+                inertia: None,
             };
             // A finite increment (up to 2 % of a cell) so that ΔF ≠ I.
             let du: Vec<f64> = noise(n, 7).iter().map(|x| 0.02 * x).collect();

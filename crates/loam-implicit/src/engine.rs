@@ -1,0 +1,165 @@
+//! What every implicit analysis does around its Newton solve: the point–node connectivity
+//! of the committed state, the constrained dofs, the sparse pattern, the external forces,
+//! the scratch trial state and the commit of a converged step (DESIGN.md "Data flow of one
+//! implicit step", steps 1, 4). Quasi-static load stepping and Newmark dynamics differ only
+//! in what they add to the Newton system and in how they advance time or load.
+
+use crate::step::{Inertia, PointCouplings, StepSystem, TrialState};
+use crate::StepError;
+use loam_grid::Connectivity;
+use loam_model::Model;
+use loam_points::stretched_half_length;
+use loam_solve::{gather_nodal, BlockPattern, LinearSolverKind, NewtonSettings, NewtonSolver, SparseDirectSolver};
+use rayon::prelude::*;
+
+pub(crate) struct Engine<const D: usize> {
+    pub model: Model<D>,
+    pub conn: Connectivity<D>,
+    conn_current: bool,
+    pub pattern: BlockPattern,
+    pub values: Vec<f64>,
+    pub constrained: Vec<bool>,
+    pub f_ext: Vec<f64>,
+    pub du: Vec<f64>,
+    pub trial: TrialState<D>,
+    pub newton: NewtonSolver,
+}
+
+impl<const D: usize> Engine<D> {
+    /// The linear solver is the one asked for, or chosen from the tangent's symmetry:
+    /// Cholesky when every material's tangent is symmetric, LU otherwise (never a silent
+    /// symmetrisation).
+    pub fn new(model: Model<D>, newton: NewtonSettings, linear_solver: Option<LinearSolverKind>) -> Self {
+        let kind = linear_solver.unwrap_or(if model.symmetric_tangent() {
+            LinearSolverKind::Cholesky
+        } else {
+            LinearSolverKind::Lu
+        });
+        tracing::info!(solver = %kind, "linear solver chosen from the tangent's symmetry");
+        Self {
+            conn: Connectivity::new(model.basis),
+            model,
+            conn_current: false,
+            pattern: BlockPattern::new(D),
+            values: Vec::new(),
+            constrained: Vec::new(),
+            f_ext: Vec::new(),
+            du: Vec::new(),
+            trial: TrialState::default(),
+            newton: NewtonSolver::new(newton, SparseDirectSolver::new(kind)),
+        }
+    }
+
+    /// Connectivity of the committed configuration (computed once per committed state).
+    /// `step` names the step in an error.
+    pub fn connect(&mut self, step: usize) -> Result<(), StepError> {
+        if self.conn_current {
+            return Ok(());
+        }
+        let pts = &self.model.points;
+        self.conn
+            .compute(&self.model.grid, &pts.position, &pts.half_length)
+            .map_err(|source| StepError::PointOutsideGrid { step, source })?;
+        self.pattern.update(&PointCouplings(&self.conn));
+        self.model.constrained_dofs(self.conn.active_nodes(), &mut self.constrained);
+        self.conn_current = true;
+        Ok(())
+    }
+
+    /// Force the next `connect` to recompute (e.g. before profiling a cold iteration).
+    pub fn invalidate(&mut self) {
+        self.conn_current = false;
+    }
+
+    /// Every constraint must hold at least one active node.
+    pub fn check(&mut self, step: usize) -> Result<(), StepError> {
+        self.connect(step)?;
+        let an = self.conn.active_nodes();
+        for (index, c) in self.model.constraints.iter().enumerate() {
+            let touches = an.active_to_grid.iter().any(|&g| self.model.grid.node_coords(g as usize)[c.axis] == c.plane);
+            if !touches {
+                return Err(StepError::ConstraintTouchesNoNode { index, axis: c.axis, plane: c.plane });
+            }
+        }
+        Ok(())
+    }
+
+    pub fn num_dofs(&self) -> usize {
+        self.conn.active_nodes().len() * D
+    }
+
+    /// External nodal forces at load factor `lambda`: the model's dead loads.
+    pub fn external_forces(&mut self, lambda: f64) {
+        let model = &self.model;
+        let conn = &self.conn;
+        self.f_ext.resize(conn.active_nodes().len() * D, 0.0);
+        gather_nodal(&PointCouplings(conn), D, &mut self.f_ext, |p, a, out| {
+            let n = conn.support_values(p)[a];
+            let f = model.point_load(p);
+            for i in 0..D {
+                out[i] += lambda * n * f[i];
+            }
+        });
+    }
+
+    /// The Newton system of a step from the committed state, with the external forces
+    /// already set and the trial buffers sized; the increment (zero unless the caller set a
+    /// predictor) and the Newton solver are lent beside it.
+    pub fn system<'a>(
+        &'a mut self,
+        inertia: Option<Inertia<'a>>,
+    ) -> (StepSystem<'a, D>, &'a mut Vec<f64>, &'a mut NewtonSolver) {
+        let n = self.num_dofs();
+        self.du.resize(n, 0.0);
+        self.trial.resize(self.model.points.len(), self.conn.stride(), self.model.points.history_stride());
+        let system = StepSystem {
+            model: &self.model,
+            conn: &self.conn,
+            pattern: &self.pattern,
+            values: &mut self.values,
+            constrained: &self.constrained,
+            f_ext: &self.f_ext,
+            trial: &mut self.trial,
+            inertia,
+        };
+        (system, &mut self.du, &mut self.newton)
+    }
+
+    /// Commit the converged trial state (THEORY.md §1): positions, F, volume, stress,
+    /// elastic strain, history, and GIMP half-lengths stretched with F (iGIMP). The
+    /// connectivity stays readable until the next `connect`.
+    pub fn commit(&mut self) {
+        let conn = &self.conn;
+        let du = &self.du;
+        let trial = &self.trial;
+        let pts = &mut self.model.points;
+        let hs = pts.history_stride();
+        (
+            pts.position.par_iter_mut(),
+            pts.deformation_gradient.par_iter_mut(),
+            pts.volume.par_iter_mut(),
+            pts.half_length.par_iter_mut(),
+            pts.half_length0.par_iter(),
+        )
+            .into_par_iter()
+            .enumerate()
+            .for_each(|(p, (x, f, v, l, l0))| {
+                for (&node, &n) in conn.support_nodes(p).iter().zip(conn.support_values(p)) {
+                    for i in 0..D {
+                        x[i] += n * du[node as usize * D + i];
+                    }
+                }
+                let df = trial.delta_f[p];
+                *v *= df.determinant();
+                *f = df * *f;
+                *l = stretched_half_length(l0, f);
+            });
+        pts.stress.copy_from_slice(&trial.stress);
+        pts.elastic_strain.copy_from_slice(&trial.elastic_strain);
+        if hs > 0 {
+            let n = pts.history.len();
+            pts.history.copy_from_slice(&trial.history[..n]);
+        }
+        self.conn_current = false;
+    }
+}
