@@ -6,6 +6,11 @@
 //!   with history kept in caller-owned slices (points store it struct-of-arrays).
 //! - [`Elastic`]: linear isotropic elasticity (Hencky elasticity when driven by
 //!   logarithmic strain).
+//! - [`VonMises`]: J2 plasticity with linear hardening/softening and a residual floor
+//!   (radial return, consistent tangent).
+//! - [`MohrCoulomb`]: Mohr–Coulomb in principal stresses (plane, edges, apex, optional
+//!   tension cut-off, linear softening of c, φ, ψ), consistent tangent mapped back
+//!   through the eigenbasis; φ = 0 is Tresca.
 //! - [`small_strain_update`] and [`finite_strain_update`]: the two kinematic drivers
 //!   (THEORY §3 and §2). The finite-strain spatial tangent is de Souza Neto, Perić &
 //!   Owen (2008), *Computational Methods for Plasticity*, eq. 14.103.
@@ -18,8 +23,12 @@ pub mod tensor;
 
 mod elastic;
 mod kinematics;
+mod mohr_coulomb;
+mod von_mises;
 
 pub use elastic::Elastic;
+pub use mohr_coulomb::{MohrCoulomb, MohrCoulombRegion, MohrCoulombReturn, Softening};
+pub use von_mises::{VonMises, VonMisesRegion};
 pub use kinematics::{finite_strain_update, small_strain_update, FiniteStrainUpdate};
 pub use tensor::Tensor4;
 
@@ -41,6 +50,12 @@ pub enum ConstitutiveError {
     InvalidParameter { name: &'static str, value: f64 },
     #[error("history slice has length {got}, law needs {expected}")]
     HistoryLength { expected: usize, got: usize },
+    #[error("{law} return mapping did not converge after {iterations} iterations (residual {residual})")]
+    ReturnMappingFailed {
+        law: &'static str,
+        iterations: usize,
+        residual: f64,
+    },
 }
 
 /// Output of a small-strain return mapping.

@@ -1,0 +1,1247 @@
+//! Mohr–Coulomb plasticity in principal stresses (THEORY §8; de Souza Neto, Perić & Owen
+//! 2008, §8.2–8.3 and Appendix A.5; Clausen, Damkilde & Andersen 2007), with an optional
+//! tension cut-off and linear softening of c, φ, ψ.
+//!
+//! # Conventions
+//! Tension positive. Principal stresses ordered σ₁ ≥ σ₂ ≥ σ₃ (σ₃ is the major compression).
+//! Main yield plane and potential:
+//!
+//! ```text
+//! f = (σ₁ − σ₃) + (σ₁ + σ₃) sin φ − 2 c cos φ,   g = (σ₁ − σ₃) + (σ₁ + σ₃) sin ψ
+//! ```
+//!
+//! (with compression-positive stresses σ'₁ = −σ₃ ≥ σ'₃ = −σ₁ this is the textbook
+//! σ'₁ − σ'₃ = 2c cos φ + (σ'₁ + σ'₃) sin φ). The optional tension cut-off is the plane
+//! f_t = σ₁ − σ_t (associated flow).
+//!
+//! # Return regions
+//! Each region is a set of active constraints; the return solves them together with the
+//! flow rule σ = σ_tr − Dᵉ Σ Δγ_j ∂g_j/∂σ (Dᵉ = λ 1⊗1 + 2G I in principal space). In this
+//! order, the first region whose solution is admissible (all six Mohr–Coulomb planes and all
+//! three cut-off planes satisfied to 1e-11·scale) with non-negative multipliers is taken:
+//!
+//! | region | active | stress after return |
+//! |---|---|---|
+//! | [`Plane`](MohrCoulombRegion::Plane) | f₁₃ | on the main plane |
+//! | [`Cutoff`](MohrCoulombRegion::Cutoff) | σ₁ = σ_t | on the cut-off plane |
+//! | [`Edge12`](MohrCoulombRegion::Edge12) | f₁₃, f₂₃ | σ₁ = σ₂ (triaxial-compression meridian) |
+//! | [`Edge23`](MohrCoulombRegion::Edge23) | f₁₃, f₁₂ | σ₂ = σ₃ (triaxial-extension meridian) |
+//! | [`CutoffPlane`](MohrCoulombRegion::CutoffPlane) | f₁₃, σ₁ = σ_t | line where the MC plane meets the cut-off |
+//! | [`CutoffEdge12`](MohrCoulombRegion::CutoffEdge12) | σ₁ = σ_t, σ₂ = σ_t | σ₁ = σ₂ = σ_t |
+//! | [`CutoffCorner23`](MohrCoulombRegion::CutoffCorner23) | f₁₃, f₁₂, σ₁ = σ_t | point σ₁ = σ_t, σ₂ = σ₃ on MC |
+//! | [`CutoffApex`](MohrCoulombRegion::CutoffApex) | σ_i = σ_t, i = 1..3 | σ = σ_t I |
+//! | [`CutoffCorner12`](MohrCoulombRegion::CutoffCorner12) | f₁₃, f₂₃, σ₁ = σ₂ = σ_t | point σ₁ = σ₂ = σ_t on MC |
+//! | [`Apex`](MohrCoulombRegion::Apex) | all MC planes | σ = c cot φ I (φ > 0 only) |
+//!
+//! Here f_ij = (1 + sin φ) σ_i − (1 − sin φ) σ_j − 2c cos φ, so f₁₃ is the main plane and
+//! f₂₃, f₁₂ are its neighbours across the edges σ₁ = σ₂ and σ₂ = σ₃. The last two regions
+//! are vertices where four or more planes meet (the flow is not fixed by as many multipliers
+//! as constraints): the stress is the vertex, the plastic strain is Dᵉ⁻¹(σ_tr − σ), and the
+//! return is taken when no earlier region was valid and the vertex is admissible. The normal
+//! cone of the plastic potentials is still checked and reported as
+//! [`MohrCoulombReturn::fallback`] when it fails. In the tests this happens only at the
+//! apex with ψ = 0 (e.g. a residual ψ_res = 0): non-dilatant flow cannot reach the apex
+//! from a trial state beyond it, so the apex return supplies volumetric plastic strain that
+//! the potential does not (the classical treatment of the apex for non-associated flow).
+//! With ψ = φ and no softening the regions partition principal stress space and `fallback`
+//! is never set (property-tested). If neither a flow region nor a vertex is accepted (never
+//! observed), the admissible candidate closest in the energy norm is taken with `fallback`
+//! set; if none is admissible the update fails with
+//! [`ConstitutiveError::ReturnMappingFailed`]. Non-associated returns are not unique in
+//! general; for them this priority order *defines* the return (continuity across region
+//! boundaries is property-tested).
+//!
+//! φ = 0 is Tresca: the apex does not exist and no expression divides by sin φ or tan φ
+//! (only the apex value c cos φ / sin φ, evaluated only for sin φ > 0).
+//!
+//! # Softening and history
+//! X(κ) = X_res + (X₀ − X_res) max(0, 1 − κ/κ_res) for X ∈ {c, φ, ψ}, where κ is the
+//! accumulated equivalent deviatoric plastic strain, κ̇ = √(2/3 ė^p : ė^p) (equal to the
+//! axial plastic strain of isochoric uniaxial flow, and to γ^p/√3 in simple shear). It is
+//! computed from the plastic strain increment itself, Δκ = √(2/3) ‖dev Δε^p‖, so that it is
+//! defined identically in every region (including the apex, where Δε^p is fixed by the
+//! stress and not by multipliers) and continuous across region boundaries. Cut-off flow
+//! contributes to κ like any other plastic strain.
+//!
+//! History slots: `[0]` κ, `[1]` accumulated volumetric plastic strain ε_v^p = Σ tr Δε^p
+//! (informative only; it drives nothing).
+//!
+//! The multipliers and κ solve a small nonlinear system by Newton's method (residuals to
+//! 1e-12 relative plus one polishing iteration, at most 50 iterations); the piecewise-linear
+//! softening law is handled as in the von Mises law: solve on the softening branch, and if
+//! κ ends beyond κ_res redo the return on the residual (constant) branch.
+//!
+//! # Tangent
+//! The principal algorithmic tangent ∂σ_A/∂ε_B follows from differentiating the converged
+//! local system (implicit function theorem); the full tensor is
+//! D = Σ_AB ∂σ_A/∂ε_B N_A⊗N_B + Σ_{A<B} 2 (σ_A − σ_B)/(ε_A − ε_B) S_AB⊗S_AB with
+//! N_A = n_A⊗n_A, S_AB = sym(n_A⊗n_B) (de Souza Neto Appendix A.5). Pairs that a region
+//! forces equal (edges, vertices) get a zero spin coefficient; distinct pairs with nearly
+//! equal trial strains (|Δε| ≤ 1e-8 max|ε|) take the limit ½(∂σ_A/∂ε_A − ∂σ_A/∂ε_B +
+//! ∂σ_B/∂ε_B − ∂σ_B/∂ε_A) instead of dividing.
+
+use nalgebra::{Matrix3, Matrix4, Matrix4x3, Vector3, Vector4};
+
+use crate::tensor::{flatten, spectral, Tensor4};
+use crate::{check_finite, ConstitutiveError, ConstitutiveLaw, Elastic, StressUpdate};
+
+/// Linear softening of c, φ, ψ to residual values at κ = κ_res (angles in radians).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Softening {
+    /// Residual cohesion c_res.
+    pub cohesion: f64,
+    /// Residual friction angle φ_res (radians).
+    pub friction: f64,
+    /// Residual dilation angle ψ_res (radians).
+    pub dilation: f64,
+    /// κ_res: the accumulated equivalent deviatoric plastic strain at which the residual
+    /// values are reached.
+    pub kappa: f64,
+}
+
+/// Return region of a Mohr–Coulomb update (see the module documentation for the table).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum MohrCoulombRegion {
+    /// Trial state admissible: returned unchanged.
+    Elastic,
+    /// Main plane f₁₃ = 0 (one multiplier).
+    Plane,
+    /// Edge σ₁ = σ₂ (planes f₁₃ and f₂₃; triaxial-compression meridian in the
+    /// tension-positive convention: the major compression σ₃ is the distinct one).
+    Edge12,
+    /// Edge σ₂ = σ₃ (planes f₁₃ and f₁₂; triaxial-extension meridian).
+    Edge23,
+    /// Apex σ = c cot φ I (φ > 0 only).
+    Apex,
+    /// Tension cut-off plane σ₁ = σ_t.
+    Cutoff,
+    /// Cut-off edge σ₁ = σ₂ = σ_t (two cut-off planes).
+    CutoffEdge12,
+    /// Line where the main MC plane meets the cut-off plane.
+    CutoffPlane,
+    /// Vertex σ₁ = σ_t, σ₂ = σ₃ on the MC surface.
+    CutoffCorner23,
+    /// Vertex σ₁ = σ₂ = σ_t on the MC surface.
+    CutoffCorner12,
+    /// Cut-off apex σ = σ_t I.
+    CutoffApex,
+}
+
+impl MohrCoulombRegion {
+    /// Principal pairs (0,1), (0,2), (1,2) that the region forces equal.
+    fn tied(self) -> [bool; 3] {
+        use MohrCoulombRegion::*;
+        match self {
+            Edge12 | CutoffEdge12 | CutoffCorner12 => [true, false, false],
+            Edge23 | CutoffCorner23 => [false, false, true],
+            Apex | CutoffApex => [true, true, true],
+            Elastic | Plane | Cutoff | CutoffPlane => [false; 3],
+        }
+    }
+}
+
+/// Diagnostics of one update (see [`MohrCoulomb::update_with_info`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct MohrCoulombReturn {
+    pub region: MohrCoulombRegion,
+    /// The accepted return did not satisfy the flow rule's sign conditions (only possible
+    /// at the vertices, e.g. the apex with ψ < φ; see the module documentation).
+    pub fallback: bool,
+    /// Softening enabled and κ_{n+1} ≥ κ_res (the residual strength branch).
+    pub residual_branch: bool,
+}
+
+/// Mohr–Coulomb with optional tension cut-off and linear softening (see module docs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MohrCoulomb {
+    pub elastic: Elastic,
+    /// Peak cohesion c ≥ 0.
+    pub cohesion: f64,
+    /// Peak friction angle φ in [0, π/2) (radians).
+    pub friction: f64,
+    /// Peak dilation angle ψ in [0, φ] (radians).
+    pub dilation: f64,
+    /// Tension cut-off σ_t (σ₁ ≤ σ_t), at most the peak apex value c cot φ.
+    pub tension_cutoff: Option<f64>,
+    pub softening: Option<Softening>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Branch {
+    /// No softening: peak values.
+    Peak,
+    /// X(κ) = X₀ + (X_res − X₀) κ/κ_res, not clamped (the clamp is the Residual branch).
+    Softening,
+    /// X = X_res.
+    Residual,
+}
+
+/// Strength parameters at some κ on a branch, with their κ-derivatives.
+#[derive(Debug, Clone, Copy)]
+struct Params {
+    c: f64,
+    sphi: f64,
+    cphi: f64,
+    spsi: f64,
+    cpsi: f64,
+    dc: f64,
+    dphi: f64,
+    dpsi: f64,
+}
+
+/// A plane in ordered principal space.
+#[derive(Debug, Clone, Copy)]
+enum Surface {
+    /// f_ij = (1 + sin φ) σ_i − (1 − sin φ) σ_j − 2c cos φ.
+    Mc(usize, usize),
+    /// σ_i − σ_t.
+    Cut(usize),
+}
+
+fn unit(i: usize) -> Vector3<f64> {
+    let mut v = Vector3::zeros();
+    v[i] = 1.0;
+    v
+}
+
+fn dev3(v: &Vector3<f64>) -> Vector3<f64> {
+    v - Vector3::repeat(v.sum() / 3.0)
+}
+
+impl Surface {
+    fn f(self, sig: &Vector3<f64>, p: &Params, t: f64) -> f64 {
+        match self {
+            Surface::Mc(i, j) => {
+                (1.0 + p.sphi) * sig[i] - (1.0 - p.sphi) * sig[j] - 2.0 * p.c * p.cphi
+            }
+            Surface::Cut(i) => sig[i] - t,
+        }
+    }
+    /// ∂f/∂σ.
+    fn a(self, p: &Params) -> Vector3<f64> {
+        match self {
+            Surface::Mc(i, j) => unit(i) * (1.0 + p.sphi) - unit(j) * (1.0 - p.sphi),
+            Surface::Cut(i) => unit(i),
+        }
+    }
+    /// ∂g/∂σ (flow direction).
+    fn b(self, p: &Params) -> Vector3<f64> {
+        match self {
+            Surface::Mc(i, j) => unit(i) * (1.0 + p.spsi) - unit(j) * (1.0 - p.spsi),
+            Surface::Cut(i) => unit(i),
+        }
+    }
+    /// ∂b/∂κ.
+    fn db(self, p: &Params) -> Vector3<f64> {
+        match self {
+            Surface::Mc(i, j) => (unit(i) + unit(j)) * (p.cpsi * p.dpsi),
+            Surface::Cut(_) => Vector3::zeros(),
+        }
+    }
+    /// ∂f/∂κ at fixed σ.
+    fn df(self, sig: &Vector3<f64>, p: &Params) -> f64 {
+        match self {
+            Surface::Mc(i, j) => {
+                p.cphi * p.dphi * (sig[i] + sig[j]) - 2.0 * p.dc * p.cphi
+                    + 2.0 * p.c * p.sphi * p.dphi
+            }
+            Surface::Cut(_) => 0.0,
+        }
+    }
+}
+
+use MohrCoulombRegion as R;
+use Surface::{Cut, Mc};
+
+/// Flow regions in priority order (the vertex regions CutoffCorner12 and Apex follow).
+const FLOW_REGIONS: [(MohrCoulombRegion, &[Surface], bool); 8] = [
+    (R::Plane, &[Mc(0, 2)], false),
+    (R::Cutoff, &[Cut(0)], true),
+    (R::Edge12, &[Mc(0, 2), Mc(1, 2)], false),
+    (R::Edge23, &[Mc(0, 2), Mc(0, 1)], false),
+    (R::CutoffPlane, &[Mc(0, 2), Cut(0)], true),
+    (R::CutoffEdge12, &[Cut(0), Cut(1)], true),
+    (R::CutoffCorner23, &[Mc(0, 2), Mc(0, 1), Cut(0)], true),
+    (R::CutoffApex, &[Cut(0), Cut(1), Cut(2)], true),
+];
+
+/// √(2/3): Δκ = √(2/3) ‖dev Δε^p‖.
+fn alpha() -> f64 {
+    (2.0f64 / 3.0).sqrt()
+}
+/// Elastic trial states with f ≤ ELASTIC_TOL·scale are returned unchanged.
+const ELASTIC_TOL: f64 = 1e-12;
+/// A candidate is admissible when every plane is satisfied to ADMISSIBLE_TOL·scale.
+const ADMISSIBLE_TOL: f64 = 1e-11;
+/// Newton residual tolerance (relative).
+const NEWTON_TOL: f64 = 1e-12;
+const MAX_ITERATIONS: usize = 50;
+
+/// Trial data shared by the candidate solvers.
+struct Trial {
+    e: Vector3<f64>,
+    sig: Vector3<f64>,
+    kappa_n: f64,
+    de: Matrix3<f64>,
+    de_inv: Matrix3<f64>,
+    g: f64,
+    scale: f64,
+}
+
+/// A converged candidate return in principal space.
+#[derive(Debug, Clone, Copy)]
+struct Candidate {
+    region: MohrCoulombRegion,
+    sig: Vector3<f64>,
+    deps_p: Vector3<f64>,
+    kappa: f64,
+    branch: Branch,
+    /// ∂σ_A/∂ε_tr,B.
+    jp: Matrix3<f64>,
+    /// Multipliers non-negative (flow regions) / plastic strain in the normal cone of the
+    /// potentials (vertices).
+    flow_ok: bool,
+}
+
+impl MohrCoulomb {
+    /// Angles in radians. Validates c ≥ 0, 0 ≤ φ < π/2, 0 ≤ ψ ≤ φ (all finite).
+    pub fn new(
+        elastic: Elastic,
+        cohesion: f64,
+        friction: f64,
+        dilation: f64,
+    ) -> Result<Self, ConstitutiveError> {
+        let law = Self {
+            elastic,
+            cohesion,
+            friction,
+            dilation,
+            tension_cutoff: None,
+            softening: None,
+        };
+        law.validate()?;
+        Ok(law)
+    }
+
+    /// Angles in degrees.
+    pub fn from_degrees(
+        elastic: Elastic,
+        cohesion: f64,
+        friction_deg: f64,
+        dilation_deg: f64,
+    ) -> Result<Self, ConstitutiveError> {
+        Self::new(
+            elastic,
+            cohesion,
+            friction_deg.to_radians(),
+            dilation_deg.to_radians(),
+        )
+    }
+
+    /// Adds the cut-off plane σ₁ ≤ σ_t; σ_t must be finite and, for φ > 0, at most the peak
+    /// apex value c cot φ.
+    pub fn with_tension_cutoff(mut self, tension: f64) -> Result<Self, ConstitutiveError> {
+        self.tension_cutoff = Some(tension);
+        self.validate()?;
+        Ok(self)
+    }
+
+    /// Linear softening to residual values (angles in degrees) at κ = κ_res > 0. Requires
+    /// 0 ≤ c_res ≤ c, 0 ≤ φ_res ≤ φ, 0 ≤ ψ_res ≤ min(ψ, φ_res).
+    pub fn with_softening(
+        mut self,
+        cohesion_res: f64,
+        friction_res_deg: f64,
+        dilation_res_deg: f64,
+        kappa_res: f64,
+    ) -> Result<Self, ConstitutiveError> {
+        self.softening = Some(Softening {
+            cohesion: cohesion_res,
+            friction: friction_res_deg.to_radians(),
+            dilation: dilation_res_deg.to_radians(),
+            kappa: kappa_res,
+        });
+        self.validate()?;
+        Ok(self)
+    }
+
+    fn validate(&self) -> Result<(), ConstitutiveError> {
+        let bad = |name: &'static str, value: f64| {
+            Err(ConstitutiveError::InvalidParameter { name, value })
+        };
+        Elastic::new(self.elastic.young, self.elastic.poisson)?;
+        let half_pi = std::f64::consts::FRAC_PI_2;
+        if !(self.cohesion.is_finite() && self.cohesion >= 0.0) {
+            return bad("cohesion", self.cohesion);
+        }
+        if !(self.friction.is_finite() && self.friction >= 0.0 && self.friction < half_pi) {
+            return bad("friction", self.friction);
+        }
+        if !(self.dilation.is_finite() && self.dilation >= 0.0 && self.dilation <= self.friction) {
+            return bad("dilation", self.dilation);
+        }
+        if let Some(t) = self.tension_cutoff {
+            if !t.is_finite() {
+                return bad("tension_cutoff", t);
+            }
+            if self.friction > 0.0 {
+                let apex = self.cohesion * self.friction.cos() / self.friction.sin();
+                if t > apex + 1e-12 * apex.abs() {
+                    return bad("tension_cutoff", t);
+                }
+            }
+        }
+        if let Some(s) = self.softening {
+            if !(s.cohesion.is_finite() && s.cohesion >= 0.0 && s.cohesion <= self.cohesion) {
+                return bad("residual cohesion", s.cohesion);
+            }
+            if !(s.friction.is_finite() && s.friction >= 0.0 && s.friction <= self.friction) {
+                return bad("residual friction", s.friction);
+            }
+            if !(s.dilation.is_finite()
+                && s.dilation >= 0.0
+                && s.dilation <= self.dilation
+                && s.dilation <= s.friction)
+            {
+                return bad("residual dilation", s.dilation);
+            }
+            if !(s.kappa.is_finite() && s.kappa > 0.0) {
+                return bad("kappa_res", s.kappa);
+            }
+        }
+        Ok(())
+    }
+
+    /// True when the softening law makes c, φ or ψ vary.
+    fn softens(&self) -> bool {
+        self.softening.is_some_and(|s| {
+            s.cohesion != self.cohesion
+                || s.friction != self.friction
+                || s.dilation != self.dilation
+        })
+    }
+
+    /// (c, φ, ψ) at accumulated plastic strain κ (angles in radians).
+    pub fn strength(&self, kappa: f64) -> (f64, f64, f64) {
+        match self.softening {
+            None => (self.cohesion, self.friction, self.dilation),
+            Some(s) => {
+                let w = (1.0 - kappa / s.kappa).max(0.0);
+                (
+                    s.cohesion + (self.cohesion - s.cohesion) * w,
+                    s.friction + (self.friction - s.friction) * w,
+                    s.dilation + (self.dilation - s.dilation) * w,
+                )
+            }
+        }
+    }
+
+    fn branch_at(&self, kappa: f64) -> Branch {
+        match self.softening {
+            None => Branch::Peak,
+            Some(s) if kappa >= s.kappa => Branch::Residual,
+            Some(_) => Branch::Softening,
+        }
+    }
+
+    fn params(&self, kappa: f64, branch: Branch) -> Params {
+        let (c, phi, psi, dc, dphi, dpsi) = match (branch, self.softening) {
+            (Branch::Softening, Some(s)) => {
+                let r = kappa / s.kappa;
+                (
+                    self.cohesion + (s.cohesion - self.cohesion) * r,
+                    self.friction + (s.friction - self.friction) * r,
+                    self.dilation + (s.dilation - self.dilation) * r,
+                    (s.cohesion - self.cohesion) / s.kappa,
+                    (s.friction - self.friction) / s.kappa,
+                    (s.dilation - self.dilation) / s.kappa,
+                )
+            }
+            (Branch::Residual, Some(s)) => (s.cohesion, s.friction, s.dilation, 0.0, 0.0, 0.0),
+            _ => (self.cohesion, self.friction, self.dilation, 0.0, 0.0, 0.0),
+        };
+        Params {
+            c,
+            sphi: phi.sin(),
+            cphi: phi.cos(),
+            spsi: psi.sin(),
+            cpsi: psi.cos(),
+            dc,
+            dphi,
+            dpsi,
+        }
+    }
+
+    /// (f_MC, f_t) of principal stresses in any order: f_MC = max over the six planes, f_t =
+    /// max σ_i − σ_t (−∞ without cut-off).
+    fn yield_principal(&self, sig: &Vector3<f64>, p: &Params) -> (f64, f64) {
+        let (mx, mn) = (sig.max(), sig.min());
+        let f = (1.0 + p.sphi) * mx - (1.0 - p.sphi) * mn - 2.0 * p.c * p.cphi;
+        let ft = self.tension_cutoff.map_or(f64::NEG_INFINITY, |t| mx - t);
+        (f, ft)
+    }
+
+    /// Yield function values (f_MC, f_t) of a stress tensor at accumulated plastic strain κ
+    /// (f_t = None without cut-off). f_MC is the Mohr–Coulomb function of the ordered
+    /// principal stresses, f_t = σ₁ − σ_t.
+    pub fn yield_function(
+        &self,
+        stress: &Matrix3<f64>,
+        kappa: f64,
+    ) -> Result<(f64, Option<f64>), ConstitutiveError> {
+        let s = spectral(stress)?;
+        let p = self.params(kappa, self.branch_at(kappa));
+        let (f, ft) = self.yield_principal(&s.values, &p);
+        Ok((f, self.tension_cutoff.map(|_| ft)))
+    }
+
+    fn admissible(&self, sig: &Vector3<f64>, p: &Params, scale: f64) -> bool {
+        let (f, ft) = self.yield_principal(sig, p);
+        let tol = ADMISSIBLE_TOL * scale;
+        f <= tol && ft <= tol
+    }
+
+    /// Runs `solve` on the branch(es) the softening law needs (see module docs).
+    fn on_branches(
+        &self,
+        kappa_n: f64,
+        solve: impl Fn(Branch) -> Result<Option<Candidate>, ConstitutiveError>,
+    ) -> Result<Option<Candidate>, ConstitutiveError> {
+        let Some(s) = self.softening else {
+            return solve(Branch::Peak);
+        };
+        if kappa_n >= s.kappa {
+            return solve(Branch::Residual);
+        }
+        let soft = solve(Branch::Softening);
+        if let Ok(Some(c)) = &soft {
+            if c.kappa <= s.kappa {
+                return soft;
+            }
+        }
+        let res = solve(Branch::Residual);
+        if let Ok(Some(c)) = &res {
+            if c.kappa >= s.kappa {
+                return res;
+            }
+        }
+        // Neither branch is self-consistent (not expected for a monotone softening law):
+        // prefer a converged answer over an error.
+        match (soft, res) {
+            (Ok(Some(c)), _) | (_, Ok(Some(c))) => Ok(Some(c)),
+            (soft, _) => soft,
+        }
+    }
+
+    /// Return to the planes `set` (1–3 of them) with as many multipliers. `Ok(None)` when
+    /// the local system is singular (the region does not exist for these parameters).
+    fn solve_flow(
+        &self,
+        region: MohrCoulombRegion,
+        set: &[Surface],
+        tr: &Trial,
+        branch: Branch,
+    ) -> Result<Option<Candidate>, ConstitutiveError> {
+        let m = set.len();
+        let t = self.tension_cutoff.unwrap_or(f64::INFINITY);
+        let al = alpha();
+        let mut dg = [0.0f64; 3];
+        let mut kappa = tr.kappa_n;
+        let mut polished = false;
+        let mut last = f64::NAN;
+        for _ in 0..MAX_ITERATIONS {
+            let p = self.params(kappa, branch);
+            let bs: [Vector3<f64>; 3] =
+                std::array::from_fn(|j| set.get(j).map_or(Vector3::zeros(), |s| s.b(&p)));
+            let mut eps_p = Vector3::zeros();
+            let mut dbsum = Vector3::zeros();
+            for j in 0..m {
+                eps_p += bs[j] * dg[j];
+                dbsum += set[j].db(&p) * dg[j];
+            }
+            let sig = tr.sig - tr.de * eps_p;
+            let w = dev3(&eps_p);
+            let nw = w.norm();
+            // ‖dev Δε^p‖ is not differentiable at 0 (e.g. hydrostatic flow at the cut-off
+            // apex): below round-off level use the zero subgradient.
+            let what = if nw > 1e-14 * eps_p.norm() {
+                w / nw
+            } else {
+                Vector3::zeros()
+            };
+
+            let mut r = Vector4::zeros();
+            let mut jm = Matrix4::identity();
+            for j in 0..m {
+                r[j] = set[j].f(&sig, &p, t);
+                let a = set[j].a(&p);
+                for i in 0..m {
+                    jm[(j, i)] = -a.dot(&(tr.de * bs[i]));
+                }
+                jm[(j, 3)] = -a.dot(&(tr.de * dbsum)) + set[j].df(&sig, &p);
+            }
+            r[3] = kappa - tr.kappa_n - al * nw;
+            for i in 0..m {
+                jm[(3, i)] = -al * what.dot(&bs[i]);
+            }
+            jm[(3, 3)] = 1.0 - al * what.dot(&dbsum);
+            if !(r.iter().all(|v| v.is_finite()) && jm.iter().all(|v| v.is_finite())) {
+                return Err(ConstitutiveError::ReturnMappingFailed {
+                    law: "mohr-coulomb",
+                    iterations: MAX_ITERATIONS,
+                    residual: f64::NAN,
+                });
+            }
+            let rf = (0..m).map(|j| r[j].abs()).fold(0.0, f64::max);
+            last = rf / tr.scale;
+            // κ residual relative to κ or, for κ ≈ 0, to the plastic strain it comes from.
+            let conv = rf <= NEWTON_TOL * tr.scale
+                && r[3].abs() <= NEWTON_TOL * kappa.abs().max(eps_p.norm());
+            // Singular local system: Hadamard ratio |det| / Π ‖row‖.
+            let hadamard: f64 = jm.row_iter().map(|row| row.norm()).product();
+            let det = jm.determinant();
+            // (jm is finite here, so det and hadamard are not NaN.)
+            if det.abs() <= 1e-12 * hadamard {
+                return Ok(None);
+            }
+            let Some(jinv) = jm.try_inverse() else {
+                return Ok(None);
+            };
+            if conv && polished {
+                // Tangent: dx/dσ_tr = −J⁻¹ ∂R/∂σ_tr with ∂r_j/∂σ_tr = a_j, ∂r_κ/∂σ_tr = 0.
+                let mut rs = Matrix4x3::zeros();
+                for (j, surf) in set.iter().enumerate() {
+                    rs.set_row(j, &surf.a(&p).transpose());
+                }
+                let dx = -(jinv * rs);
+                let mut dsig = Matrix3::identity();
+                for (i, b) in bs.iter().enumerate().take(m) {
+                    dsig -= (tr.de * b) * dx.row(i);
+                }
+                dsig -= (tr.de * dbsum) * dx.row(3);
+                let jp = dsig * tr.de;
+                let gmax = dg[..m].iter().fold(0.0f64, |a, &v| a.max(v.abs()));
+                let flow_ok = dg[..m].iter().all(|&v| v >= -1e-12 * gmax);
+                return Ok(Some(Candidate {
+                    region,
+                    sig,
+                    deps_p: eps_p,
+                    kappa,
+                    branch,
+                    jp,
+                    flow_ok,
+                }));
+            }
+            if conv {
+                polished = true;
+            }
+            let delta = -(jinv * r);
+            for j in 0..m {
+                dg[j] += delta[j];
+            }
+            kappa = (kappa + delta[3]).max(tr.kappa_n);
+        }
+        Err(ConstitutiveError::ReturnMappingFailed {
+            law: "mohr-coulomb",
+            iterations: MAX_ITERATIONS,
+            residual: last,
+        })
+    }
+
+    /// Vertex σ₁ = σ₂ = σ_t on the MC surface: σ₃ = ((1 + sin φ) σ_t − 2c cos φ)/(1 − sin φ),
+    /// with κ from the scalar equation κ = κ_n + √(2/3)/(2G) ‖dev(σ_tr − σ_V(κ))‖.
+    fn solve_corner12(
+        &self,
+        tr: &Trial,
+        branch: Branch,
+    ) -> Result<Option<Candidate>, ConstitutiveError> {
+        let Some(t) = self.tension_cutoff else {
+            return Ok(None);
+        };
+        let beta = alpha() / (2.0 * tr.g);
+        let mut kappa = tr.kappa_n;
+        let mut polished = false;
+        let mut last = f64::NAN;
+        for _ in 0..MAX_ITERATIONS {
+            let p = self.params(kappa, branch);
+            let den = 1.0 - p.sphi;
+            let num = (1.0 + p.sphi) * t - 2.0 * p.c * p.cphi;
+            let s3 = num / den;
+            let dnum = p.cphi * p.dphi * t - 2.0 * p.dc * p.cphi + 2.0 * p.c * p.sphi * p.dphi;
+            let ds3 = (dnum + s3 * p.cphi * p.dphi) / den;
+            let sigv = Vector3::new(t, t, s3);
+            let dsigv = Vector3::new(0.0, 0.0, ds3);
+            let u = dev3(&(tr.sig - sigv));
+            let nu = u.norm();
+            let uhat = if nu > 1e-14 * tr.sig.norm() {
+                u / nu
+            } else {
+                Vector3::zeros()
+            };
+            let r = kappa - tr.kappa_n - beta * nu;
+            let dr = 1.0 + beta * uhat.dot(&dsigv);
+            if !(r.is_finite() && dr.is_finite()) || dr.abs() < 1e-12 {
+                return Err(ConstitutiveError::ReturnMappingFailed {
+                    law: "mohr-coulomb",
+                    iterations: MAX_ITERATIONS,
+                    residual: r,
+                });
+            }
+            last = r;
+            let conv = r.abs() <= NEWTON_TOL * kappa.abs().max(beta * u.norm());
+            if conv && polished {
+                // dκ/dσ_tr = β û / dr; dσ/dσ_tr = σ_V' ⊗ dκ/dσ_tr; Dᵉ û = 2G û (û deviatoric).
+                let jp = dsigv * (uhat * (alpha() / dr)).transpose();
+                let deps_p = tr.de_inv * (tr.sig - sigv);
+                let gens = [Mc(0, 2).b(&p), Mc(1, 2).b(&p), unit(0), unit(1)];
+                return Ok(Some(Candidate {
+                    region: R::CutoffCorner12,
+                    sig: sigv,
+                    deps_p,
+                    kappa,
+                    branch,
+                    jp,
+                    flow_ok: in_cone(&deps_p, &gens),
+                }));
+            }
+            if conv {
+                polished = true;
+            }
+            kappa = (kappa - r / dr).max(tr.kappa_n);
+        }
+        Err(ConstitutiveError::ReturnMappingFailed {
+            law: "mohr-coulomb",
+            iterations: MAX_ITERATIONS,
+            residual: last,
+        })
+    }
+
+    /// Apex σ = c cot φ I. Δε^p = ε_tr − Dᵉ⁻¹σ has deviatoric part dev ε_tr, so κ is
+    /// explicit: κ = κ_n + √(2/3) ‖dev ε_tr‖. `None` when φ(κ) = 0 (no apex).
+    fn solve_apex(&self, tr: &Trial) -> Option<Candidate> {
+        let de = dev3(&tr.e);
+        let nde = de.norm();
+        // Zero subgradient of ‖dev ε_tr‖ for a (round-off) hydrostatic trial, which is what
+        // a symmetric difference quotient sees.
+        let what = if nde > 1e-14 * tr.e.norm() {
+            de / nde
+        } else {
+            Vector3::zeros()
+        };
+        let kappa = tr.kappa_n + alpha() * nde;
+        let branch = self.branch_at(kappa);
+        let p = self.params(kappa, branch);
+        if p.sphi <= 0.0 {
+            return None;
+        }
+        let pa = p.c * p.cphi / p.sphi;
+        // d(c cot φ)/dκ = c' cot φ − c φ'/sin²φ.
+        let dpa = p.dc * p.cphi / p.sphi - p.c * p.dphi / (p.sphi * p.sphi);
+        let sig = Vector3::repeat(pa);
+        let jp = Vector3::repeat(1.0) * (what * (dpa * alpha())).transpose();
+        let deps_p = tr.de_inv * (tr.sig - sig);
+        let gens = [
+            Mc(0, 2).b(&p),
+            Mc(1, 2).b(&p),
+            Mc(0, 1).b(&p),
+            Mc(2, 0).b(&p),
+            Mc(2, 1).b(&p),
+            Mc(1, 0).b(&p),
+        ];
+        if !(sig.iter().chain(jp.iter()).all(|v| v.is_finite())) {
+            return None;
+        }
+        Some(Candidate {
+            region: R::Apex,
+            sig,
+            deps_p,
+            kappa,
+            branch,
+            jp,
+            flow_ok: in_cone(&deps_p, &gens),
+        })
+    }
+
+    /// The stress update with its return region and diagnostics.
+    pub fn update_with_info(
+        &self,
+        eps_trial: &Matrix3<f64>,
+        h_n: &[f64],
+        h_out: &mut [f64],
+    ) -> Result<(StressUpdate, MohrCoulombReturn), ConstitutiveError> {
+        check_finite(eps_trial, "trial strain")?;
+        for got in [h_n.len(), h_out.len()] {
+            if got != 2 {
+                return Err(ConstitutiveError::HistoryLength { expected: 2, got });
+            }
+        }
+        let (kappa_n, evp_n) = (h_n[0], h_n[1]);
+        if !(kappa_n.is_finite() && kappa_n >= 0.0 && evp_n.is_finite()) {
+            return Err(ConstitutiveError::NonFinite {
+                what: "Mohr-Coulomb history",
+            });
+        }
+        let eps = (eps_trial + eps_trial.transpose()) * 0.5;
+        let (lambda, g) = self.elastic.lame();
+        let spec = spectral(&eps)?;
+        // Order principal values descending (σ₁ ≥ σ₂ ≥ σ₃ follows since σ_A = λ tr ε + 2G ε_A).
+        let mut order = [0usize, 1, 2];
+        order.sort_by(|&a, &b| spec.values[b].total_cmp(&spec.values[a]));
+        let e = Vector3::from_fn(|a, _| spec.values[order[a]]);
+        let n = Matrix3::from_fn(|r, c| spec.vectors[(r, order[c])]);
+        let de = Matrix3::repeat(lambda) + Matrix3::identity() * (2.0 * g);
+        let de_inv =
+            (Matrix3::identity() - Matrix3::repeat(lambda / (3.0 * lambda + 2.0 * g))) / (2.0 * g);
+        let sig_tr = de * e;
+        if !sig_tr.iter().all(|v| v.is_finite()) {
+            return Err(ConstitutiveError::NonFinite {
+                what: "Mohr-Coulomb trial stress",
+            });
+        }
+        let scale = sig_tr
+            .amax()
+            .max(self.cohesion)
+            .max(self.tension_cutoff.map_or(0.0, f64::abs))
+            .max(f64::MIN_POSITIVE);
+        let branch_n = self.branch_at(kappa_n);
+        let p_n = self.params(kappa_n, branch_n);
+        let (f_tr, ft_tr) = self.yield_principal(&sig_tr, &p_n);
+        if f_tr <= ELASTIC_TOL * scale && ft_tr <= ELASTIC_TOL * scale {
+            h_out[0] = kappa_n;
+            h_out[1] = evp_n;
+            return Ok((
+                // Exactly the elastic law's update of the input (not of its symmetrised copy).
+                StressUpdate {
+                    stress: self.elastic.stress(eps_trial),
+                    elastic_strain: *eps_trial,
+                    tangent: self.elastic.stiffness(),
+                },
+                MohrCoulombReturn {
+                    region: R::Elastic,
+                    fallback: false,
+                    residual_branch: branch_n == Branch::Residual,
+                },
+            ));
+        }
+
+        let tr = Trial {
+            e,
+            sig: sig_tr,
+            kappa_n,
+            de,
+            de_inv,
+            g,
+            scale,
+        };
+        let admissible =
+            |c: &Candidate| self.admissible(&c.sig, &self.params(c.kappa, c.branch), scale);
+        let mut chosen: Option<(Candidate, bool)> = None;
+        // Rejected candidates (at most 8 flow regions + 2 vertices; no heap allocation).
+        let mut seen: [Option<Candidate>; 10] = [None; 10];
+        let mut n_seen = 0;
+        let mut remember = |c: Candidate| {
+            seen[n_seen] = Some(c);
+            n_seen += 1;
+        };
+        for (region, set, needs_cutoff) in FLOW_REGIONS {
+            if needs_cutoff && self.tension_cutoff.is_none() {
+                continue;
+            }
+            if let Some(c) = self.on_branches(kappa_n, |b| self.solve_flow(region, set, &tr, b))? {
+                if c.flow_ok && admissible(&c) {
+                    chosen = Some((c, false));
+                    break;
+                }
+                remember(c);
+            }
+        }
+        if chosen.is_none() {
+            // Vertices where more planes meet than there are constraints.
+            let corner = self.on_branches(kappa_n, |b| self.solve_corner12(&tr, b))?;
+            for c in corner.into_iter().chain(self.solve_apex(&tr)) {
+                if admissible(&c) {
+                    chosen = Some((c, !c.flow_ok));
+                    break;
+                }
+                remember(c);
+            }
+        }
+        if chosen.is_none() {
+            // Not expected (see module docs): closest admissible candidate, energy norm.
+            chosen = seen
+                .iter()
+                .flatten()
+                .filter(|c| admissible(c))
+                .min_by(|a, b| {
+                    let da = a.deps_p.dot(&(de * a.deps_p));
+                    let db = b.deps_p.dot(&(de * b.deps_p));
+                    da.total_cmp(&db)
+                })
+                .map(|c| (*c, true));
+        }
+        let Some((mut c, fallback)) = chosen else {
+            return Err(ConstitutiveError::ReturnMappingFailed {
+                law: "mohr-coulomb",
+                iterations: 0,
+                residual: f_tr,
+            });
+        };
+
+        // Enforce the equalities the region implies exactly (they hold to round-off).
+        let tied = c.region.tied();
+        if tied == [true; 3] {
+            c.sig = Vector3::repeat(c.sig.mean());
+        } else if tied[0] {
+            let m = 0.5 * (c.sig[0] + c.sig[1]);
+            c.sig[0] = m;
+            c.sig[1] = m;
+        } else if tied[2] {
+            let m = 0.5 * (c.sig[1] + c.sig[2]);
+            c.sig[1] = m;
+            c.sig[2] = m;
+        }
+
+        let stress = n * Matrix3::from_diagonal(&c.sig) * n.transpose();
+        let stress = (stress + stress.transpose()) * 0.5;
+        let eps_p = n * Matrix3::from_diagonal(&c.deps_p) * n.transpose();
+        let elastic_strain = eps - (eps_p + eps_p.transpose()) * 0.5;
+        let tangent = assemble(&n, &e, &c.sig, &c.jp, tied);
+        check_finite(&stress, "Mohr-Coulomb stress")?;
+        if !tangent.iter().all(|v| v.is_finite()) {
+            return Err(ConstitutiveError::NonFinite {
+                what: "Mohr-Coulomb tangent",
+            });
+        }
+        h_out[0] = c.kappa;
+        h_out[1] = evp_n + c.deps_p.sum();
+        Ok((
+            StressUpdate {
+                stress,
+                elastic_strain,
+                tangent,
+            },
+            MohrCoulombReturn {
+                region: c.region,
+                fallback,
+                residual_branch: c.branch == Branch::Residual,
+            },
+        ))
+    }
+}
+
+/// Full tangent from the principal one (de Souza Neto Appendix A.5), see module docs.
+fn assemble(
+    n: &Matrix3<f64>,
+    e: &Vector3<f64>,
+    sig: &Vector3<f64>,
+    jp: &Matrix3<f64>,
+    tied: [bool; 3],
+) -> Tensor4 {
+    let na: [_; 3] = std::array::from_fn(|a| {
+        let v = n.column(a);
+        flatten(&(v * v.transpose()))
+    });
+    let mut d = Tensor4::zeros();
+    for a in 0..3 {
+        for b in 0..3 {
+            d += na[a] * na[b].transpose() * jp[(a, b)];
+        }
+    }
+    let emax = e.amax();
+    for (k, (a, b)) in [(0usize, 1usize), (0, 2), (1, 2)].into_iter().enumerate() {
+        let theta = if tied[k] {
+            0.0
+        } else if (e[a] - e[b]).abs() > 1e-8 * emax {
+            (sig[a] - sig[b]) / (e[a] - e[b])
+        } else {
+            0.5 * ((jp[(a, a)] - jp[(a, b)]) + (jp[(b, b)] - jp[(b, a)]))
+        };
+        let p = n.column(a) * n.column(b).transpose();
+        let s = flatten(&((p + p.transpose()) * 0.5));
+        d += s * s.transpose() * (2.0 * theta);
+    }
+    d
+}
+
+/// Whether v lies in the cone spanned by `gens` (Carathéodory: some ≤ 3 of them with
+/// non-negative coefficients), to a relative tolerance of 1e-9.
+fn in_cone(v: &Vector3<f64>, gens: &[Vector3<f64>]) -> bool {
+    let nv = v.norm();
+    if nv == 0.0 {
+        return true;
+    }
+    let tol = 1e-9;
+    let k = gens.len();
+    for i in 0..k {
+        for j in (i + 1)..k {
+            for l in (j + 1)..k {
+                let m = Matrix3::from_columns(&[gens[i], gens[j], gens[l]]);
+                let scale = gens[i].norm() * gens[j].norm() * gens[l].norm();
+                if m.determinant().abs() <= 1e-10 * scale {
+                    continue;
+                }
+                if let Some(inv) = m.try_inverse() {
+                    let x = inv * v;
+                    if (0..3).all(|q| x[q] * m.column(q).norm() >= -tol * nv) {
+                        return true;
+                    }
+                }
+            }
+        }
+    }
+    // Rank-deficient generator sets: pairs and singles by least squares.
+    for i in 0..k {
+        for j in i..k {
+            let (gi, gj) = (gens[i], gens[j]);
+            let (x, y) = if i == j {
+                (gi.dot(v) / gi.norm_squared(), 0.0)
+            } else {
+                let (a11, a12, a22) = (gi.norm_squared(), gi.dot(&gj), gj.norm_squared());
+                let det = a11 * a22 - a12 * a12;
+                if det <= 1e-12 * a11 * a22 {
+                    continue;
+                }
+                let (b1, b2) = (gi.dot(v), gj.dot(v));
+                ((a22 * b1 - a12 * b2) / det, (a11 * b2 - a12 * b1) / det)
+            };
+            let res = (v - gi * x - gj * y).norm();
+            if res <= tol * nv && x * gi.norm() >= -tol * nv && y * gj.norm() >= -tol * nv {
+                return true;
+            }
+        }
+    }
+    false
+}
+
+impl ConstitutiveLaw for MohrCoulomb {
+    fn name(&self) -> &'static str {
+        "mohr-coulomb"
+    }
+
+    fn history_len(&self) -> usize {
+        2
+    }
+
+    fn init_history(&self, h: &mut [f64]) {
+        h.iter_mut().for_each(|v| *v = 0.0);
+    }
+
+    /// Symmetric for associated flow (ψ = φ) without softening. Softening couples the yield
+    /// normals to κ (and κ to the plastic strain norm), which breaks symmetry in general.
+    fn symmetric_tangent(&self) -> bool {
+        self.dilation == self.friction && !self.softens()
+    }
+
+    fn update(
+        &self,
+        eps_trial: &Matrix3<f64>,
+        h_n: &[f64],
+        h_out: &mut [f64],
+    ) -> Result<StressUpdate, ConstitutiveError> {
+        self.update_with_info(eps_trial, h_n, h_out).map(|(u, _)| u)
+    }
+
+    fn p_wave_modulus(&self) -> f64 {
+        self.elastic.p_wave_modulus()
+    }
+
+    fn stored_energy(&self, elastic_strain: &Matrix3<f64>) -> f64 {
+        self.elastic.stored_energy(elastic_strain)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::tensor::idx;
+
+    fn el() -> Elastic {
+        Elastic::new(1.0e4, 0.3).unwrap()
+    }
+
+    fn strain_for_stress(s: [f64; 3]) -> Matrix3<f64> {
+        let (l, g) = el().lame();
+        let tr = s.iter().sum::<f64>();
+        let e = Vector3::from(s).map(|x| (x - l / (3.0 * l + 2.0 * g) * tr) / (2.0 * g));
+        let q = nalgebra::Rotation3::from_scaled_axis(Vector3::new(0.3, -0.5, 0.7)).into_inner();
+        q * Matrix3::from_diagonal(&e) * q.transpose()
+    }
+
+    #[test]
+    fn validates_parameters_and_names_them() {
+        let name_of = |r: Result<MohrCoulomb, ConstitutiveError>| match r {
+            Err(ConstitutiveError::InvalidParameter { name, .. }) => name,
+            other => panic!("expected InvalidParameter, got {other:?}"),
+        };
+        assert_eq!(
+            name_of(MohrCoulomb::from_degrees(el(), -1.0, 30.0, 0.0)),
+            "cohesion"
+        );
+        assert_eq!(
+            name_of(MohrCoulomb::from_degrees(el(), f64::NAN, 30.0, 0.0)),
+            "cohesion"
+        );
+        assert_eq!(
+            name_of(MohrCoulomb::from_degrees(el(), 1.0, 90.0, 0.0)),
+            "friction"
+        );
+        assert_eq!(
+            name_of(MohrCoulomb::from_degrees(el(), 1.0, -1.0, 0.0)),
+            "friction"
+        );
+        assert_eq!(
+            name_of(MohrCoulomb::from_degrees(el(), 1.0, 30.0, 31.0)),
+            "dilation"
+        );
+        assert_eq!(
+            name_of(MohrCoulomb::from_degrees(el(), 1.0, 30.0, -1.0)),
+            "dilation"
+        );
+        let law = MohrCoulomb::from_degrees(el(), 10.0, 30.0, 10.0).unwrap();
+        // Apex c cot φ = 17.32: a cut-off above it is rejected, at or below it accepted.
+        assert_eq!(name_of(law.with_tension_cutoff(17.4)), "tension_cutoff");
+        assert_eq!(
+            name_of(law.with_tension_cutoff(f64::INFINITY)),
+            "tension_cutoff"
+        );
+        assert!(law
+            .with_tension_cutoff(10.0 / 30f64.to_radians().tan())
+            .is_ok());
+        assert!(law.with_tension_cutoff(-3.0).is_ok());
+        // Tresca has no apex: any finite cut-off.
+        assert!(MohrCoulomb::from_degrees(el(), 10.0, 0.0, 0.0)
+            .unwrap()
+            .with_tension_cutoff(1e6)
+            .is_ok());
+        assert_eq!(
+            name_of(law.with_softening(11.0, 20.0, 0.0, 0.1)),
+            "residual cohesion"
+        );
+        assert_eq!(
+            name_of(law.with_softening(1.0, 31.0, 0.0, 0.1)),
+            "residual friction"
+        );
+        assert_eq!(
+            name_of(law.with_softening(1.0, 20.0, 11.0, 0.1)),
+            "residual dilation"
+        );
+        assert_eq!(
+            name_of(law.with_softening(1.0, 5.0, 6.0, 0.1)),
+            "residual dilation"
+        );
+        assert_eq!(
+            name_of(law.with_softening(1.0, 20.0, 0.0, 0.0)),
+            "kappa_res"
+        );
+        assert!(law.with_softening(1.0, 20.0, 0.0, 0.1).is_ok());
+        assert!(MohrCoulomb::from_degrees(
+            Elastic {
+                young: -1.0,
+                poisson: 0.3
+            },
+            1.0,
+            30.0,
+            0.0
+        )
+        .is_err());
+        // Angles are stored in radians.
+        assert!((law.friction - 30f64.to_radians()).abs() < 1e-15);
+        assert_eq!(law.history_len(), 2);
+    }
+
+    #[test]
+    fn symmetric_tangent_flag() {
+        let assoc = MohrCoulomb::from_degrees(el(), 10.0, 30.0, 30.0).unwrap();
+        assert!(assoc.symmetric_tangent());
+        assert!(assoc.with_tension_cutoff(5.0).unwrap().symmetric_tangent());
+        // Softening to the same values changes nothing.
+        assert!(assoc
+            .with_softening(10.0, 30.0, 30.0, 0.1)
+            .unwrap()
+            .symmetric_tangent());
+        assert!(!MohrCoulomb::from_degrees(el(), 10.0, 30.0, 20.0)
+            .unwrap()
+            .symmetric_tangent());
+        assert!(!assoc
+            .with_softening(5.0, 30.0, 30.0, 0.1)
+            .unwrap()
+            .symmetric_tangent());
+    }
+
+    /// Why softening reports a non-symmetric tangent even for associated flow: κ is the
+    /// norm of the deviatoric plastic strain, so at an edge ∂κ/∂Δγ depends on the mix of
+    /// the two multipliers and the tangent loses major symmetry (cohesion softening only).
+    #[test]
+    fn associated_softening_edge_is_not_symmetric() {
+        let law = MohrCoulomb::from_degrees(el(), 10.0, 30.0, 30.0)
+            .unwrap()
+            .with_softening(2.0, 30.0, 30.0, 0.05)
+            .unwrap();
+        let eps = strain_for_stress([-60.0, -62.0, -250.0]);
+        let (up, info) = law
+            .update_with_info(&eps, &[0.0, 0.0], &mut [0.0; 2])
+            .unwrap();
+        assert_eq!(info.region, MohrCoulombRegion::Edge12);
+        let d = up.tangent;
+        assert!((d - d.transpose()).norm() > 1e-6 * d.norm());
+    }
+
+    #[test]
+    fn tangent_is_minor_symmetric() {
+        let law = MohrCoulomb::from_degrees(el(), 10.0, 30.0, 10.0).unwrap();
+        for s in [
+            [-50.0, -100.0, -250.0],
+            [-60.0, -62.0, -250.0],
+            [300.0, 200.0, -100.0],
+        ] {
+            let d = law
+                .update(&strain_for_stress(s), &[0.0, 0.0], &mut [0.0; 2])
+                .unwrap()
+                .tangent;
+            for i in 0..3 {
+                for j in 0..3 {
+                    for k in 0..3 {
+                        for l in 0..3 {
+                            let v = d[(idx(i, j), idx(k, l))];
+                            // Built from symmetric dyads: equal up to round-off (1e-12 ‖D‖).
+                            assert!((v - d[(idx(j, i), idx(k, l))]).abs() <= 1e-12 * d.norm());
+                            assert!((v - d[(idx(i, j), idx(l, k))]).abs() <= 1e-12 * d.norm());
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn cone_membership() {
+        let g = [
+            Vector3::new(1.0, 0.0, 0.0),
+            Vector3::new(0.0, 1.0, 0.0),
+            Vector3::new(0.0, 0.0, 1.0),
+        ];
+        assert!(in_cone(&Vector3::new(1.0, 2.0, 3.0), &g));
+        assert!(!in_cone(&Vector3::new(1.0, -2.0, 3.0), &g));
+        assert!(in_cone(&Vector3::zeros(), &g));
+        // Rank-deficient generators (ψ = 0: deviatoric flow only).
+        let d = [
+            Vector3::new(1.0, 0.0, -1.0),
+            Vector3::new(0.0, 1.0, -1.0),
+            Vector3::new(1.0, -1.0, 0.0),
+        ];
+        assert!(in_cone(&Vector3::new(2.0, 1.0, -3.0), &d));
+        assert!(!in_cone(&Vector3::new(1.0, 1.0, 1.0), &d));
+    }
+
+    /// The spin coefficient for repeated principal strains uses the limit, not 0/0.
+    #[test]
+    fn assemble_elastic_limit_for_repeated_values() {
+        let (l, g) = el().lame();
+        let de = Matrix3::repeat(l) + Matrix3::identity() * (2.0 * g);
+        let e = Vector3::new(1e-3, 1e-3, -2e-3);
+        let sig = de * e;
+        let d = assemble(&Matrix3::identity(), &e, &sig, &de, [false; 3]);
+        // Exactly the isotropic tensor (round-off).
+        assert!((d - el().stiffness()).norm() < 1e-12 * d.norm());
+    }
+}
