@@ -1,1 +1,51 @@
-//! Explicit MPM (placeholder; being written).
+//! Explicit material point method over the same grid, points, constitutive laws and model
+//! as the implicit solver, for comparison with it (THEORY.md §9) and for fast dynamics.
+//!
+//! One step, updated Lagrangian with the grid reset every step:
+//!
+//! 1. Connectivity (basis values and gradients) at the committed point positions.
+//! 2. Point → grid by a deterministic per-node gather (`loam_solve::gather_nodal`):
+//!    m_I = Σ_p N_I m_p, p_I = Σ_p N_I m_p v_p, f_I = Σ_p N_I f_ext,p − Σ_p v_p σ_p ∇N_I.
+//!    Nodes with m_I ≤ 1e-12 · max m_I are empty (zero velocity and acceleration);
+//!    constrained dofs get zero momentum and force.
+//! 3. Local non-viscous damping (Cundall 1987; Itasca FLAC/PFC "local damping"):
+//!    f_I ← f_I − α |f_I| sign(v_I), per component.
+//! 4. Grid momentum update v_I^{n+1} = (p_I + Δt f_I) / m_I, a_I = f_I / m_I.
+//! 5. Grid → point: v_p ← flip (v_p + Δt Σ N_I a_I) + (1 − flip) Σ N_I v_I^{n+1}
+//!    (FLIP of Brackbill & Ruppel 1986 blended with PIC), x_p ← x_p + Δt Σ N_I v_I^{n+1}.
+//! 6. Stress update from ∇v_p = Σ_I v_I ⊗ ∇N_I: ΔF = I + Δt ∇v_p, then the finite-strain
+//!    (Hencky, b^e) or small-strain driver of `loam-constitutive`. Which nodal velocity
+//!    v_I, and when, is the update scheme (Bardenhagen 2002, "Energy conservation error in
+//!    the material point method for solid mechanics", J. Comput. Phys. 180; Nairn 2003,
+//!    "Material point method calculations with explicit cracks", CMES 4; Buzzi, Pedroso &
+//!    Giacomini 2008 compare them):
+//!    - USF: v_I = p_I / m_I of the start of the step, stress updated *before* the
+//!      internal force is computed (with the updated stress and volume);
+//!    - USL: v_I = v_I^{n+1};
+//!    - MUSL (Sulsky, Zhou & Schreyer 1995): v_I re-mapped from the updated point
+//!      velocities, p_I = Σ N_I m_p v_p^{n+1} (constrained dofs zeroed), v_I = p_I / m_I.
+//! 7. Commit: F ← ΔF F, v_p ← det ΔF v_p, iGIMP half-lengths stretched with F, stress,
+//!    elastic strain, history, velocity, position.
+//!
+//! The algorithm is that of Sulsky, Chen & Schreyer (1994), "A particle method for
+//! history-dependent materials", Comput. Methods Appl. Mech. Engrg. 118. The time step is
+//! the CFL limit Δt_c = min_p h_min / (c_p + |v_p|), c_p = √(M / ρ_p) with M the P-wave
+//! modulus of the point's law and ρ_p = m_p / v_p its current density (THEORY.md §9).
+//!
+//! Everything a step computes goes into scratch buffers reused from step to step; the
+//! model is changed only when the whole step has succeeded, so a failed step (a point
+//! leaving the grid, a blow-up) leaves the last committed state intact. Every point → node
+//! transfer is a gather in a fixed order and every point loop is independent, so results
+//! are bitwise identical for any number of threads (DESIGN.md, "Parallelism and
+//! determinism").
+
+mod energy;
+mod error;
+mod explicit;
+mod settings;
+
+pub use energy::LeapfrogEnergy;
+pub use error::{ExplicitError, ExplicitRunError};
+pub use explicit::{Explicit, ExplicitStepReport};
+pub use loam_model::{Kinematics, Model, ModelError, PlaneConstraint};
+pub use settings::{ExplicitSettings, TimeStep, UpdateScheme};

@@ -1,0 +1,668 @@
+//! The explicit analysis: one time step as described in the crate docs.
+
+use crate::{ExplicitError, ExplicitRunError, ExplicitSettings, TimeStep, UpdateScheme};
+use loam_constitutive::{finite_strain_update, small_strain_update};
+use loam_grid::{BasisError, Connectivity, PointBasisError};
+use loam_model::{Kinematics, Model, PointCouplings};
+use loam_points::stretched_half_length;
+use loam_solve::gather_nodal;
+use nalgebra::{Matrix3, SMatrix, SVector};
+use rayon::prelude::*;
+use std::time::{Duration, Instant};
+
+/// Nodes whose mass is at most this fraction of the largest nodal mass are empty: their
+/// velocity and acceleration are zero instead of a division by a tiny mass.
+const EMPTY_NODE_MASS: f64 = 1e-12;
+/// A step within this fraction of the remaining time is stretched to land on the end time
+/// (no sliver step from rounding in the accumulated time).
+const LAND_ON_END: f64 = 1e-9;
+
+/// What one explicit step did.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ExplicitStepReport {
+    /// 1-based step number.
+    pub step: usize,
+    /// Time at the end of the step.
+    pub time: f64,
+    pub dt: f64,
+    /// The critical time step of the state the step started from.
+    pub critical_dt: f64,
+    pub active_nodes: usize,
+    pub wall_time: Duration,
+}
+
+/// Nodal scratch of one step, reused across steps.
+#[derive(Debug, Default)]
+struct NodalScratch {
+    /// Per active node [m, p (D), f (D)] as gathered from the points.
+    gathered: Vec<f64>,
+    /// USF: internal force of the updated stress (D per node).
+    internal: Vec<f64>,
+    /// v_I^{n+1} (D per node).
+    velocity: Vec<f64>,
+    /// a_I = f_I / m_I (D per node).
+    acceleration: Vec<f64>,
+    /// Nodal velocity that drives the strain update for USF (p_I / m_I) and MUSL
+    /// (re-mapped); USL uses `velocity`.
+    strain_velocity: Vec<f64>,
+}
+
+/// Per-point trial state of one step, committed only when the whole step succeeded.
+#[derive(Debug, Default)]
+struct PointScratch<const D: usize> {
+    position: Vec<SVector<f64, D>>,
+    velocity: Vec<SVector<f64, D>>,
+    delta_f: Vec<Matrix3<f64>>,
+    volume: Vec<f64>,
+    stress: Vec<Matrix3<f64>>,
+    elastic_strain: Vec<Matrix3<f64>>,
+    /// `max(history_stride, 1)` per point so that every point has its own chunk.
+    history: Vec<f64>,
+}
+
+impl<const D: usize> PointScratch<D> {
+    fn resize(&mut self, n: usize, history_stride: usize) {
+        self.position.resize(n, SVector::zeros());
+        self.velocity.resize(n, SVector::zeros());
+        self.delta_f.resize(n, Matrix3::identity());
+        self.volume.resize(n, 0.0);
+        self.stress.resize(n, Matrix3::zeros());
+        self.elastic_strain.resize(n, Matrix3::zeros());
+        self.history.resize(n * history_stride.max(1), 0.0);
+    }
+}
+
+/// Why a point stopped a step.
+enum PointFailure {
+    Unstable(String),
+    Outside,
+}
+
+type PointResult = Result<(), (usize, PointFailure)>;
+
+/// Explicit MPM analysis of a model (see the crate docs).
+pub struct Explicit<const D: usize> {
+    model: Model<D>,
+    settings: ExplicitSettings,
+    time: f64,
+    steps: usize,
+    /// P-wave modulus of each material, for the critical time step.
+    p_wave: Vec<f64>,
+    conn: Connectivity<D>,
+    constrained: Vec<bool>,
+    nodes: NodalScratch,
+    points: PointScratch<D>,
+}
+
+impl<const D: usize> Explicit<D> {
+    /// An explicit analysis of `model` from t = 0 to `settings.duration`. Refuses invalid
+    /// settings with [`ExplicitError::InvalidSettings`].
+    pub fn new(model: Model<D>, settings: ExplicitSettings) -> Result<Self, ExplicitError> {
+        settings.validate()?;
+        tracing::info!(scheme = ?settings.scheme, flip = settings.flip, time_step = ?settings.time_step,
+            damping = settings.damping, duration = settings.duration, "explicit analysis");
+        let p_wave = model.materials.iter().map(|m| m.p_wave_modulus()).collect();
+        Ok(Self {
+            conn: Connectivity::new(model.basis),
+            model,
+            settings,
+            time: 0.0,
+            steps: 0,
+            p_wave,
+            constrained: Vec::new(),
+            nodes: NodalScratch::default(),
+            points: PointScratch::default(),
+        })
+    }
+
+    pub fn model(&self) -> &Model<D> {
+        &self.model
+    }
+
+    pub fn into_model(self) -> Model<D> {
+        self.model
+    }
+
+    pub fn settings(&self) -> &ExplicitSettings {
+        &self.settings
+    }
+
+    /// Time reached by the committed state.
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    pub fn steps_done(&self) -> usize {
+        self.steps
+    }
+
+    pub fn is_finished(&self) -> bool {
+        self.time >= self.settings.duration
+    }
+
+    /// Connectivity of the committed configuration.
+    fn connect(&mut self, step: usize) -> Result<(), ExplicitError> {
+        let pts = &self.model.points;
+        self.conn
+            .compute(&self.model.grid, &pts.position, &pts.half_length)
+            .map_err(|source| ExplicitError::PointOutsideGrid { step, source })
+    }
+
+    /// Check what can only be checked against the connectivity: every point's basis lies in
+    /// the grid and every constraint holds at least one active node (the rule of
+    /// `QuasiStatic::check`). Scene validation calls this before the first step.
+    pub fn check(&mut self) -> Result<(), ExplicitError> {
+        self.connect(self.steps + 1)?;
+        let an = self.conn.active_nodes();
+        for (index, c) in self.model.constraints.iter().enumerate() {
+            let touches = an.active_to_grid.iter().any(|&g| self.model.grid.node_coords(g as usize)[c.axis] == c.plane);
+            if !touches {
+                return Err(ExplicitError::ConstraintTouchesNoNode { index, axis: c.axis, plane: c.plane });
+            }
+        }
+        Ok(())
+    }
+
+    /// Critical time step of the committed state (THEORY.md §9):
+    /// min over points of h_min / (c_p + |v_p|), c_p = √(M / ρ_p), ρ_p = m_p / v_p.
+    pub fn critical_time_step(&self) -> f64 {
+        let pts = &self.model.points;
+        let h = self.model.grid.cell_size().min();
+        let p_wave = &self.p_wave;
+        (0..pts.len())
+            .into_par_iter()
+            .map(|p| {
+                let rho = pts.mass[p] / pts.volume[p];
+                let c = (p_wave[pts.material[p] as usize] / rho).sqrt();
+                h / (c + pts.velocity[p].norm())
+            })
+            .reduce(|| f64::INFINITY, f64::min)
+    }
+
+    /// The time step of step `step` given the critical one, shortened to land on the end.
+    fn time_step(&self, step: usize, critical: f64) -> Result<f64, ExplicitError> {
+        let remaining = self.settings.duration - self.time;
+        let (dt, check) = match self.settings.time_step {
+            TimeStep::Cfl { safety } => (safety * critical, false),
+            TimeStep::Fixed { dt, allow_above_critical } => (dt, !allow_above_critical),
+        };
+        let dt = if dt >= remaining * (1.0 - LAND_ON_END) { remaining } else { dt };
+        if check && dt > critical {
+            return Err(ExplicitError::AboveCritical { step, dt, critical });
+        }
+        Ok(dt)
+    }
+
+    /// Advance one time step (the last one shortened to land on `duration`). On error the
+    /// committed state is that of the last successful step.
+    pub fn step(&mut self) -> Result<ExplicitStepReport, ExplicitError> {
+        if self.is_finished() {
+            return Err(ExplicitError::Finished(self.steps));
+        }
+        let start = Instant::now();
+        let step = self.steps + 1;
+        self.connect(step)?;
+        self.model.constrained_dofs(self.conn.active_nodes(), &mut self.constrained);
+        let critical = self.critical_time_step();
+        let dt = self.time_step(step, critical)?;
+        let n_nodes = self.conn.active_nodes().len();
+        let hs = self.model.points.history_stride();
+        let nodes = &mut self.nodes;
+        nodes.gathered.resize(n_nodes * (1 + 2 * D), 0.0);
+        for v in [&mut nodes.internal, &mut nodes.velocity, &mut nodes.acceleration, &mut nodes.strain_velocity] {
+            v.resize(n_nodes * D, 0.0);
+        }
+        self.points.resize(self.model.points.len(), hs);
+
+        let time = self.time;
+        let unstable = |(point, failure): (usize, PointFailure), model: &Model<D>, sc: &PointScratch<D>| match failure {
+            PointFailure::Unstable(reason) => ExplicitError::Unstable { step, time, point, reason },
+            PointFailure::Outside => ExplicitError::PointOutsideGrid { step, source: outside_error(model, point, &sc.position[point]) },
+        };
+        let Settings { scheme, flip, damping } = Settings::of(&self.settings);
+        let (model, conn, constrained) = (&self.model, &self.conn, &self.constrained[..]);
+        let (nodes, sc) = (&mut self.nodes, &mut self.points);
+
+        gather_grid(model, conn, scheme != UpdateScheme::Usf, &mut nodes.gathered);
+        let stride = 1 + 2 * D;
+        let max_mass = nodes.gathered.par_chunks(stride).map(|g| g[0]).reduce(|| 0.0, f64::max);
+        let m_min = EMPTY_NODE_MASS * max_mass;
+        if scheme == UpdateScheme::Usf {
+            nodes
+                .strain_velocity
+                .par_chunks_mut(D)
+                .zip(nodes.gathered.par_chunks(stride))
+                .for_each(|(v, g)| v.copy_from_slice(&g[1..1 + D]));
+            momentum_to_velocity::<D>(&nodes.gathered, constrained, m_min, &mut nodes.strain_velocity);
+            update_stress(model, conn, &nodes.strain_velocity, dt, sc).map_err(|e| unstable(e, model, sc))?;
+            internal_force(model, conn, sc, &mut nodes.internal);
+        }
+        let internal = (scheme == UpdateScheme::Usf).then_some(&nodes.internal[..]);
+        nodal_update::<D>(
+            &nodes.gathered,
+            internal,
+            constrained,
+            m_min,
+            dt,
+            damping,
+            &mut nodes.velocity,
+            &mut nodes.acceleration,
+        );
+        grid_to_points(model, conn, &nodes.velocity, &nodes.acceleration, dt, flip, sc).map_err(|e| unstable(e, model, sc))?;
+        match scheme {
+            UpdateScheme::Usf => {}
+            UpdateScheme::Usl => {
+                update_stress(model, conn, &nodes.velocity, dt, sc).map_err(|e| unstable(e, model, sc))?;
+            }
+            UpdateScheme::Musl => {
+                remap_momentum(model, conn, &sc.velocity, &mut nodes.strain_velocity);
+                momentum_to_velocity::<D>(&nodes.gathered, constrained, m_min, &mut nodes.strain_velocity);
+                update_stress(model, conn, &nodes.strain_velocity, dt, sc).map_err(|e| unstable(e, model, sc))?;
+            }
+        }
+        self.commit();
+        let remaining = self.settings.duration - self.time;
+        self.time = if dt >= remaining { self.settings.duration } else { self.time + dt };
+        self.steps = step;
+        tracing::debug!(step, time = self.time, dt, critical, active_nodes = n_nodes, "explicit step");
+        Ok(ExplicitStepReport {
+            step,
+            time: self.time,
+            dt,
+            critical_dt: critical,
+            active_nodes: n_nodes,
+            wall_time: start.elapsed(),
+        })
+    }
+
+    /// Commit the trial state of a successful step (THEORY.md §1): F ← ΔF F,
+    /// v_p ← det ΔF v_p, half-lengths stretched with F (iGIMP), and the rest swapped in.
+    fn commit(&mut self) {
+        let sc = &mut self.points;
+        let pts = &mut self.model.points;
+        (
+            pts.deformation_gradient.par_iter_mut(),
+            pts.volume.par_iter_mut(),
+            pts.half_length.par_iter_mut(),
+            pts.half_length0.par_iter(),
+            sc.delta_f.par_iter(),
+            sc.volume.par_iter(),
+        )
+            .into_par_iter()
+            .for_each(|(f, v, l, l0, df, v_new)| {
+                *f = df * *f;
+                *v = *v_new;
+                *l = stretched_half_length(l0, f);
+            });
+        std::mem::swap(&mut pts.position, &mut sc.position);
+        std::mem::swap(&mut pts.velocity, &mut sc.velocity);
+        std::mem::swap(&mut pts.stress, &mut sc.stress);
+        std::mem::swap(&mut pts.elastic_strain, &mut sc.elastic_strain);
+        if pts.history_stride() > 0 {
+            std::mem::swap(&mut pts.history, &mut sc.history);
+        }
+    }
+
+    /// Run every remaining step, calling `on_step` after each.
+    pub fn run<E: std::error::Error + 'static>(
+        &mut self,
+        mut on_step: impl FnMut(&ExplicitStepReport, &Model<D>) -> Result<(), E>,
+    ) -> Result<(), ExplicitRunError<E>> {
+        while !self.is_finished() {
+            let report = self.step().map_err(ExplicitRunError::Step)?;
+            on_step(&report, &self.model).map_err(ExplicitRunError::Observer)?;
+        }
+        Ok(())
+    }
+}
+
+/// The settings the hot loops read, copied out so the borrows stay simple.
+struct Settings {
+    scheme: UpdateScheme,
+    flip: f64,
+    damping: f64,
+}
+
+impl Settings {
+    fn of(s: &ExplicitSettings) -> Self {
+        Self { scheme: s.scheme, flip: s.flip, damping: s.damping }
+    }
+}
+
+/// The error for a point whose new position `x` lies outside the grid.
+fn outside_error<const D: usize>(model: &Model<D>, point: usize, x: &SVector<f64, D>) -> PointBasisError {
+    let g = &model.grid;
+    let (lo, hi) = (g.origin(), g.extent_max());
+    let axis = (0..D).find(|&a| !(x[a] >= lo[a] && x[a] < hi[a])).unwrap_or(0);
+    PointBasisError {
+        point,
+        position: x.iter().copied().collect(),
+        source: BasisError::OutsideGrid { axis, coordinate: x[axis], min: lo[axis], max: hi[axis] },
+    }
+}
+
+/// Sign with sign(0) = 0 (`f64::signum` gives ±1 at zero).
+#[inline]
+fn sign(x: f64) -> f64 {
+    if x > 0.0 {
+        1.0
+    } else if x < 0.0 {
+        -1.0
+    } else {
+        0.0
+    }
+}
+
+/// −v_p σ_p ∇N_I, the internal force of one point on one node (in-plane components of σ).
+#[inline]
+fn add_internal<const D: usize>(out: &mut [f64], volume: f64, stress: &Matrix3<f64>, grad: &SVector<f64, D>) {
+    for i in 0..D {
+        let mut f = 0.0;
+        for j in 0..D {
+            f += stress[(i, j)] * grad[j];
+        }
+        out[i] -= volume * f;
+    }
+}
+
+/// Gather [m_I, p_I, f_I] per active node; f_I is the external force, plus the internal
+/// force of the committed stress when `with_internal`.
+fn gather_grid<const D: usize>(model: &Model<D>, conn: &Connectivity<D>, with_internal: bool, out: &mut [f64]) {
+    let pts = &model.points;
+    gather_nodal(&PointCouplings(conn), 1 + 2 * D, out, |p, a, o| {
+        let n = conn.support_values(p)[a];
+        let nm = n * pts.mass[p];
+        let v = &pts.velocity[p];
+        let load = model.point_load(p);
+        o[0] += nm;
+        for i in 0..D {
+            o[1 + i] += nm * v[i];
+            o[1 + D + i] += n * load[i];
+        }
+        if with_internal {
+            add_internal(&mut o[1 + D..], pts.volume[p], &pts.stress[p], &conn.support_gradients(p)[a]);
+        }
+    });
+}
+
+/// USF: the internal force of the updated stress (finite strain: on the updated volume;
+/// small strain: on the start-of-step volume, as the implicit small-strain step).
+fn internal_force<const D: usize>(model: &Model<D>, conn: &Connectivity<D>, sc: &PointScratch<D>, out: &mut [f64]) {
+    let finite = model.kinematics == Kinematics::FiniteStrain;
+    let pts = &model.points;
+    gather_nodal(&PointCouplings(conn), D, out, |p, a, o| {
+        let v = if finite { sc.volume[p] } else { pts.volume[p] };
+        add_internal(o, v, &sc.stress[p], &conn.support_gradients(p)[a]);
+    });
+}
+
+/// MUSL: p_I = Σ N_I m_p v_p^{n+1} from the updated point velocities.
+fn remap_momentum<const D: usize>(model: &Model<D>, conn: &Connectivity<D>, velocity: &[SVector<f64, D>], out: &mut [f64]) {
+    let mass = &model.points.mass;
+    gather_nodal(&PointCouplings(conn), D, out, |p, a, o| {
+        let nm = conn.support_values(p)[a] * mass[p];
+        for i in 0..D {
+            o[i] += nm * velocity[p][i];
+        }
+    });
+}
+
+/// In place: nodal momentum → velocity p_I / m_I; zero at empty nodes and constrained dofs.
+fn momentum_to_velocity<const D: usize>(gathered: &[f64], constrained: &[bool], m_min: f64, v: &mut [f64]) {
+    v.par_chunks_mut(D)
+        .zip(gathered.par_chunks(1 + 2 * D))
+        .zip(constrained.par_chunks(D))
+        .for_each(|((v, g), fixed)| {
+            let m = g[0];
+            for i in 0..D {
+                v[i] = if m > m_min && !fixed[i] { v[i] / m } else { 0.0 };
+            }
+        });
+}
+
+/// Damped grid momentum update: a_I = f_I / m_I, v_I^{n+1} = (p_I + Δt f_I) / m_I, with
+/// constrained dofs and empty nodes at zero.
+#[allow(clippy::too_many_arguments)]
+fn nodal_update<const D: usize>(
+    gathered: &[f64],
+    internal: Option<&[f64]>,
+    constrained: &[bool],
+    m_min: f64,
+    dt: f64,
+    damping: f64,
+    velocity: &mut [f64],
+    acceleration: &mut [f64],
+) {
+    let stride = 1 + 2 * D;
+    velocity.par_chunks_mut(D).zip(acceleration.par_chunks_mut(D)).enumerate().for_each(|(j, (v, a))| {
+        let g = &gathered[j * stride..(j + 1) * stride];
+        let m = g[0];
+        for i in 0..D {
+            if m <= m_min || constrained[j * D + i] {
+                v[i] = 0.0;
+                a[i] = 0.0;
+                continue;
+            }
+            let p = g[1 + i];
+            let mut f = g[1 + D + i] + internal.map_or(0.0, |fi| fi[j * D + i]);
+            // sign(v_I) = sign(p_I) since m_I > 0.
+            f -= damping * f.abs() * sign(p);
+            a[i] = f / m;
+            v[i] = (p + dt * f) / m;
+        }
+    });
+}
+
+/// Grid → points into the scratch: FLIP/PIC velocity and the new position. Fails for a
+/// non-finite result or a point leaving the grid (lowest point index first).
+fn grid_to_points<const D: usize>(
+    model: &Model<D>,
+    conn: &Connectivity<D>,
+    velocity: &[f64],
+    acceleration: &[f64],
+    dt: f64,
+    flip: f64,
+    sc: &mut PointScratch<D>,
+) -> PointResult {
+    let pts = &model.points;
+    let grid = &model.grid;
+    let failure = sc
+        .position
+        .par_iter_mut()
+        .zip(sc.velocity.par_iter_mut())
+        .enumerate()
+        .filter_map(|(p, (x, v))| {
+            let mut vi = SVector::<f64, D>::zeros();
+            let mut ai = SVector::<f64, D>::zeros();
+            for (&node, &n) in conn.support_nodes(p).iter().zip(conn.support_values(p)) {
+                let k = node as usize * D;
+                for i in 0..D {
+                    vi[i] += n * velocity[k + i];
+                    ai[i] += n * acceleration[k + i];
+                }
+            }
+            *v = (pts.velocity[p] + ai * dt) * flip + vi * (1.0 - flip);
+            *x = pts.position[p] + vi * dt;
+            if !(v.iter().all(|c| c.is_finite()) && x.iter().all(|c| c.is_finite())) {
+                let reason = format!("non-finite velocity {:?} or position {:?} after the grid update", v.as_slice(), x.as_slice());
+                return Some((p, PointFailure::Unstable(reason)));
+            }
+            if !grid.contains(x) {
+                return Some((p, PointFailure::Outside));
+            }
+            None
+        })
+        .min_by_key(|(p, _)| *p);
+    failure.map_or(Ok(()), Err)
+}
+
+/// Stress update of every point from the nodal velocities `velocity` into the scratch:
+/// ΔF = I + Δt Σ_I v_I ⊗ ∇N_I, then the finite- or small-strain driver.
+fn update_stress<const D: usize>(
+    model: &Model<D>,
+    conn: &Connectivity<D>,
+    velocity: &[f64],
+    dt: f64,
+    sc: &mut PointScratch<D>,
+) -> PointResult {
+    let pts = &model.points;
+    let hs = pts.history_stride();
+    let kinematics = model.kinematics;
+    let failure = (sc.delta_f.par_iter_mut(), sc.volume.par_iter_mut(), sc.stress.par_iter_mut(), sc.elastic_strain.par_iter_mut())
+        .into_par_iter()
+        .zip(sc.history.par_chunks_mut(hs.max(1)))
+        .enumerate()
+        .filter_map(|(p, ((delta_f, volume, stress, elastic), h_out))| {
+            let mut l = SMatrix::<f64, D, D>::zeros();
+            for (&node, g) in conn.support_nodes(p).iter().zip(conn.support_gradients(p)) {
+                let k = node as usize * D;
+                let v = SVector::<f64, D>::from_column_slice(&velocity[k..k + D]);
+                l += v * g.transpose();
+            }
+            let mut grad_du = Matrix3::zeros();
+            grad_du.fixed_view_mut::<D, D>(0, 0).copy_from(&(l * dt));
+            let df = Matrix3::identity() + grad_du;
+            if !df.iter().all(|c| c.is_finite()) {
+                return Some((p, PointFailure::Unstable("non-finite velocity gradient".into())));
+            }
+            let det = df.determinant();
+            if !det.is_finite() || det <= 0.0 {
+                let reason = format!("det ΔF = {det:e}: the point was inverted or torn apart within one step");
+                return Some((p, PointFailure::Unstable(reason)));
+            }
+            let law = &*model.materials[pts.material[p] as usize];
+            let h_n = pts.history(p);
+            let h_out = &mut h_out[..hs];
+            let failed = |e: &dyn std::fmt::Display| Some((p, PointFailure::Unstable(format!("stress update failed: {e}"))));
+            match kinematics {
+                Kinematics::FiniteStrain => {
+                    let j = det * pts.deformation_gradient[p].determinant();
+                    match finite_strain_update(law, &df, &pts.elastic_strain[p], j, h_n, h_out) {
+                        Ok(u) => {
+                            *stress = u.cauchy;
+                            *elastic = u.be;
+                        }
+                        Err(e) => return failed(&e),
+                    }
+                }
+                Kinematics::SmallStrain => match small_strain_update(law, &grad_du, &pts.elastic_strain[p], h_n, h_out) {
+                    Ok(u) if u.stress.iter().chain(u.elastic_strain.iter()).all(|c| c.is_finite()) => {
+                        *stress = u.stress;
+                        *elastic = u.elastic_strain;
+                    }
+                    Ok(_) => return failed(&"non-finite stress"),
+                    Err(e) => return failed(&e),
+                },
+            }
+            *delta_f = df;
+            *volume = det * pts.volume[p];
+            None
+        })
+        .min_by_key(|(p, _)| *p);
+    failure.map_or(Ok(()), Err)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use loam_constitutive::Elastic;
+    use loam_grid::{BasisKind, Grid};
+    use loam_points::{PointStore, Shape};
+    use nalgebra::Vector2;
+    use std::sync::Arc;
+
+    /// A 2×2-cell block of 4 points per cell in a 6×6 grid, given velocity `v`.
+    fn block(v: Vector2<f64>, gravity: Vector2<f64>) -> Model<2> {
+        let grid = Grid::new(Vector2::zeros(), Vector2::new(0.5, 0.5), [6, 6]).unwrap();
+        let mut points = PointStore::new();
+        points.fill(&grid, &Shape::Box { min: Vector2::new(1.0, 1.0), max: Vector2::new(2.0, 2.0) }, 2, 800.0, 0).unwrap();
+        points.velocity.iter_mut().for_each(|x| *x = v);
+        let law = Elastic::new(2e5, 0.25).unwrap();
+        Model::new(grid, BasisKind::Gimp, Kinematics::FiniteStrain, points, vec![Arc::new(law)], vec![], gravity).unwrap()
+    }
+
+    #[test]
+    fn sign_is_zero_at_zero() {
+        assert_eq!(sign(0.0), 0.0);
+        assert_eq!(sign(-0.0), 0.0);
+        assert_eq!(sign(2.0), 1.0);
+        assert_eq!(sign(-1e-300), -1.0);
+    }
+
+    /// The critical step is h / (c + |v|) with c = √(M/ρ) (THEORY.md §9), to round-off.
+    #[test]
+    fn critical_time_step_is_the_cfl_limit() {
+        let v = Vector2::new(3.0, 4.0);
+        let ex = Explicit::new(block(v, Vector2::zeros()), ExplicitSettings::new(1.0)).unwrap();
+        let (e, nu, rho): (f64, f64, f64) = (2e5, 0.25, 800.0);
+        let m = e * (1.0 - nu) / ((1.0 + nu) * (1.0 - 2.0 * nu));
+        let expected = 0.5 / ((m / rho).sqrt() + 5.0);
+        assert!((ex.critical_time_step() - expected).abs() <= 1e-14 * expected);
+    }
+
+    /// Fixed steps that divide the duration up to rounding end exactly on it: no sliver
+    /// step, and a step after the end is refused.
+    #[test]
+    fn the_last_step_lands_on_the_duration() {
+        let settings = ExplicitSettings {
+            time_step: TimeStep::Fixed { dt: 1e-4, allow_above_critical: false },
+            ..ExplicitSettings::new(1e-3)
+        };
+        let mut ex = Explicit::new(block(Vector2::new(0.1, 0.0), Vector2::zeros()), settings).unwrap();
+        let mut reports = Vec::new();
+        ex.run(|r, _| {
+            reports.push(r.clone());
+            Ok::<_, std::io::Error>(())
+        })
+        .unwrap();
+        assert_eq!(reports.len(), 10);
+        assert_eq!(ex.time(), 1e-3);
+        assert!(ex.is_finished());
+        assert!(matches!(ex.step(), Err(ExplicitError::Finished(10))));
+
+        // A step that does not divide the duration: the last one is shortened.
+        let settings = ExplicitSettings {
+            time_step: TimeStep::Fixed { dt: 3e-4, allow_above_critical: false },
+            ..ExplicitSettings::new(1e-3)
+        };
+        let mut ex = Explicit::new(block(Vector2::new(0.1, 0.0), Vector2::zeros()), settings).unwrap();
+        let mut dts = Vec::new();
+        while !ex.is_finished() {
+            dts.push(ex.step().unwrap().dt);
+        }
+        assert_eq!(dts.len(), 4);
+        assert!((dts[3] - 1e-4).abs() < 1e-15, "last dt {}", dts[3]);
+        assert_eq!(ex.time(), 1e-3);
+    }
+
+    /// A free block under gravity falls with the gravity acceleration: momentum grows by
+    /// M g Δt per step exactly as the nodal forces sum to the total weight (partition of
+    /// unity), to round-off (1e-12 relative).
+    #[test]
+    fn free_fall_gains_the_impulse_of_gravity() {
+        let g = Vector2::new(0.0, -9.81);
+        for scheme in [UpdateScheme::Usf, UpdateScheme::Usl, UpdateScheme::Musl] {
+            let settings = ExplicitSettings { scheme, ..ExplicitSettings::new(0.02) };
+            let mut ex = Explicit::new(block(Vector2::zeros(), g), settings).unwrap();
+            while !ex.is_finished() {
+                ex.step().unwrap();
+            }
+            let m = ex.model().points.total_mass();
+            let p = ex.model().points.momentum();
+            let expected = g * m * 0.02;
+            assert!((p - expected).norm() <= 1e-12 * expected.norm(), "{scheme:?}: {p} vs {expected}");
+            // Uniform acceleration produces no stress (rigid motion).
+            let smax = ex.model().points.stress.iter().map(|s| s.amax()).fold(0.0, f64::max);
+            assert!(smax < 1e-6, "{scheme:?}: stress {smax}");
+        }
+    }
+
+    #[test]
+    fn a_constraint_on_an_empty_plane_is_reported() {
+        let mut model = block(Vector2::zeros(), Vector2::zeros());
+        model.constraints.push(loam_model::PlaneConstraint { axis: 1, plane: 0, fixed: [true, true, false] });
+        let mut ex = Explicit::new(model, ExplicitSettings::new(1.0)).unwrap();
+        let e = ex.check().unwrap_err();
+        assert!(matches!(e, ExplicitError::ConstraintTouchesNoNode { index: 0, axis: 1, plane: 0 }), "{e}");
+    }
+}
