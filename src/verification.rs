@@ -333,3 +333,86 @@ pub fn period_from_crossings(crossings: &[f64]) -> Option<f64> {
     let n = crossings.len() - 1;
     Some(2.0 * (crossings[n] - crossings[0]) / n as f64)
 }
+
+/// Time histories of a dynamic run, sampled after every step: centre-of-mass velocity,
+/// kinetic and stored energy. Shared by the tests, `cargo xtask verify` and `steps`.
+#[derive(Debug, Clone, Default)]
+pub struct DynamicRecord {
+    pub time: Vec<f64>,
+    /// Centre-of-mass velocity along x.
+    pub vcm_x: Vec<f64>,
+    pub kinetic: Vec<f64>,
+    pub stored: Vec<f64>,
+}
+
+impl DynamicRecord {
+    pub fn push<const D: usize>(&mut self, time: f64, model: &crate::model::Model<D>) {
+        self.time.push(time);
+        self.vcm_x.push(centre_of_mass_velocity(&model.points, 0));
+        self.kinetic.push(model.points.kinetic_energy());
+        self.stored.push(model.stored_energy());
+    }
+
+    /// Kinetic + stored energy at sample k.
+    pub fn energy(&self, k: usize) -> f64 {
+        self.kinetic[k] + self.stored[k]
+    }
+}
+
+/// Errors of a vibrating-bar run (VERIFICATION.md V2 norms).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BarErrors {
+    /// Period measured from the zero crossings of v_cm (NaN with fewer than two).
+    pub period: f64,
+    /// max over samples of |v_cm − v_cm,exact| / (2v₀/π).
+    pub vcm_error: f64,
+    /// |E(t_end) − E(0)| / E(0).
+    pub energy_drift: f64,
+    /// max over samples of (E(t) − E(0)) / E(0): positive when energy grew.
+    pub energy_growth: f64,
+}
+
+impl VibratingBar {
+    pub fn errors(&self, record: &DynamicRecord) -> BarErrors {
+        let scale = 2.0 * self.amplitude / std::f64::consts::PI;
+        let vcm_error = record
+            .time
+            .iter()
+            .zip(&record.vcm_x)
+            .map(|(&t, &v)| (v - self.centre_of_mass_velocity(t)).abs() / scale)
+            .fold(0.0, f64::max);
+        let n = record.time.len();
+        let e0 = record.energy(0);
+        let energy_growth = (0..n).map(|k| (record.energy(k) - e0) / e0).fold(f64::NEG_INFINITY, f64::max);
+        BarErrors {
+            period: period_from_crossings(&zero_crossings(&record.time, &record.vcm_x)).unwrap_or(f64::NAN),
+            vcm_error,
+            energy_drift: (record.energy(n - 1) - e0).abs() / e0,
+            energy_growth,
+        }
+    }
+}
+
+/// V5: two elastic disks colliding (Sulsky, Chen & Schreyer 1994; VERIFICATION.md V5) on
+/// the unit square, 20 × 20 cells, 2 × 2 points per cell, linear basis (the disks touch the
+/// grid's faces, which GIMP domains would cross).
+pub fn disks_model(kinematics: crate::implicit::Kinematics) -> crate::model::Model<2> {
+    use crate::constitutive::Elastic;
+    use crate::grid::{BasisKind, Grid};
+    use crate::model::Model;
+    use crate::points::Shape;
+    use nalgebra::Vector2;
+    use std::sync::Arc;
+    let grid = Grid::new(Vector2::zeros(), Vector2::new(0.05, 0.05), [20, 20]).expect("valid disk grid");
+    let mut points = PointStore::new();
+    for (centre, v) in [(Vector2::new(0.2, 0.2), 0.1), (Vector2::new(0.8, 0.8), -0.1)] {
+        let first = points.len();
+        points.fill(&grid, &Shape::Ball { centre, radius: 0.2 }, 2, 1000.0, 0).expect("disk fits the grid");
+        for p in first..points.len() {
+            points.velocity[p] = Vector2::new(v, v);
+        }
+    }
+    let law = Elastic::new(1000.0, 0.3).expect("valid elastic constants");
+    Model::new(grid, BasisKind::Linear, kinematics, points, vec![Arc::new(law)], vec![], Vector2::zeros())
+        .expect("valid disk model")
+}

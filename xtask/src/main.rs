@@ -1,8 +1,11 @@
 //! `cargo xtask verify [--quick]`: run the verification problems against their closed-form
 //! references, report error and wall time, write `target/verify/{report.md, summary.csv,
 //! *.svg}`, and exit non-zero when a bound fails.
+//! `cargo xtask steps [--quick]`: the implicit-vs-explicit step-size study (`steps.rs`).
 //! `cargo xtask bench`: run the criterion benchmarks.
 
+mod dynamics;
+mod steps;
 mod svg;
 
 use anyhow::{bail, Context, Result};
@@ -32,6 +35,15 @@ enum Cmd {
         #[arg(long, default_value = "target/verify")]
         out: PathBuf,
     },
+    /// Implicit vs explicit: error against time step and against wall time (V2, V1c).
+    Steps {
+        /// Fewer time steps and a coarser column.
+        #[arg(long)]
+        quick: bool,
+        /// Output folder.
+        #[arg(long, default_value = "target/steps")]
+        out: PathBuf,
+    },
     /// Run the criterion benchmarks (`cargo bench`), passing any extra arguments on.
     Bench {
         #[arg(trailing_var_arg = true)]
@@ -42,6 +54,7 @@ enum Cmd {
 fn main() -> Result<()> {
     match Cli::parse().command {
         Cmd::Verify { quick, out } => verify(quick, &out),
+        Cmd::Steps { quick, out } => steps::run(quick, &out),
         Cmd::Bench { args } => {
             let status = std::process::Command::new(env!("CARGO"))
                 .args(["bench", "--package", "loam"])
@@ -137,14 +150,31 @@ fn observed_rate(runs: &[&ColumnRun]) -> f64 {
     sxy / sxx
 }
 
-struct Row {
+pub(crate) struct Row {
     case: String,
     quantity: String,
     value: f64,
     bound: Option<(f64, bool)>, // (bound, is_upper)
 }
 
+/// The verification report being written: markdown, the bounds table's rows, the folder.
+pub(crate) struct Report {
+    pub md: String,
+    pub rows: Vec<Row>,
+    pub out: PathBuf,
+}
+
 impl Row {
+    /// A value that must not exceed `bound`.
+    pub fn upper(case: impl Into<String>, quantity: impl Into<String>, value: f64, bound: f64) -> Self {
+        Self { case: case.into(), quantity: quantity.into(), value, bound: Some((bound, true)) }
+    }
+
+    /// A measured figure without a bound.
+    pub fn info(case: impl Into<String>, quantity: impl Into<String>, value: f64) -> Self {
+        Self { case: case.into(), quantity: quantity.into(), value, bound: None }
+    }
+
     fn pass(&self) -> Option<bool> {
         self.bound.map(|(b, upper)| if upper { self.value <= b } else { self.value >= b })
     }
@@ -273,6 +303,9 @@ fn verify(quick: bool, out: &Path) -> Result<()> {
         rows.push(Row { case: format!("V1c GIMP {study_cells} cells"), quantity: format!("e_sigma_{steps}_steps"), value: r.e_sigma, bound: None });
     }
     writeln!(md)?;
+    let mut report = Report { md, rows, out: out.to_owned() };
+    dynamics::verify(quick, &mut report)?;
+    let Report { mut md, rows, .. } = report;
     writeln!(md, "## Bounds\n\n| case | quantity | value | bound | pass |\n|---|---|---:|---:|---|")?;
     let mut csv = String::from("case,quantity,value,bound,pass\n");
     let mut failed = Vec::new();

@@ -16,7 +16,8 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Run a scene and write its outputs (VTU/PVD frames, run_log.csv, points_final.csv).
+    /// Run a scene and write its outputs (VTU/PVD frames, run_log.csv, history.csv,
+    /// points_final.csv).
     Run {
         /// Scene file (RON), see docs/scene-format.md.
         scene: PathBuf,
@@ -70,27 +71,32 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             let out = out.unwrap_or_else(|| {
                 PathBuf::from("out").join(scene.file_stem().map(|s| s.to_owned()).unwrap_or_default())
             });
-            let bar = if quiet { ProgressBar::hidden() } else { ProgressBar::new(0) };
+            let bar = if quiet { ProgressBar::hidden() } else { ProgressBar::new(1000) };
             bar.set_style(
-                ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:40} step {pos}/{len} {msg}")
-                    .expect("valid template"),
+                ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:40} {msg}").expect("valid template"),
             );
-            let summary = run_scene(&loaded, &out, &mut |r, total| {
-                bar.set_length(total as u64);
-                bar.set_position(r.step as u64);
+            let summary = run_scene(&loaded, &out, &mut |r, end| {
+                bar.set_position((1000.0 * (r.time / end).clamp(0.0, 1.0)) as u64);
+                let newton = if r.final_residual.is_nan() {
+                    String::new()
+                } else {
+                    format!(" its={} res={:.1e}", r.iterations, r.final_residual)
+                };
                 bar.set_message(format!(
-                    "λ={:.3} its={} res={:.1e}{}",
-                    r.load_factor,
-                    r.iterations,
-                    r.final_residual(),
+                    "step {} t={:.4e}/{:.4e} Δ={:.2e}{newton}{}",
+                    r.step,
+                    r.time,
+                    end,
+                    r.increment,
                     if r.cutbacks > 0 { format!(" cut-backs={}", r.cutbacks) } else { String::new() }
                 ));
             })
             .with_context(|| format!("running {}", scene.display()))?;
             bar.finish_and_clear();
             println!(
-                "{}: {} steps, {} points, {} Newton iterations (max {} per step), {} cut-backs, {}, {:.3} s; outputs in {}",
+                "{}: {} analysis, {} steps, {} points, {} Newton iterations (max {} per step), {} cut-backs, {}, {:.3} s; outputs in {}",
                 scene.display(),
+                summary.analysis,
                 summary.steps,
                 summary.points,
                 summary.newton_iterations,

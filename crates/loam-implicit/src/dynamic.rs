@@ -252,6 +252,8 @@ impl<const D: usize> Dynamic<D> {
             factor: (1.0 - alpha) / (beta * dt * dt),
             predictor: &self.predictor,
             bossak_term: &self.bossak_term,
+            velocity: &self.velocity,
+            time_step: dt,
             x: &mut self.x,
             point_x: &mut self.point_x,
             force: &mut self.force,

@@ -68,6 +68,10 @@ pub(crate) struct Inertia<'a> {
     pub predictor: &'a [f64],
     /// α_B aₙ per dof (zero for plain Newmark).
     pub bossak_term: &'a [f64],
+    /// Nodal velocity vₙ per dof and the step Δt: the momentum force m vₙ / Δt is the
+    /// floor of the residual's reference.
+    pub velocity: &'a [f64],
+    pub time_step: f64,
     /// Scratch: x per dof, x interpolated to points, consistent inertial force per dof.
     pub x: &'a mut Vec<f64>,
     pub point_x: &'a mut Vec<f64>,
@@ -257,13 +261,17 @@ impl<const D: usize> NewtonProblem for StepSystem<'_, D> {
         // r = M x + f_int − f_ext; the reference is the external and inertial force on
         // free dofs plus the support reactions (= f_int) on constrained ones (THEORY.md §7):
         // a free vibration has no external force, and must not be judged against zero.
+        // In dynamics the internal and inertial forces join the reference, with the
+        // momentum force m_I v_I / Δt as a floor: bodies in free flight have no external
+        // or internal force, and their round-off residual must not count as an error.
         let mut reference = 0.0;
         if let Some(inertia) = self.inertia.as_mut() {
             inertia.inertial_force::<D>(self.conn, &self.model.points.mass, du);
-            for ((ri, &fi), &fixed) in r.iter_mut().zip(inertia.force.iter()).zip(self.constrained) {
+            for (k, ((ri, &fi), &fixed)) in r.iter_mut().zip(inertia.force.iter()).zip(self.constrained).enumerate() {
                 if !fixed {
+                    let momentum = inertia.nodal_mass[k / D] * inertia.velocity[k] / inertia.time_step;
+                    reference += *ri * *ri + fi * fi + momentum * momentum;
                     *ri += fi;
-                    reference += fi * fi;
                 }
             }
         }

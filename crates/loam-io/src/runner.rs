@@ -1,11 +1,12 @@
 //! Running a scene end to end with its outputs: a VTU frame per output step collected in a
-//! PVD file, a run log (one CSV row per load step, flushed as it goes) and
-//! `points_final.csv` after the last step. A run that fails mid-way keeps every file
-//! written so far; the error says which step failed and why.
+//! PVD file, a run log (one CSV row per step, flushed as it goes), `history.csv` (time,
+//! energies, momentum) and `points_final.csv` after the last step. A run that fails mid-way
+//! keeps every file written so far; the error says which step failed and why.
 
+use crate::analysis::{Analysis, AnalysisError, Progress};
 use crate::output::{write_csv_table, write_vtu, CsvCell, CsvWriter, OutputError, PointCloud, PvdWriter};
 use crate::scene::{LoadedScene, SceneError};
-use loam_implicit::{Model, QuasiStatic, RunError, StepError, StepReport};
+use loam_model::{ExternalWork, Model};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
@@ -15,7 +16,7 @@ pub enum RunFailure {
     #[error(transparent)]
     Scene(#[from] SceneError),
     #[error("{0}")]
-    Analysis(#[from] StepError),
+    Analysis(#[from] AnalysisError),
     #[error("output: {0}")]
     Output(#[from] OutputError),
     #[error("cannot create the output folder {}: {source}", path.display())]
@@ -25,6 +26,7 @@ pub enum RunFailure {
 /// What a finished run did.
 #[derive(Debug, Clone)]
 pub struct RunSummary {
+    pub analysis: &'static str,
     pub steps: usize,
     pub points: usize,
     pub newton_iterations: usize,
@@ -35,11 +37,12 @@ pub struct RunSummary {
     pub output_dir: PathBuf,
 }
 
-/// Run a scene, writing its outputs into `out_dir`; `progress` is called after each step.
+/// Run a scene, writing its outputs into `out_dir`; `progress` is called after each step
+/// with the step's report and the end time (quasi-static: load factor 1).
 pub fn run_scene(
     scene: &LoadedScene,
     out_dir: &Path,
-    progress: &mut dyn FnMut(&StepReport, usize),
+    progress: &mut dyn FnMut(&Progress, f64),
 ) -> Result<RunSummary, RunFailure> {
     match scene.scene.dimension {
         3 => run_dim::<3>(scene, out_dir, progress),
@@ -47,21 +50,60 @@ pub fn run_scene(
     }
 }
 
+/// `history.csv`: one row per recorded step with time, energies and momentum. The external
+/// work is accumulated every step, whether or not a row is written.
+struct History<const D: usize> {
+    writer: CsvWriter,
+    work: ExternalWork<D>,
+}
+
+impl<const D: usize> History<D> {
+    fn create(path: &Path, model: &Model<D>, load_factor: f64) -> Result<Self, OutputError> {
+        let mut header = vec!["time", "kinetic_energy", "strain_energy", "external_work", "total_energy"];
+        header.extend(["momentum_x", "momentum_y", "momentum_z"].iter().take(D));
+        let writer = CsvWriter::create(path, &header)?;
+        Ok(Self { writer, work: ExternalWork::new(model, load_factor) })
+    }
+
+    fn advance(&mut self, model: &Model<D>, load_factor: f64) {
+        self.work.advance(model, load_factor);
+    }
+
+    /// Total energy is kinetic + strain − external work: constant for a conservative
+    /// system, falling where the scheme or the material dissipates.
+    fn row(&mut self, model: &Model<D>, time: f64) -> Result<(), OutputError> {
+        let kinetic = model.points.kinetic_energy();
+        let strain = model.stored_energy();
+        let work = self.work.work();
+        let mut cells = vec![
+            CsvCell::Float(time),
+            CsvCell::Float(kinetic),
+            CsvCell::Float(strain),
+            CsvCell::Float(work),
+            CsvCell::Float(kinetic + strain - work),
+        ];
+        cells.extend(model.points.momentum().iter().map(|&m| CsvCell::Float(m)));
+        self.writer.row_mixed(&cells)
+    }
+}
+
 fn run_dim<const D: usize>(
     scene: &LoadedScene,
     out_dir: &Path,
-    progress: &mut dyn FnMut(&StepReport, usize),
+    progress: &mut dyn FnMut(&Progress, f64),
 ) -> Result<RunSummary, RunFailure> {
     let start = Instant::now();
-    let mut analysis: QuasiStatic<D> = scene.build::<D>()?;
+    let mut analysis: Analysis<D> = scene.build::<D>()?;
     std::fs::create_dir_all(out_dir).map_err(|source| RunFailure::OutputDir { path: out_dir.to_owned(), source })?;
     let out = &scene.scene.output;
-    let total = analysis.settings().load_steps;
+    let end_time = analysis.end_time();
     let mut log = CsvWriter::create(
         &out_dir.join("run_log.csv"),
         &[
             "step",
+            "time",
             "load_factor",
+            "increment",
             "substeps",
             "cutbacks",
             "iterations",
@@ -75,46 +117,59 @@ fn run_dim<const D: usize>(
     if let Some(pvd) = pvd.as_mut() {
         write_frame(analysis.model(), out_dir, pvd, 0, 0.0)?;
     }
+    let mut history = if out.history_every > 0 {
+        let mut h = History::create(&out_dir.join("history.csv"), analysis.model(), analysis.load_factor())?;
+        h.row(analysis.model(), analysis.time())?;
+        Some(h)
+    } else {
+        None
+    };
     let (mut iterations, mut max_its, mut cutbacks) = (0, 0, 0);
-    let result = analysis.run(|r, model| -> Result<(), OutputError> {
+    while !analysis.is_finished() {
+        let r = analysis.step()?;
+        let model = analysis.model();
+        let last = analysis.is_finished();
         iterations += r.iterations;
         max_its = max_its.max(r.iterations);
         cutbacks += r.cutbacks;
         log.row_mixed(&[
             CsvCell::Int(r.step as i64),
+            CsvCell::Float(r.time),
             CsvCell::Float(r.load_factor),
+            CsvCell::Float(r.increment),
             CsvCell::Int(r.substeps as i64),
             CsvCell::Int(r.cutbacks as i64),
             CsvCell::Int(r.iterations as i64),
-            CsvCell::Float(r.final_residual()),
+            CsvCell::Float(r.final_residual),
             CsvCell::Int(r.active_nodes as i64),
             CsvCell::Int(r.dofs as i64),
             CsvCell::Float(r.wall_time.as_secs_f64()),
         ])?;
-        if let Some(pvd) = pvd.as_mut() {
-            if r.step % out.vtu_every == 0 || r.step == total {
-                write_frame(model, out_dir, pvd, r.step, r.load_factor)?;
+        if let Some(h) = history.as_mut() {
+            h.advance(model, r.load_factor);
+            if r.step % out.history_every == 0 || last {
+                h.row(model, r.time)?;
             }
         }
-        progress(r, total);
-        Ok(())
-    });
-    match result {
-        Ok(()) => {}
-        Err(RunError::Step(e)) => return Err(e.into()),
-        Err(RunError::Observer(e)) => return Err(e.into()),
+        if let Some(pvd) = pvd.as_mut() {
+            if r.step % out.vtu_every == 0 || last {
+                write_frame(model, out_dir, pvd, r.step, r.time)?;
+            }
+        }
+        progress(&r, end_time);
     }
     if out.final_csv {
         write_points_csv(analysis.model(), &out_dir.join("points_final.csv"))?;
     }
     Ok(RunSummary {
+        analysis: analysis.name(),
         steps: analysis.steps_done(),
         points: analysis.model().points.len(),
         newton_iterations: iterations,
         max_iterations_per_step: max_its,
         cutbacks,
         wall_time: start.elapsed(),
-        solver: analysis.linear_solver_kind().to_string(),
+        solver: analysis.solver(),
         output_dir: out_dir.to_owned(),
     })
 }
@@ -123,6 +178,7 @@ fn run_dim<const D: usize>(
 struct Fields {
     position: Vec<f64>,
     displacement: Vec<f64>,
+    velocity: Vec<f64>,
     stress: Vec<f64>,
 }
 
@@ -137,7 +193,7 @@ fn fields<const D: usize>(model: &Model<D>) -> Fields {
         .iter()
         .flat_map(|s| [s[(0, 0)], s[(1, 1)], s[(2, 2)], s[(0, 1)], s[(1, 2)], s[(0, 2)]])
         .collect();
-    Fields { position, displacement, stress }
+    Fields { position, displacement, velocity: flat(&pts.velocity), stress }
 }
 
 fn write_frame<const D: usize>(
@@ -145,7 +201,7 @@ fn write_frame<const D: usize>(
     out_dir: &Path,
     pvd: &mut PvdWriter,
     step: usize,
-    load_factor: f64,
+    time: f64,
 ) -> Result<(), OutputError> {
     let f = fields(model);
     let material: Vec<f64> = model.points.material.iter().map(|&m| m as f64).collect();
@@ -154,10 +210,11 @@ fn write_frame<const D: usize>(
         .with_scalar("mass", &model.points.mass)
         .with_scalar("material", &material)
         .with_vector("displacement", &f.displacement)
+        .with_vector("velocity", &f.velocity)
         .with_tensor("stress", &f.stress);
     let name = format!("points_{step:05}.vtu");
     write_vtu(&out_dir.join(&name), &cloud)?;
-    pvd.add(load_factor, &name)
+    pvd.add(time, &name)
 }
 
 /// `points_final.csv`: one row per point with initial and current position, stress

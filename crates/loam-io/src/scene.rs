@@ -5,7 +5,11 @@
 
 use loam_constitutive::{ConstitutiveLaw, Elastic};
 use loam_grid::{BasisKind, Grid};
-use loam_implicit::{Kinematics, Model, PlaneConstraint, QuasiStatic, QuasiStaticSettings, StepError};
+use crate::analysis::{Analysis, AnalysisError};
+use loam_explicit::{Explicit, ExplicitError, ExplicitSettings, TimeStep, UpdateScheme};
+use loam_implicit::{
+    Dynamic, DynamicSettings, Kinematics, MassMatrix, Model, PlaneConstraint, QuasiStatic, QuasiStaticSettings, StepError,
+};
 use loam_points::{PointStore, Shape};
 use loam_solve::{LinearSolverKind, NewtonSettings};
 use nalgebra::{SVector, Vector2};
@@ -91,6 +95,20 @@ pub struct BodySpec {
     pub shape: ShapeSpec,
     #[serde(default = "default_ppc")]
     pub points_per_cell: usize,
+    /// Initial velocity of the body's points (dynamic analyses); default at rest.
+    #[serde(default)]
+    pub velocity: Option<VelocitySpec>,
+}
+
+/// An initial velocity field.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub enum VelocitySpec {
+    /// The same velocity everywhere; D components.
+    Uniform(Vec<f64>),
+    /// v(x) = amplitude · sin(2π (x_axis − origin) / wavelength): a standing-wave mode,
+    /// e.g. the vibrating bar's first mode with wavelength 4L.
+    Sine { amplitude: Vec<f64>, axis: Axis, wavelength: f64, #[serde(default)] origin: f64 },
 }
 
 fn default_ppc() -> usize {
@@ -103,6 +121,8 @@ pub enum ShapeSpec {
     Box { min: Vec<f64>, max: Vec<f64> },
     /// 2D only: vertices [x, y] in order.
     Polygon { vertices: Vec<[f64; 2]> },
+    /// A disk (2D) or ball (3D).
+    Ball { centre: Vec<f64>, radius: f64 },
 }
 
 #[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
@@ -140,6 +160,75 @@ pub enum AnalysisSpec {
         #[serde(default = "default_cutbacks")]
         max_cutbacks: usize,
     },
+    /// Implicit Newmark dynamics (Bossak with `bossak_alpha` < 0), loads applied in full at
+    /// t = 0, Newton per time step, a failed step halved up to `max_cutbacks` times.
+    ImplicitDynamic {
+        time_step: f64,
+        duration: f64,
+        #[serde(default = "default_beta")]
+        beta: f64,
+        #[serde(default = "default_gamma")]
+        gamma: f64,
+        #[serde(default)]
+        bossak_alpha: f64,
+        #[serde(default)]
+        mass: MassSpec,
+        #[serde(default = "default_cutbacks")]
+        max_cutbacks: usize,
+    },
+    /// Explicit MPM (no Newton): `time_step` Cfl(safety) or Fixed(dt); a fixed step above
+    /// the critical one is refused unless `allow_above_critical`.
+    Explicit {
+        duration: f64,
+        #[serde(default = "default_explicit_step")]
+        time_step: TimeStepSpec,
+        #[serde(default)]
+        scheme: SchemeSpec,
+        #[serde(default = "default_flip")]
+        flip: f64,
+        #[serde(default)]
+        damping: f64,
+    },
+}
+
+fn default_beta() -> f64 {
+    0.25
+}
+
+fn default_gamma() -> f64 {
+    0.5
+}
+
+fn default_flip() -> f64 {
+    1.0
+}
+
+fn default_explicit_step() -> TimeStepSpec {
+    TimeStepSpec::Cfl(0.5)
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+pub enum MassSpec {
+    #[default]
+    Lumped,
+    Consistent,
+}
+
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub enum TimeStepSpec {
+    /// Δt = safety × the critical step, every step.
+    Cfl(f64),
+    /// A fixed Δt.
+    Fixed { dt: f64, #[serde(default)] allow_above_critical: bool },
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+pub enum SchemeSpec {
+    Usf,
+    Usl,
+    #[default]
+    Musl,
 }
 
 fn default_cutbacks() -> usize {
@@ -181,11 +270,14 @@ pub struct OutputSpec {
     pub vtu_every: usize,
     /// Write `points_final.csv` after the last step.
     pub final_csv: bool,
+    /// Write a `history.csv` row (time, energies, momentum) every this many steps (and
+    /// after the last); 0 = none.
+    pub history_every: usize,
 }
 
 impl Default for OutputSpec {
     fn default() -> Self {
-        Self { vtu_every: 1, final_csv: true }
+        Self { vtu_every: 1, final_csv: true, history_every: 1 }
     }
 }
 
@@ -244,7 +336,7 @@ impl LoadedScene {
 
     /// Build the model and analysis of a `D`-dimensional scene, checking everything that can
     /// be checked before the first step. `D` must equal the scene's `dimension`.
-    pub fn build<const D: usize>(&self) -> Result<QuasiStatic<D>, SceneError> {
+    pub fn build<const D: usize>(&self) -> Result<Analysis<D>, SceneError> {
         let s = &self.scene;
         if s.dimension != D {
             return Err(self.error(&[Seg::Key("dimension")], format!("dimension is {}; loam runs 2 (plane strain) or 3", s.dimension)));
@@ -316,6 +408,10 @@ impl LoadedScene {
                     min: vec_d(min, &[Seg::Key("bodies"), Seg::Index(i), Seg::Key("shape"), Seg::Key("min")], "Box min")?,
                     max: vec_d(max, &[Seg::Key("bodies"), Seg::Index(i), Seg::Key("shape"), Seg::Key("max")], "Box max")?,
                 },
+                ShapeSpec::Ball { centre, radius } => Shape::Ball {
+                    centre: vec_d(centre, &[Seg::Key("bodies"), Seg::Index(i), Seg::Key("shape"), Seg::Key("centre")], "Ball centre")?,
+                    radius: *radius,
+                },
                 ShapeSpec::Polygon { vertices } => {
                     if D != 2 {
                         return Err(self.error(&at("shape"), "Polygon shapes are 2D only; use Box in 3D"));
@@ -323,9 +419,16 @@ impl LoadedScene {
                     Shape::Polygon(vertices.iter().map(|v| Vector2::new(v[0], v[1])).collect())
                 }
             };
-            points
+            let added = points
                 .fill(&grid, &shape, b.points_per_cell, s.materials[mi].density, mi as u32)
                 .map_err(|e| self.error(&at("shape"), format!("body {i}: {e}")))?;
+            if let Some(v) = &b.velocity {
+                let first = points.len() - added;
+                let field = self.velocity_field::<D>(v, i)?;
+                for p in first..points.len() {
+                    points.velocity[p] = field(&points.position[p]);
+                }
+            }
         }
         // Loads and constraints.
         let gravity = vec_d(&s.gravity, &[Seg::Key("gravity")], "gravity")?;
@@ -355,12 +458,6 @@ impl LoadedScene {
             }
             constraints.push(PlaneConstraint { axis: a, plane, fixed });
         }
-        let (load_steps, max_cutbacks) = match s.analysis {
-            AnalysisSpec::QuasiStatic { load_steps, max_cutbacks } => (load_steps, max_cutbacks),
-        };
-        if load_steps == 0 {
-            return Err(self.error(&[Seg::Key("analysis"), Seg::Key("load_steps")], "load_steps is 0; it must be at least 1"));
-        }
         let sv = &s.solver;
         if !(sv.residual_tolerance > 0.0 && sv.residual_tolerance < 1.0) {
             return Err(self.error(&[Seg::Key("solver"), Seg::Key("residual_tolerance")], format!("residual_tolerance is {}; it must lie in (0, 1)", sv.residual_tolerance)));
@@ -371,6 +468,16 @@ impl LoadedScene {
         if sv.max_iterations == 0 {
             return Err(self.error(&[Seg::Key("solver"), Seg::Key("max_iterations")], "max_iterations is 0; it must be at least 1"));
         }
+        let newton = NewtonSettings {
+            residual_tolerance: sv.residual_tolerance,
+            increment_tolerance: sv.increment_tolerance,
+            max_iterations: sv.max_iterations,
+            ..NewtonSettings::default()
+        };
+        let linear_solver = sv.linear.map(|l| match l {
+            LinearSpec::Cholesky => LinearSolverKind::Cholesky,
+            LinearSpec::Lu => LinearSolverKind::Lu,
+        });
         let basis = match s.basis {
             BasisSpec::Linear => BasisKind::Linear,
             BasisSpec::Gimp => BasisKind::Gimp,
@@ -381,32 +488,121 @@ impl LoadedScene {
         };
         let model = Model::new(grid, basis, kinematics, points, laws, constraints, gravity)
             .map_err(|e| self.error(&[Seg::Key("bodies")], e.to_string()))?;
-        let settings = QuasiStaticSettings {
-            load_steps,
-            newton: NewtonSettings {
-                residual_tolerance: sv.residual_tolerance,
-                increment_tolerance: sv.increment_tolerance,
-                max_iterations: sv.max_iterations,
-                ..NewtonSettings::default()
-            },
-            max_cutbacks,
-            linear_solver: sv.linear.map(|l| match l {
-                LinearSpec::Cholesky => LinearSolverKind::Cholesky,
-                LinearSpec::Lu => LinearSolverKind::Lu,
-            }),
+        let at_analysis = |key: &'static str| [Seg::Key("analysis"), Seg::Key(key)];
+        let mut analysis = match s.analysis {
+            AnalysisSpec::QuasiStatic { load_steps, max_cutbacks } => {
+                if load_steps == 0 {
+                    return Err(self.error(&at_analysis("load_steps"), "load_steps is 0; it must be at least 1"));
+                }
+                Analysis::QuasiStatic(QuasiStatic::new(
+                    model,
+                    QuasiStaticSettings { load_steps, newton, max_cutbacks, linear_solver },
+                ))
+            }
+            AnalysisSpec::ImplicitDynamic { time_step, duration, beta, gamma, bossak_alpha, mass, max_cutbacks } => {
+                let settings = DynamicSettings {
+                    time_step,
+                    duration,
+                    beta,
+                    gamma,
+                    bossak_alpha,
+                    mass: match mass {
+                        MassSpec::Lumped => MassMatrix::Lumped,
+                        MassSpec::Consistent => MassMatrix::Consistent,
+                    },
+                    newton,
+                    max_cutbacks,
+                    linear_solver,
+                };
+                match Dynamic::new(model, settings) {
+                    Ok(d) => Analysis::Dynamic(d),
+                    Err(StepError::InvalidSettings { field, value, valid }) => {
+                        return Err(self.error(&at_analysis(field), format!("{field} is {value}; valid: {valid}")))
+                    }
+                    Err(e) => return Err(self.error(&[Seg::Key("analysis")], e.to_string())),
+                }
+            }
+            AnalysisSpec::Explicit { duration, ref time_step, scheme, flip, damping } => {
+                let settings = ExplicitSettings {
+                    scheme: match scheme {
+                        SchemeSpec::Usf => UpdateScheme::Usf,
+                        SchemeSpec::Usl => UpdateScheme::Usl,
+                        SchemeSpec::Musl => UpdateScheme::Musl,
+                    },
+                    flip,
+                    time_step: match *time_step {
+                        TimeStepSpec::Cfl(safety) => TimeStep::Cfl { safety },
+                        TimeStepSpec::Fixed { dt, allow_above_critical } => TimeStep::Fixed { dt, allow_above_critical },
+                    },
+                    damping,
+                    duration,
+                };
+                match Explicit::new(model, settings) {
+                    Ok(e) => Analysis::Explicit(e),
+                    Err(ExplicitError::InvalidSettings { field, value, valid }) => {
+                        let key = if field.starts_with("time_step") { "time_step" } else { field };
+                        return Err(self.error(&at_analysis(key), format!("{field} is {value}; valid: {valid}")));
+                    }
+                    Err(e) => return Err(self.error(&[Seg::Key("analysis")], e.to_string())),
+                }
+            }
         };
-        let mut analysis = QuasiStatic::new(model, settings);
         analysis.check().map_err(|e| match e {
-            StepError::ConstraintTouchesNoNode { index, .. } => {
+            AnalysisError::Implicit(StepError::ConstraintTouchesNoNode { index, .. })
+            | AnalysisError::Explicit(ExplicitError::ConstraintTouchesNoNode { index, .. }) => {
                 self.error(&[Seg::Key("constraints"), Seg::Index(index)], format!("constraint {index}: {e}"))
             }
-            StepError::PointOutsideGrid { ref source, .. } => self.error(
+            AnalysisError::Implicit(StepError::PointOutsideGrid { ref source, .. })
+            | AnalysisError::Explicit(ExplicitError::PointOutsideGrid { ref source, .. }) => self.error(
                 &[Seg::Key("bodies")],
                 format!("material point {} at {:?}: its basis reaches outside the grid ({}); enlarge the grid or move the body", source.point, source.position, source.source),
             ),
             other => self.error(&[], other.to_string()),
         })?;
+        // A fixed explicit step above the critical one is refused here, before any output.
+        if let Analysis::Explicit(e) = &analysis {
+            if let TimeStep::Fixed { dt, allow_above_critical: false } = e.settings().time_step {
+                let critical = e.critical_time_step();
+                if dt > critical {
+                    return Err(self.error(&at_analysis("time_step"), format!(
+                        "the fixed time step {dt:e} is above the critical step {critical:e} (h / (c_p + |v|)): the explicit run would blow up; use Cfl(0.5), a step ≤ {critical:e}, or allow_above_critical: true"
+                    )));
+                }
+            }
+        }
         Ok(analysis)
+    }
+
+    /// The initial velocity field of body `i`.
+    fn velocity_field<const D: usize>(
+        &self,
+        v: &VelocitySpec,
+        i: usize,
+    ) -> Result<impl Fn(&SVector<f64, D>) -> SVector<f64, D>, SceneError> {
+        let at = [Seg::Key("bodies"), Seg::Index(i), Seg::Key("velocity")];
+        let vec_d = |v: &[f64]| -> Result<SVector<f64, D>, SceneError> {
+            if v.len() != D || v.iter().any(|x| !x.is_finite()) {
+                return Err(self.error(&at, format!("body {i}: the velocity needs {D} finite components, got {v:?}")));
+            }
+            Ok(SVector::from_column_slice(v))
+        };
+        Ok(match v {
+            VelocitySpec::Uniform(u) => {
+                let u = vec_d(u)?;
+                (u, 0usize, 0.0, 0.0)
+            }
+            VelocitySpec::Sine { amplitude, axis, wavelength, origin } => {
+                let a = vec_d(amplitude)?;
+                if axis.index() >= D {
+                    return Err(self.error(&at, format!("body {i}: the velocity's axis {axis:?} does not exist in {D}D")));
+                }
+                if !(wavelength.is_finite() && *wavelength > 0.0) {
+                    return Err(self.error(&at, format!("body {i}: the wavelength is {wavelength}; it must be positive")));
+                }
+                (a, axis.index(), 2.0 * std::f64::consts::PI / wavelength, *origin)
+            }
+        })
+        .map(|(a, axis, k, origin)| move |x: &SVector<f64, D>| if k == 0.0 { a } else { a * (k * (x[axis] - origin)).sin() })
     }
 }
 

@@ -1,0 +1,180 @@
+//! The analysis a scene asks for, behind one stepping interface for the runner and the
+//! CLI: quasi-static load stepping, implicit Newmark dynamics or explicit MPM.
+
+use loam_explicit::{Explicit, ExplicitError};
+use loam_implicit::{Dynamic, Model, QuasiStatic, StepError};
+use std::time::Duration;
+
+/// One of the three analyses.
+pub enum Analysis<const D: usize> {
+    QuasiStatic(QuasiStatic<D>),
+    Dynamic(Dynamic<D>),
+    Explicit(Explicit<D>),
+}
+
+/// Why a step failed.
+#[derive(Debug, thiserror::Error)]
+pub enum AnalysisError {
+    #[error(transparent)]
+    Implicit(#[from] StepError),
+    #[error(transparent)]
+    Explicit(#[from] ExplicitError),
+}
+
+/// What one step did, whatever the analysis.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Progress {
+    /// 1-based step number.
+    pub step: usize,
+    /// Time reached (quasi-static: the pseudo-time, equal to the load factor).
+    pub time: f64,
+    pub load_factor: f64,
+    /// Time (or load) increment of the step.
+    pub increment: f64,
+    /// Newton corrections over the step (0 for explicit steps).
+    pub iterations: usize,
+    pub substeps: usize,
+    pub cutbacks: usize,
+    /// Relative residual at convergence (NaN for explicit steps, which have none).
+    pub final_residual: f64,
+    pub active_nodes: usize,
+    pub dofs: usize,
+    pub wall_time: Duration,
+}
+
+impl<const D: usize> Analysis<D> {
+    /// Short name for logs: "quasi-static", "implicit dynamic", "explicit".
+    pub fn name(&self) -> &'static str {
+        match self {
+            Analysis::QuasiStatic(_) => "quasi-static",
+            Analysis::Dynamic(_) => "implicit dynamic",
+            Analysis::Explicit(_) => "explicit",
+        }
+    }
+
+    pub fn model(&self) -> &Model<D> {
+        match self {
+            Analysis::QuasiStatic(a) => a.model(),
+            Analysis::Dynamic(a) => a.model(),
+            Analysis::Explicit(a) => a.model(),
+        }
+    }
+
+    pub fn is_finished(&self) -> bool {
+        match self {
+            Analysis::QuasiStatic(a) => a.is_finished(),
+            Analysis::Dynamic(a) => a.is_finished(),
+            Analysis::Explicit(a) => a.is_finished(),
+        }
+    }
+
+    pub fn steps_done(&self) -> usize {
+        match self {
+            Analysis::QuasiStatic(a) => a.steps_done(),
+            Analysis::Dynamic(a) => a.steps_done(),
+            Analysis::Explicit(a) => a.steps_done(),
+        }
+    }
+
+    /// Time reached (quasi-static: the load factor).
+    pub fn time(&self) -> f64 {
+        match self {
+            Analysis::QuasiStatic(a) => a.load_factor(),
+            Analysis::Dynamic(a) => a.time(),
+            Analysis::Explicit(a) => a.time(),
+        }
+    }
+
+    /// Load factor of the dead loads now: ramped in quasi-static analysis, full at once in
+    /// dynamics.
+    pub fn load_factor(&self) -> f64 {
+        match self {
+            Analysis::QuasiStatic(a) => a.load_factor(),
+            _ => 1.0,
+        }
+    }
+
+    /// Time (or load factor) at the end of the analysis.
+    pub fn end_time(&self) -> f64 {
+        match self {
+            Analysis::QuasiStatic(_) => 1.0,
+            Analysis::Dynamic(a) => a.settings().duration,
+            Analysis::Explicit(a) => a.settings().duration,
+        }
+    }
+
+    /// The linear solver, or "none" for explicit analysis.
+    pub fn solver(&self) -> String {
+        match self {
+            Analysis::QuasiStatic(a) => a.linear_solver_kind().to_string(),
+            Analysis::Dynamic(a) => a.linear_solver_kind().to_string(),
+            Analysis::Explicit(_) => "no linear solver (explicit)".to_string(),
+        }
+    }
+
+    /// Connectivity checks that need the active nodes (constraints that touch no node,
+    /// points whose basis leaves the grid).
+    pub fn check(&mut self) -> Result<(), AnalysisError> {
+        match self {
+            Analysis::QuasiStatic(a) => a.check()?,
+            Analysis::Dynamic(a) => a.check()?,
+            Analysis::Explicit(a) => a.check()?,
+        }
+        Ok(())
+    }
+
+    /// Advance one step.
+    pub fn step(&mut self) -> Result<Progress, AnalysisError> {
+        let before = self.time();
+        Ok(match self {
+            Analysis::QuasiStatic(a) => {
+                let r = a.step()?;
+                Progress {
+                    step: r.step,
+                    time: r.time,
+                    load_factor: r.load_factor,
+                    increment: r.time - before,
+                    iterations: r.iterations,
+                    substeps: r.substeps,
+                    cutbacks: r.cutbacks,
+                    final_residual: r.final_residual(),
+                    active_nodes: r.active_nodes,
+                    dofs: r.dofs,
+                    wall_time: r.wall_time,
+                }
+            }
+            Analysis::Dynamic(a) => {
+                let r = a.step()?;
+                Progress {
+                    step: r.step,
+                    time: r.time,
+                    load_factor: r.load_factor,
+                    increment: r.time - before,
+                    iterations: r.iterations,
+                    substeps: r.substeps,
+                    cutbacks: r.cutbacks,
+                    final_residual: r.final_residual(),
+                    active_nodes: r.active_nodes,
+                    dofs: r.dofs,
+                    wall_time: r.wall_time,
+                }
+            }
+            Analysis::Explicit(a) => {
+                let r = a.step()?;
+                Progress {
+                    step: r.step,
+                    time: r.time,
+                    load_factor: 1.0,
+                    increment: r.dt,
+                    iterations: 0,
+                    substeps: 1,
+                    cutbacks: 0,
+                    final_residual: f64::NAN,
+                    active_nodes: r.active_nodes,
+                    dofs: r.active_nodes * D,
+                    wall_time: r.wall_time,
+                }
+            }
+        })
+    }
+}
