@@ -132,3 +132,61 @@ fn unreadable_file_names_the_path() {
     let e = LoadedScene::read(Path::new("/nonexistent/scene.ron")).unwrap_err();
     assert!(e.to_string().contains("/nonexistent/scene.ron"), "{e}");
 }
+
+// ------------------------------------------------------------------ dynamic scenes
+
+const BAR: &str = include_str!("../examples/vibrating_bar.ron");
+const DISKS: &str = include_str!("../examples/disks.ron");
+
+fn check_text(source: &str) -> Result<(), SceneError> {
+    let scene = LoadedScene::parse(Path::new("dyn.ron"), source.to_string())?;
+    scene.build::<2>().map(|_| ())
+}
+
+#[test]
+fn the_dynamic_examples_are_valid() {
+    check_text(BAR).unwrap();
+    check_text(DISKS).unwrap();
+}
+
+/// γ < ½ makes Newmark unstable: refused at the analysis line, naming the setting.
+#[test]
+fn newmark_gamma_below_one_half() {
+    let src = BAR.replacen("ImplicitDynamic(time_step: 0.5, duration: 30.0)", "ImplicitDynamic(time_step: 0.5, duration: 30.0, gamma: 0.4)", 1);
+    let e = check_text(&src).unwrap_err();
+    let line = BAR.lines().position(|l| l.contains("ImplicitDynamic")).unwrap() + 1;
+    assert_eq!(e.line, line, "{e}");
+    assert!(e.to_string().contains("gamma") && e.to_string().contains("½"), "{e}");
+}
+
+/// A fixed explicit step above the critical one is refused before any output, with the
+/// critical step and the ways out in the message; allowed when the scene says so.
+#[test]
+fn explicit_step_above_the_critical_one() {
+    // Disks: c_p = √(M/ρ) ≈ 1.16, h = 0.05, so Δt_c ≈ 0.042.
+    let src = DISKS.replacen("time_step: Cfl(0.5)", "time_step: Fixed(dt: 0.1)", 1);
+    let e = check_text(&src).unwrap_err();
+    let line = DISKS.lines().position(|l| l.contains("Explicit(")).unwrap() + 1;
+    assert_eq!(e.line, line, "{e}");
+    for s in ["critical", "Cfl", "allow_above_critical"] {
+        assert!(e.to_string().contains(s), "{e} should say {s}");
+    }
+    let allowed = DISKS.replacen("time_step: Cfl(0.5)", "time_step: Fixed(dt: 0.1, allow_above_critical: true)", 1);
+    check_text(&allowed).unwrap();
+}
+
+#[test]
+fn explicit_damping_out_of_range() {
+    let src = DISKS.replacen("flip: 1.0", "flip: 1.0, damping: 1.5", 1);
+    let e = check_text(&src).unwrap_err();
+    assert!(e.to_string().contains("damping") && e.to_string().contains("[0, 1)"), "{e}");
+}
+
+#[test]
+fn initial_velocity_with_the_wrong_length() {
+    let src = DISKS.replacen("Uniform([0.1, 0.1])", "Uniform([0.1])", 1);
+    let e = check_text(&src).unwrap_err();
+    let line = DISKS.lines().position(|l| l.contains("Uniform([0.1, 0.1])")).unwrap() + 1;
+    assert_eq!(e.line, line, "{e}");
+    assert!(e.to_string().contains("2 finite components"), "{e}");
+}

@@ -70,6 +70,11 @@ pub struct PointBasisError {
     pub source: BasisError,
 }
 
+/// Weight below which, together with a gradient below `NEGLIGIBLE_GRADIENT / h`, a node
+/// is left out of a point's support.
+const NEGLIGIBLE_WEIGHT: f64 = 1e-14;
+const NEGLIGIBLE_GRADIENT: f64 = 1e-8;
+
 impl<const D: usize> Connectivity<D> {
     pub fn new(basis: BasisKind) -> Self {
         Self {
@@ -169,7 +174,22 @@ impl<const D: usize> Connectivity<D> {
             .filter_map(|(p, (((nodes, vals), grads), count))| {
                 match basis.evaluate(grid, &positions[p], &half_lengths[p], nodes, vals, grads) {
                     Ok(c) => {
-                        *count = c as u32;
+                        // A node where the weight and its gradient (nearly) vanish — a
+                        // point on or within round-off of a grid node, linear basis —
+                        // couples to nothing; kept, it would be an active node with a
+                        // (numerically) empty row in the tangent. Dropping it changes the
+                        // partition of unity by < 1e-14 and of its gradient by < 1e-8 / h.
+                        let h_min = grid.cell_size().min();
+                        let mut kept = 0;
+                        for k in 0..c {
+                            if vals[k] > NEGLIGIBLE_WEIGHT || grads[k].norm() * h_min > NEGLIGIBLE_GRADIENT {
+                                nodes[kept] = nodes[k];
+                                vals[kept] = vals[k];
+                                grads[kept] = grads[k];
+                                kept += 1;
+                            }
+                        }
+                        *count = kept as u32;
                         None
                     }
                     Err(e) => {
@@ -271,5 +291,22 @@ mod tests {
         let pos = [Vector2::new(0.5, 0.5), Vector2::new(2.5, 0.5), Vector2::new(-1.0, 0.5)];
         let e = c.compute(&g, &pos, &[Vector2::zeros(); 3]).unwrap_err();
         assert_eq!(e.point, 1);
+    }
+
+    /// A point exactly on a grid node (linear basis) touches four nodes of which one has
+    /// zero weight and zero gradient: that node is not part of the support, so it is not an
+    /// active node and the tangent has no empty row.
+    #[test]
+    fn nodes_with_no_weight_and_no_gradient_are_dropped() {
+
+        let grid = Grid::new(Vector2::zeros(), Vector2::new(1.0, 1.0), [4, 4]).unwrap();
+        let mut conn = Connectivity::new(BasisKind::Linear);
+        conn.compute(&grid, &[Vector2::new(2.0, 2.0)], &[Vector2::new(0.25, 0.25)]).unwrap();
+        // Nodes (2,2) with N = 1, and (3,2), (2,3) with N = 0 but gradient ±1 along one axis.
+        assert_eq!(conn.support_len(0), 3);
+        assert_eq!(conn.active_nodes().len(), 3);
+        assert!(conn.support_values(0).iter().sum::<f64>() == 1.0);
+        let g: Vector2<f64> = conn.support_gradients(0).iter().sum();
+        assert_eq!(g, Vector2::zeros());
     }
 }

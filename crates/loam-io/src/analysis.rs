@@ -6,6 +6,7 @@ use loam_implicit::{Dynamic, Model, QuasiStatic, StepError};
 use std::time::Duration;
 
 /// One of the three analyses.
+#[allow(clippy::large_enum_variant)] // one per run; boxing buys nothing
 pub enum Analysis<const D: usize> {
     QuasiStatic(QuasiStatic<D>),
     Dynamic(Dynamic<D>),

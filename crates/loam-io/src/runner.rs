@@ -98,7 +98,7 @@ fn run_dim<const D: usize>(
     let out = &scene.scene.output;
     let end_time = analysis.end_time();
     let mut log = CsvWriter::create(
-        &out_dir.join("run_log.csv"),
+        out_dir.join("run_log.csv"),
         &[
             "step",
             "time",
@@ -113,7 +113,7 @@ fn run_dim<const D: usize>(
             "wall_time_s",
         ],
     )?;
-    let mut pvd = if out.vtu_every > 0 { Some(PvdWriter::create(&out_dir.join("points.pvd"))?) } else { None };
+    let mut pvd = if out.vtu_every > 0 { Some(PvdWriter::create(out_dir.join("points.pvd"))?) } else { None };
     if let Some(pvd) = pvd.as_mut() {
         write_frame(analysis.model(), out_dir, pvd, 0, 0.0)?;
     }

@@ -3,7 +3,7 @@
 //! checks (finite, unchanged).
 
 use loam_constitutive::{ConstitutiveLaw, Elastic};
-use loam_explicit::{Explicit, ExplicitSettings, Kinematics, Model, PlaneConstraint, UpdateScheme};
+use loam_explicit::{Explicit, ExplicitSettings, Kinematics, Model, PlaneConstraint};
 use loam_grid::{BasisKind, Grid};
 use loam_points::{PointStore, Shape};
 use nalgebra::Vector2;
