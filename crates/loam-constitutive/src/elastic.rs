@@ -89,7 +89,7 @@ impl ConstitutiveLaw for Elastic {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::tensor::{flatten, idx};
+    use crate::tensor::{central_difference, idx, symmetric_unit_directions};
 
     #[test]
     fn rejects_bad_parameters() {
@@ -139,18 +139,7 @@ mod tests {
         let eps0 = Matrix3::new(1e-3, 2e-4, -3e-4, 2e-4, -5e-4, 1e-4, -3e-4, 1e-4, 7e-4);
         let d = law.update(&eps0, &[], &mut []).unwrap().tangent;
         // Linear law: central differences are exact up to round-off (~1e-16 · |σ| / h).
-        let h = 1e-6;
-        let mut fd = Tensor4::zeros();
-        for k in 0..3 {
-            for l in 0..3 {
-                let mut s = Matrix3::zeros();
-                s[(k, l)] += 0.5;
-                s[(l, k)] += 0.5;
-                let sp = law.update(&(eps0 + s * h), &[], &mut []).unwrap().stress;
-                let sm = law.update(&(eps0 - s * h), &[], &mut []).unwrap().stress;
-                fd.set_column(idx(k, l), &flatten(&((sp - sm) / (2.0 * h))));
-            }
-        }
+        let fd = central_difference(|e| law.update(e, &[], &mut []).unwrap().stress, &eps0, 1e-6);
         let r = (d - fd).norm() / d.norm();
         assert!(r < 1e-6, "rel {r}");
         // Minor symmetry.
@@ -174,15 +163,10 @@ mod tests {
         let eps = Matrix3::new(1e-3, 2e-4, -3e-4, 2e-4, -5e-4, 1e-4, -3e-4, 1e-4, 7e-4);
         let sigma = law.stress(&eps);
         let h = 1e-6;
-        for k in 0..3 {
-            for l in k..3 {
-                let mut s = Matrix3::zeros();
-                s[(k, l)] += 0.5;
-                s[(l, k)] += 0.5;
-                let dw = (law.stored_energy(&(eps + s * h)) - law.stored_energy(&(eps - s * h))) / (2.0 * h);
-                // dW along the symmetric direction s is σ : s = σ_kl (σ symmetric).
-                assert!((dw - sigma[(k, l)]).abs() < 1e-6 * sigma.norm(), "({k},{l}): {dw} vs {}", sigma[(k, l)]);
-            }
+        for (k, l, s) in symmetric_unit_directions() {
+            let dw = (law.stored_energy(&(eps + s * h)) - law.stored_energy(&(eps - s * h))) / (2.0 * h);
+            // dW along the symmetric direction s is σ : s = σ_kl (σ symmetric).
+            assert!((dw - sigma[(k, l)]).abs() < 1e-6 * sigma.norm(), "({k},{l}): {dw} vs {}", sigma[(k, l)]);
         }
         assert_eq!(law.stored_energy(&Matrix3::zeros()), 0.0);
     }

@@ -218,7 +218,7 @@ impl ConstitutiveLaw for VonMises {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::tensor::idx;
+    use crate::tensor::central_difference;
 
     fn law() -> VonMises {
         VonMises::new(Elastic::new(2.0e4, 0.3).unwrap(), 30.0, 0.0).unwrap()
@@ -228,19 +228,7 @@ mod tests {
     /// step is relative to the strain (1e-6 ‖ε‖): truncation ~(1e-6)² and round-off
     /// ~1e-16/1e-6 of the tangent, both far below the 1e-6 tolerance of the brief.
     fn fd_tangent(law: &VonMises, eps: &Matrix3<f64>, h_n: &[f64]) -> Tensor4 {
-        let h = 1e-6 * eps.norm();
-        let mut fd = Tensor4::zeros();
-        for k in 0..3 {
-            for l in 0..3 {
-                let mut s = Matrix3::zeros();
-                s[(k, l)] += 0.5;
-                s[(l, k)] += 0.5;
-                let sp = law.update(&(eps + s * h), h_n, &mut [0.0]).unwrap().stress;
-                let sm = law.update(&(eps - s * h), h_n, &mut [0.0]).unwrap().stress;
-                fd.set_column(idx(k, l), &flatten(&((sp - sm) / (2.0 * h))));
-            }
-        }
-        fd
+        central_difference(|e| law.update(e, h_n, &mut [0.0]).unwrap().stress, eps, 1e-6 * eps.norm())
     }
 
     fn q_of(s: &Matrix3<f64>) -> f64 {

@@ -11,7 +11,7 @@
 //! - Round-off bounds (1e-12 … 1e-10 relative) where the result is a closed form evaluated
 //!   with a handful of operations.
 
-use loam_constitutive::tensor::{flatten, idx, Tensor4};
+use loam_constitutive::tensor::{central_difference, idx, symmetric_unit_directions, Tensor4};
 use loam_constitutive::{
     finite_strain_update, small_strain_update, ConstitutiveError, ConstitutiveLaw, Elastic,
     MohrCoulomb, MohrCoulombRegion, StressUpdate, VonMises, VonMisesRegion,
@@ -53,20 +53,8 @@ fn strain_for_stress(el: &Elastic, s: [f64; 3], r: [f64; 3]) -> Matrix3<f64> {
 /// relative; both well below FD_TOL provided the state is 1e-6 ‖ε‖ away from a region
 /// boundary (the tests pick such states, or check that ±h stay in the same region).
 fn fd_tangent(law: &dyn ConstitutiveLaw, eps: &Matrix3<f64>, h_n: &[f64]) -> Tensor4 {
-    let h = 1e-6 * eps.norm();
     let mut h_out = vec![0.0; h_n.len()];
-    let mut fd = Tensor4::zeros();
-    for k in 0..3 {
-        for l in 0..3 {
-            let mut s = Matrix3::zeros();
-            s[(k, l)] += 0.5;
-            s[(l, k)] += 0.5;
-            let sp = law.update(&(eps + s * h), h_n, &mut h_out).unwrap().stress;
-            let sm = law.update(&(eps - s * h), h_n, &mut h_out).unwrap().stress;
-            fd.set_column(idx(k, l), &flatten(&((sp - sm) / (2.0 * h))));
-        }
-    }
-    fd
+    central_difference(|e| law.update(e, h_n, &mut h_out).unwrap().stress, eps, 1e-6 * eps.norm())
 }
 
 /// Relative tangent error ‖D − D_fd‖ / ‖D‖; when D vanishes to round-off (‖D‖ ≤ 1e-8 ‖Dᵉ‖:
@@ -905,15 +893,10 @@ proptest! {
         // FD tangent where ±h stays in the same region and branch (away from kinks).
         let hstep = 1e-6 * eps.norm();
         let mut same = true;
-        for k in 0..3 {
-            for l in k..3 {
-                let mut d = Matrix3::zeros();
-                d[(k, l)] += 0.5;
-                d[(l, k)] += 0.5;
-                for sgn in [-1.0, 1.0] {
-                    let (_, i2) = law.update_with_info(&(eps + d * (sgn * hstep)), &h_n, &mut [0.0; 2]).unwrap();
-                    same &= i2.region == info.region && i2.residual_branch == info.residual_branch;
-                }
+        for (_, _, d) in symmetric_unit_directions() {
+            for sgn in [-1.0, 1.0] {
+                let (_, i2) = law.update_with_info(&(eps + d * (sgn * hstep)), &h_n, &mut [0.0; 2]).unwrap();
+                same &= i2.region == info.region && i2.residual_branch == info.residual_branch;
             }
         }
         if same && info.region != R::Elastic {
@@ -999,15 +982,10 @@ proptest! {
             // FD only where ±h stays on the same branch (not at yield onset or the floor kink).
             let hstep = 1e-6 * eps.norm();
             let mut same = true;
-            for k in 0..3 {
-                for l in k..3 {
-                    let mut d = Matrix3::zeros();
-                    d[(k, l)] += 0.5;
-                    d[(l, k)] += 0.5;
-                    for sgn in [-1.0, 1.0] {
-                        let (_, r2) = law.update_with_region(&(eps + d * (sgn * hstep)), &[eqps_n], &mut [0.0]).unwrap();
-                        same &= r2 == region;
-                    }
+            for (_, _, d) in symmetric_unit_directions() {
+                for sgn in [-1.0, 1.0] {
+                    let (_, r2) = law.update_with_region(&(eps + d * (sgn * hstep)), &[eqps_n], &mut [0.0]).unwrap();
+                    same &= r2 == region;
                 }
             }
             if same {

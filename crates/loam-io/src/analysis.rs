@@ -2,7 +2,7 @@
 //! CLI: quasi-static load stepping, implicit Newmark dynamics or explicit MPM.
 
 use loam_explicit::{Explicit, ExplicitError};
-use loam_implicit::{Dynamic, Model, QuasiStatic, StepError};
+use loam_implicit::{Dynamic, Model, QuasiStatic, StepError, StepReport};
 use std::time::Duration;
 
 /// One of the three analyses.
@@ -43,6 +43,25 @@ pub struct Progress {
     pub wall_time: Duration,
 }
 
+impl Progress {
+    /// The progress of an implicit (quasi-static or dynamic) step that started at `before`.
+    fn implicit(r: StepReport, before: f64) -> Self {
+        Progress {
+            step: r.step,
+            time: r.time,
+            load_factor: r.load_factor,
+            increment: r.time - before,
+            iterations: r.iterations,
+            substeps: r.substeps,
+            cutbacks: r.cutbacks,
+            final_residual: r.final_residual(),
+            active_nodes: r.active_nodes,
+            dofs: r.dofs,
+            wall_time: r.wall_time,
+        }
+    }
+}
+
 impl<const D: usize> Analysis<D> {
     /// Short name for logs: "quasi-static", "implicit dynamic", "explicit".
     pub fn name(&self) -> &'static str {
@@ -58,6 +77,14 @@ impl<const D: usize> Analysis<D> {
             Analysis::QuasiStatic(a) => a.model(),
             Analysis::Dynamic(a) => a.model(),
             Analysis::Explicit(a) => a.model(),
+        }
+    }
+
+    pub fn into_model(self) -> Model<D> {
+        match self {
+            Analysis::QuasiStatic(a) => a.into_model(),
+            Analysis::Dynamic(a) => a.into_model(),
+            Analysis::Explicit(a) => a.into_model(),
         }
     }
 
@@ -128,38 +155,8 @@ impl<const D: usize> Analysis<D> {
     pub fn step(&mut self) -> Result<Progress, AnalysisError> {
         let before = self.time();
         Ok(match self {
-            Analysis::QuasiStatic(a) => {
-                let r = a.step()?;
-                Progress {
-                    step: r.step,
-                    time: r.time,
-                    load_factor: r.load_factor,
-                    increment: r.time - before,
-                    iterations: r.iterations,
-                    substeps: r.substeps,
-                    cutbacks: r.cutbacks,
-                    final_residual: r.final_residual(),
-                    active_nodes: r.active_nodes,
-                    dofs: r.dofs,
-                    wall_time: r.wall_time,
-                }
-            }
-            Analysis::Dynamic(a) => {
-                let r = a.step()?;
-                Progress {
-                    step: r.step,
-                    time: r.time,
-                    load_factor: r.load_factor,
-                    increment: r.time - before,
-                    iterations: r.iterations,
-                    substeps: r.substeps,
-                    cutbacks: r.cutbacks,
-                    final_residual: r.final_residual(),
-                    active_nodes: r.active_nodes,
-                    dofs: r.dofs,
-                    wall_time: r.wall_time,
-                }
-            }
+            Analysis::QuasiStatic(a) => Progress::implicit(a.step()?, before),
+            Analysis::Dynamic(a) => Progress::implicit(a.step()?, before),
             Analysis::Explicit(a) => {
                 let r = a.step()?;
                 Progress {
