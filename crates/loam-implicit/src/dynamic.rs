@@ -13,7 +13,7 @@
 //! period elongation ωΔt / (2 arctan(ωΔt/2)). Bossak (α_B ∈ [−⅓, 0], β = (1 − α_B)²/4,
 //! γ = ½ − α_B): second order, damps the highest frequencies.
 
-use crate::engine::Engine;
+use crate::engine::{advance, CutBack, Engine};
 use crate::step::{Inertia, PointCouplings, PointUpdateError};
 use crate::{StepError, StepReport};
 use loam_model::Model;
@@ -233,7 +233,7 @@ impl<const D: usize> Dynamic<D> {
     }
 
     /// Try one time step of length `dt` from the committed state; commit on success.
-    fn attempt(&mut self, dt: f64) -> Result<NewtonReport, NewtonError<PointUpdateError>> {
+    fn attempt_step(&mut self, dt: f64) -> Result<NewtonReport, NewtonError<PointUpdateError>> {
         let (beta, gamma, alpha) = (self.settings.beta, self.settings.gamma, self.settings.bossak_alpha);
         self.map_to_nodes();
         self.engine.external_forces(1.0);
@@ -297,55 +297,46 @@ impl<const D: usize> Dynamic<D> {
         if self.settings.duration - target < 1e-6 * dt {
             target = self.settings.duration;
         }
-        let mut increment = target - self.time;
-        let (mut substeps, mut cutbacks, mut iterations) = (0, 0, 0);
-        let mut residuals = Vec::new();
-        let (mut active_nodes, mut dofs) = (0, 0);
-        while self.time < target - 1e-12 * target.abs().max(dt) {
-            self.engine.connect(step)?;
-            if !self.started {
-                self.initial_acceleration();
-                self.started = true;
-            }
-            active_nodes = self.engine.conn.active_nodes().len();
-            dofs = active_nodes * D;
-            let h = increment.min(target - self.time);
-            match self.attempt(h) {
-                Ok(report) => {
-                    substeps += 1;
-                    iterations += report.iterations();
-                    residuals = report.residuals;
-                    self.time += h;
-                }
-                Err(e) => {
-                    cutbacks += 1;
-                    tracing::warn!(step, time = self.time, dt = h, error = %e, "Newton failed; cutting the time step back");
-                    if cutbacks > self.settings.max_cutbacks {
-                        return Err(StepError::NotConverged {
-                            step,
-                            load_factor: 1.0,
-                            cutbacks: cutbacks - 1,
-                            reason: format!("at time {:.6e} with time step {h:.3e}: {e}", self.time),
-                            residuals: e.report().residuals.clone(),
-                        });
-                    }
-                    increment /= 2.0;
-                }
-            }
-        }
+        let done = advance(self, step, target, dt, self.settings.max_cutbacks)?;
         self.time = target;
         self.step = step;
         Ok(StepReport {
             step,
             load_factor: 1.0,
             time: self.time,
-            substeps,
-            cutbacks,
-            iterations,
-            residuals,
-            active_nodes,
-            dofs,
+            substeps: done.substeps,
+            cutbacks: done.cutbacks,
+            iterations: done.iterations,
+            residuals: done.residuals,
+            active_nodes: done.active_nodes,
+            dofs: done.dofs,
             wall_time: start.elapsed(),
         })
+    }
+}
+
+impl<const D: usize> CutBack<D> for Dynamic<D> {
+    fn engine(&mut self) -> &mut Engine<D> {
+        &mut self.engine
+    }
+
+    fn position(&self) -> f64 {
+        self.time
+    }
+
+    fn attempt(&mut self, increment: f64, target: f64) -> Result<NewtonReport, NewtonError<PointUpdateError>> {
+        if !self.started {
+            self.initial_acceleration();
+            self.started = true;
+        }
+        let h = increment.min(target - self.time);
+        let report = self.attempt_step(h)?;
+        self.time += h;
+        Ok(report)
+    }
+
+    fn failure(&self, increment: f64, target: f64, error: &NewtonError<PointUpdateError>) -> (f64, String) {
+        let h = increment.min(target - self.time);
+        (1.0, format!("at time {:.6e} with time step {h:.3e}: {error}", self.time))
     }
 }

@@ -5,11 +5,15 @@
 //! in what they add to the Newton system and in how they advance time or load.
 
 use crate::step::{Inertia, PointCouplings, StepSystem, TrialState};
+use crate::step::PointUpdateError;
 use crate::StepError;
 use loam_grid::Connectivity;
 use loam_model::Model;
 use loam_points::stretched_half_length;
-use loam_solve::{gather_nodal, BlockPattern, LinearSolverKind, NewtonSettings, NewtonSolver, SparseDirectSolver};
+use loam_solve::{
+    gather_nodal, BlockPattern, LinearSolverKind, NewtonError, NewtonReport, NewtonSettings, NewtonSolver,
+    SparseDirectSolver,
+};
 use rayon::prelude::*;
 
 pub(crate) struct Engine<const D: usize> {
@@ -162,4 +166,71 @@ impl<const D: usize> Engine<D> {
         }
         self.conn_current = false;
     }
+}
+
+/// An implicit analysis that advances a load factor or a time by Newton steps, each of which
+/// may be cut back (THEORY.md §7): the one cut-back rule for quasi-static and dynamic runs.
+pub(crate) trait CutBack<const D: usize> {
+    fn engine(&mut self) -> &mut Engine<D>;
+    /// The load factor or time of the committed state.
+    fn position(&self) -> f64;
+    /// Try to advance the committed state by `increment`, not past `target`; commit on
+    /// success, change nothing on failure.
+    fn attempt(&mut self, increment: f64, target: f64) -> Result<NewtonReport, NewtonError<PointUpdateError>>;
+    /// The load factor and a description of a failed attempt, for the error.
+    fn failure(&self, increment: f64, target: f64, error: &NewtonError<PointUpdateError>) -> (f64, String);
+}
+
+/// What advancing to one step's target took.
+pub(crate) struct Advanced {
+    pub substeps: usize,
+    pub cutbacks: usize,
+    pub iterations: usize,
+    /// Relative residuals of the last sub-step.
+    pub residuals: Vec<f64>,
+    pub active_nodes: usize,
+    pub dofs: usize,
+}
+
+/// Advance `a` to `target` in step `step`: try the whole increment, halve it after every
+/// failed attempt, and stop with `NotConverged` after `max_cutbacks` halvings. `scale` sets
+/// the round-off allowance on reaching the target (1 for load factors, Δt for time).
+pub(crate) fn advance<const D: usize, A: CutBack<D>>(
+    a: &mut A,
+    step: usize,
+    target: f64,
+    scale: f64,
+    max_cutbacks: usize,
+) -> Result<Advanced, StepError> {
+    let mut increment = target - a.position();
+    let mut done = Advanced { substeps: 0, cutbacks: 0, iterations: 0, residuals: Vec::new(), active_nodes: 0, dofs: 0 };
+    while a.position() < target - 1e-12 * target.abs().max(scale) {
+        let engine = a.engine();
+        engine.connect(step)?;
+        done.active_nodes = engine.conn.active_nodes().len();
+        done.dofs = done.active_nodes * D;
+        match a.attempt(increment, target) {
+            Ok(report) => {
+                done.substeps += 1;
+                done.iterations += report.iterations();
+                done.residuals = report.residuals;
+            }
+            Err(e) => {
+                done.cutbacks += 1;
+                let (load_factor, reason) = a.failure(increment, target, &e);
+                tracing::warn!(step, position = a.position(), increment, error = %e, "Newton failed; cutting the step back");
+                if done.cutbacks > max_cutbacks {
+                    return Err(StepError::NotConverged {
+                        step,
+                        load_factor,
+                        cutbacks: done.cutbacks - 1,
+                        reason,
+                        residuals: e.report().residuals.clone(),
+                    });
+                }
+                increment /= 2.0;
+            }
+        }
+    }
+    Ok(done)
 }

@@ -7,10 +7,10 @@
 //! never committed.
 
 use loam_model::Model;
-use crate::engine::Engine;
+use crate::engine::{advance, CutBack, Engine};
 use crate::step::PointUpdateError;
 use loam_grid::PointBasisError;
-use loam_solve::{LinearSolverKind, LinearSolverTimings, NewtonError, NewtonSettings, SparseDirectSolver};
+use loam_solve::{LinearSolverKind, LinearSolverTimings, NewtonError, NewtonReport, NewtonSettings, SparseDirectSolver};
 use std::time::{Duration, Instant};
 
 /// Settings of a quasi-static analysis.
@@ -126,7 +126,7 @@ impl<const D: usize> QuasiStatic<D> {
     }
 
     /// Try to reach `lambda` from the committed state. On success the state is committed.
-    fn attempt(&mut self, lambda: f64) -> Result<loam_solve::NewtonReport, NewtonError<PointUpdateError>> {
+    fn attempt(&mut self, lambda: f64) -> Result<NewtonReport, NewtonError<PointUpdateError>> {
         self.engine.external_forces(lambda);
         self.engine.du.clear();
         let (mut system, du, newton) = self.engine.system(None);
@@ -190,48 +190,18 @@ impl<const D: usize> QuasiStatic<D> {
         let start = Instant::now();
         let step = self.step + 1;
         let target = step as f64 / self.settings.load_steps as f64;
-        let mut increment = target - self.load_factor;
-        let (mut substeps, mut cutbacks, mut iterations) = (0, 0, 0);
-        let mut residuals = Vec::new();
-        let (mut active_nodes, mut dofs) = (0, 0);
-        while self.load_factor < target - 1e-12 * target.abs().max(1.0) {
-            self.engine.connect(step)?;
-            active_nodes = self.engine.conn.active_nodes().len();
-            dofs = active_nodes * D;
-            let lambda = (self.load_factor + increment).min(target);
-            match self.attempt(lambda) {
-                Ok(report) => {
-                    substeps += 1;
-                    iterations += report.iterations();
-                    residuals = report.residuals;
-                }
-                Err(e) => {
-                    cutbacks += 1;
-                    tracing::warn!(step, load_factor = lambda, error = %e, "Newton failed; cutting the load step back");
-                    if cutbacks > self.settings.max_cutbacks {
-                        return Err(StepError::NotConverged {
-                            step,
-                            load_factor: lambda,
-                            cutbacks: cutbacks - 1,
-                            reason: e.to_string(),
-                            residuals: e.report().residuals.clone(),
-                        });
-                    }
-                    increment /= 2.0;
-                }
-            }
-        }
+        let done = advance(self, step, target, 1.0, self.settings.max_cutbacks)?;
         self.step = step;
         Ok(StepReport {
             step,
             load_factor: self.load_factor,
             time: self.load_factor,
-            substeps,
-            cutbacks,
-            iterations,
-            residuals,
-            active_nodes,
-            dofs,
+            substeps: done.substeps,
+            cutbacks: done.cutbacks,
+            iterations: done.iterations,
+            residuals: done.residuals,
+            active_nodes: done.active_nodes,
+            dofs: done.dofs,
             wall_time: start.elapsed(),
         })
     }
@@ -249,6 +219,24 @@ impl<const D: usize> QuasiStatic<D> {
             on_step(&report, &self.engine.model).map_err(RunError::Observer)?;
         }
         Ok(())
+    }
+}
+
+impl<const D: usize> CutBack<D> for QuasiStatic<D> {
+    fn engine(&mut self) -> &mut Engine<D> {
+        &mut self.engine
+    }
+
+    fn position(&self) -> f64 {
+        self.load_factor
+    }
+
+    fn attempt(&mut self, increment: f64, target: f64) -> Result<NewtonReport, NewtonError<PointUpdateError>> {
+        self.attempt((self.load_factor + increment).min(target))
+    }
+
+    fn failure(&self, increment: f64, target: f64, error: &NewtonError<PointUpdateError>) -> (f64, String) {
+        ((self.load_factor + increment).min(target), error.to_string())
     }
 }
 
