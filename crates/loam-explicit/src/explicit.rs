@@ -153,14 +153,10 @@ impl<const D: usize> Explicit<D> {
     /// `QuasiStatic::check`). Scene validation calls this before the first step.
     pub fn check(&mut self) -> Result<(), ExplicitError> {
         self.connect(self.steps + 1)?;
-        let an = self.conn.active_nodes();
-        for (index, c) in self.model.constraints.iter().enumerate() {
-            let touches = an.active_to_grid.iter().any(|&g| self.model.grid.node_coords(g as usize)[c.axis] == c.plane);
-            if !touches {
-                return Err(ExplicitError::ConstraintTouchesNoNode { index, axis: c.axis, plane: c.plane });
-            }
+        match self.model.constraint_without_nodes(self.conn.active_nodes()) {
+            Some((index, c)) => Err(ExplicitError::ConstraintTouchesNoNode { index, axis: c.axis, plane: c.plane }),
+            None => Ok(()),
         }
-        Ok(())
     }
 
     /// Critical time step of the committed state (THEORY.md §9):

@@ -78,14 +78,10 @@ impl<const D: usize> Engine<D> {
     /// Every constraint must hold at least one active node.
     pub fn check(&mut self, step: usize) -> Result<(), StepError> {
         self.connect(step)?;
-        let an = self.conn.active_nodes();
-        for (index, c) in self.model.constraints.iter().enumerate() {
-            let touches = an.active_to_grid.iter().any(|&g| self.model.grid.node_coords(g as usize)[c.axis] == c.plane);
-            if !touches {
-                return Err(StepError::ConstraintTouchesNoNode { index, axis: c.axis, plane: c.plane });
-            }
+        match self.model.constraint_without_nodes(self.conn.active_nodes()) {
+            Some((index, c)) => Err(StepError::ConstraintTouchesNoNode { index, axis: c.axis, plane: c.plane }),
+            None => Ok(()),
         }
-        Ok(())
     }
 
     pub fn num_dofs(&self) -> usize {

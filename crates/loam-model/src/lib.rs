@@ -122,6 +122,14 @@ impl<const D: usize> Model<D> {
         }
     }
 
+    /// The first constraint (by index) that holds no active node: no material point has
+    /// support on its plane, so it would silently constrain nothing.
+    pub fn constraint_without_nodes(&self, active: &ActiveNodes) -> Option<(usize, &PlaneConstraint)> {
+        self.constraints.iter().enumerate().find(|(_, c)| {
+            !active.active_to_grid.iter().any(|&g| self.grid.node_coords(g as usize)[c.axis] == c.plane)
+        })
+    }
+
     /// Dead load on point `p` at full load: gravity on its mass plus its point force.
     #[inline]
     pub fn point_load(&self, p: usize) -> SVector<f64, D> {
