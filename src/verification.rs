@@ -163,35 +163,28 @@ mod tests {
     }
 }
 
-/// The V1 column as a model: one cell wide (`width`; the cell is `width` across in every
-/// horizontal axis), `cells_high` cells over the column height plus one empty cell above,
-/// `points_per_cell`^D points per cell, rollers on the sides and the base, ν = 0 elastic,
-/// gravity along −y (axis 1) in 2D and 3D.
-pub fn column_model<const D: usize>(
-    column: &Column,
-    width: f64,
-    cells_high: usize,
-    points_per_cell: usize,
-    basis: crate::grid::BasisKind,
-    kinematics: crate::implicit::Kinematics,
-) -> crate::implicit::Model<D> {
+/// What the MPM and FEM columns share: grid, body's upper corner, constraints, gravity, law.
+struct ColumnParts<const D: usize> {
+    grid: crate::grid::Grid<D>,
+    max: nalgebra::SVector<f64, D>,
+    constraints: Vec<crate::implicit::PlaneConstraint>,
+    gravity: nalgebra::SVector<f64, D>,
+    law: std::sync::Arc<dyn crate::constitutive::ConstitutiveLaw>,
+}
+
+/// The V1 column's shared parts (see [`column_model`]).
+fn column_parts<const D: usize>(column: &Column, width: f64, cells_high: usize) -> ColumnParts<D> {
     use crate::constitutive::Elastic;
     use crate::grid::Grid;
-    use crate::implicit::{Model, PlaneConstraint};
-    use crate::points::Shape;
+    use crate::implicit::PlaneConstraint;
     use nalgebra::SVector;
-    use std::sync::Arc;
     assert!(D >= 2);
     let h = column.height / cells_high as f64;
     let cell = SVector::<f64, D>::from_fn(|a, _| if a == 1 { h } else { width });
     let mut cells = [1usize; D];
     cells[1] = cells_high + 1;
     let grid = Grid::new(SVector::zeros(), cell, cells).expect("valid column grid");
-    let mut points = PointStore::new();
     let max = SVector::<f64, D>::from_fn(|a, _| if a == 1 { column.height } else { width });
-    points
-        .fill(&grid, &Shape::Box { min: SVector::zeros(), max }, points_per_cell, column.density, 0)
-        .expect("column fits the grid");
     let mut constraints = Vec::new();
     for a in 0..D {
         let mut fixed = [false; 3];
@@ -204,7 +197,48 @@ pub fn column_model<const D: usize>(
     let mut gravity = SVector::<f64, D>::zeros();
     gravity[1] = -column.gravity;
     let law = Elastic::new(column.young, 0.0).expect("valid elastic constants");
-    Model::new(grid, basis, kinematics, points, vec![Arc::new(law)], constraints, gravity).expect("valid column model")
+    ColumnParts { grid, max, constraints, gravity, law: std::sync::Arc::new(law) }
+}
+
+/// The V1 column as a model: one cell wide (`width`; the cell is `width` across in every
+/// horizontal axis), `cells_high` cells over the column height plus one empty cell above,
+/// `points_per_cell`^D points per cell, rollers on the sides and the base, ν = 0 elastic,
+/// gravity along −y (axis 1) in 2D and 3D.
+pub fn column_model<const D: usize>(
+    column: &Column,
+    width: f64,
+    cells_high: usize,
+    points_per_cell: usize,
+    basis: crate::grid::BasisKind,
+    kinematics: crate::implicit::Kinematics,
+) -> crate::implicit::Model<D> {
+    use crate::implicit::Model;
+    use crate::points::Shape;
+    let ColumnParts { grid, max, constraints, gravity, law } = column_parts::<D>(column, width, cells_high);
+    let mut points = PointStore::new();
+    points
+        .fill(&grid, &Shape::Box { min: nalgebra::SVector::zeros(), max }, points_per_cell, column.density, 0)
+        .expect("column fits the grid");
+    Model::new(grid, basis, kinematics, points, vec![law], constraints, gravity).expect("valid column model")
+}
+
+/// The V1 column as an updated Lagrangian FEM model: the same grid planes, constraints,
+/// law and loads as [`column_model`], the body meshed by one element per grid cell with
+/// `gauss_order`^D Gauss points each.
+pub fn column_fem_model<const D: usize>(
+    column: &Column,
+    width: f64,
+    cells_high: usize,
+    gauss_order: usize,
+    kinematics: crate::implicit::Kinematics,
+) -> crate::implicit::Model<D> {
+    use crate::grid::FeMesh;
+    use crate::implicit::Model;
+    let ColumnParts { grid, max, constraints, gravity, law } = column_parts::<D>(column, width, cells_high);
+    let elements = std::array::from_fn(|a| if a == 1 { cells_high } else { 1 });
+    let mesh = FeMesh::block(nalgebra::SVector::zeros(), max, elements, gauss_order).expect("valid column mesh");
+    Model::updated_lagrangian_fem(grid, kinematics, mesh, &[column.density], &[0], vec![law], constraints, gravity)
+        .expect("valid column FEM model")
 }
 
 /// V2: the axially vibrating bar (VERIFICATION.md V2). Fixed at x = 0, free at x = L,
@@ -258,9 +292,48 @@ impl VibratingBar {
         w / (2.0 * (w / 2.0).atan())
     }
 
+    /// Period of the first mode of the lumped-mass linear-element bar (the FEM reference)
+    /// under the trapezoidal rule: ω_h = (2c/h) sin(β₁h/2) (Hughes 2000, §9.1), the mode
+    /// shape being sampled exactly at the nodes, stretched by ω_hΔt / (2 arctan(ω_hΔt/2)).
+    pub fn lumped_fem_period(&self, dt: f64) -> f64 {
+        let h = self.cell_size;
+        let omega_h = 2.0 * self.wave_speed() / h * (self.wavenumber() * h / 2.0).sin();
+        let w = omega_h * dt;
+        2.0 * std::f64::consts::PI / omega_h * w / (2.0 * (w / 2.0).atan())
+    }
+
     /// Explicit critical step h / c.
     pub fn critical_time_step(&self) -> f64 {
         self.cell_size / self.wave_speed()
+    }
+
+    /// Grid, constraints and law of the bar (see [`VibratingBar::model`]).
+    fn parts(
+        &self,
+    ) -> (crate::grid::Grid<2>, Vec<crate::implicit::PlaneConstraint>, std::sync::Arc<dyn crate::constitutive::ConstitutiveLaw>)
+    {
+        use crate::constitutive::Elastic;
+        use crate::grid::Grid;
+        use crate::implicit::PlaneConstraint;
+        use nalgebra::Vector2;
+        let h = self.cell_size;
+        let cells_long = (self.length / h).round() as usize + 4;
+        let grid = Grid::new(Vector2::zeros(), Vector2::new(h, h), [cells_long, 1]).expect("valid bar grid");
+        let constraints = vec![
+            PlaneConstraint { axis: 0, plane: 0, fixed: [true, false, false] },
+            PlaneConstraint { axis: 1, plane: 0, fixed: [false, true, false] },
+            PlaneConstraint { axis: 1, plane: 1, fixed: [false, true, false] },
+        ];
+        let law = Elastic::new(self.young, 0.0).expect("valid elastic constants");
+        (grid, constraints, std::sync::Arc::new(law))
+    }
+
+    /// The initial velocity v₀ sin(β₁ x) along x on every point.
+    fn set_initial_velocity(&self, points: &mut PointStore<2>) {
+        let k = self.wavenumber();
+        for (v, x) in points.velocity.iter_mut().zip(&points.position) {
+            *v = nalgebra::Vector2::new(self.amplitude * (k * x[0]).sin(), 0.0);
+        }
     }
 
     /// The bar as a 2D model: grid from x = 0 over L plus 4 empty cells, one cell high;
@@ -272,30 +345,41 @@ impl VibratingBar {
         basis: crate::grid::BasisKind,
         kinematics: crate::implicit::Kinematics,
     ) -> crate::implicit::Model<2> {
-        use crate::constitutive::Elastic;
-        use crate::grid::Grid;
-        use crate::implicit::{Model, PlaneConstraint};
+        use crate::implicit::Model;
         use crate::points::Shape;
         use nalgebra::Vector2;
-        use std::sync::Arc;
-        let h = self.cell_size;
-        let cells_long = (self.length / h).round() as usize + 4;
-        let grid = Grid::new(Vector2::zeros(), Vector2::new(h, h), [cells_long, 1]).expect("valid bar grid");
+        let (grid, constraints, law) = self.parts();
         let mut points = PointStore::new();
-        let shape = Shape::Box { min: Vector2::zeros(), max: Vector2::new(self.length, h) };
+        let shape = Shape::Box { min: Vector2::zeros(), max: Vector2::new(self.length, self.cell_size) };
         points.fill(&grid, &shape, points_per_cell, self.density, 0).expect("bar fits the grid");
-        let k = self.wavenumber();
-        for (v, x) in points.velocity.iter_mut().zip(&points.position) {
-            *v = Vector2::new(self.amplitude * (k * x[0]).sin(), 0.0);
-        }
-        let constraints = vec![
-            PlaneConstraint { axis: 0, plane: 0, fixed: [true, false, false] },
-            PlaneConstraint { axis: 1, plane: 0, fixed: [false, true, false] },
-            PlaneConstraint { axis: 1, plane: 1, fixed: [false, true, false] },
-        ];
-        let law = Elastic::new(self.young, 0.0).expect("valid elastic constants");
-        Model::new(grid, basis, kinematics, points, vec![Arc::new(law)], constraints, Vector2::zeros())
-            .expect("valid bar model")
+        self.set_initial_velocity(&mut points);
+        Model::new(grid, basis, kinematics, points, vec![law], constraints, Vector2::zeros()).expect("valid bar model")
+    }
+
+    /// The bar as an updated Lagrangian FEM model: one element per grid cell along the bar,
+    /// `gauss_order`² Gauss points each, the same constraints and initial velocity (at the
+    /// Gauss points; the dynamic analysis maps it to the nodes once).
+    pub fn fem_model(&self, gauss_order: usize, kinematics: crate::implicit::Kinematics) -> crate::implicit::Model<2> {
+        use crate::grid::FeMesh;
+        use crate::implicit::Model;
+        use nalgebra::Vector2;
+        let (grid, constraints, law) = self.parts();
+        let elements = [(self.length / self.cell_size).round() as usize, 1];
+        let mesh = FeMesh::block(Vector2::zeros(), Vector2::new(self.length, self.cell_size), elements, gauss_order)
+            .expect("valid bar mesh");
+        let mut model = Model::updated_lagrangian_fem(
+            grid,
+            kinematics,
+            mesh,
+            &[self.density],
+            &[0],
+            vec![law],
+            constraints,
+            Vector2::zeros(),
+        )
+        .expect("valid bar FEM model");
+        self.set_initial_velocity(&mut model.points);
+        model
     }
 }
 

@@ -190,3 +190,22 @@ fn initial_velocity_with_the_wrong_length() {
     assert_eq!(e.line, line, "{e}");
     assert!(e.to_string().contains("2 finite components"), "{e}");
 }
+
+/// The FEM reference meshes Box bodies only, takes 1–3 Gauss points per axis, and runs
+/// with the implicit analyses only; each mistake names its place.
+#[test]
+fn fem_method_limits_are_named() {
+    let fem = GOOD.replacen("basis: Gimp,", "method: UpdatedLagrangianFem,", 1);
+    check(&fem).unwrap();
+    let e = check(&fem.replacen("points_per_cell: 2", "points_per_cell: 4", 1)).unwrap_err();
+    assert!(e.to_string().contains("Gauss order 4") && e.line == line_of("points_per_cell"), "{e}");
+    let e = check(&fem.replacen(
+        "shape: Box(min: [0.0, 0.0], max: [0.3125, 10.0])",
+        "shape: Polygon(vertices: [(0.0, 0.0), (0.3125, 0.0), (0.0, 10.0)])",
+        1,
+    ))
+    .unwrap_err();
+    assert!(e.to_string().contains("Box bodies only"), "{e}");
+    let e = check(&fem.replacen("QuasiStatic(load_steps: 40)", "Explicit(duration: 1.0)", 1)).unwrap_err();
+    assert!(e.to_string().contains("implicit analyses") && e.line == line_of("basis: Gimp"), "{e}");
+}

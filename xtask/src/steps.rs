@@ -6,16 +6,18 @@
 //!   the wall time of the steps.
 //! - V1c column (quasi-static, large deformation): implicit load stepping against explicit
 //!   MUSL with local damping run to a steady state, e_σ against wall time.
+//! - Both problems also with the updated Lagrangian FEM reference (the seed paper's
+//!   comparison), through the same implicit analyses.
 //!
 //! Writes `steps.md`, `steps.csv` and SVG plots into the output folder.
 
-use crate::dynamics::{bar_explicit, bar_implicit, run_explicit};
+use crate::dynamics::{bar_explicit, bar_fem_implicit, bar_implicit, run_explicit, DynRun};
 use crate::svg::{Plot, Series};
 use anyhow::{Context, Result};
 use loam::explicit::{ExplicitSettings, TimeStep};
 use loam::grid::BasisKind;
 use loam::implicit::{Kinematics, QuasiStatic, QuasiStaticSettings};
-use loam::verification::{column_errors, column_model, Column, VibratingBar};
+use loam::verification::{column_errors, column_fem_model, column_model, Column, VibratingBar};
 use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
@@ -43,21 +45,25 @@ pub fn run(quick: bool, out: &Path) -> Result<()> {
     let implicit_multiples: &[f64] = if quick { &[1.0, 5.0, 10.0, 50.0, 100.0] } else { &[1.0, 2.0, 5.0, 10.0, 20.0, 50.0, 100.0, 200.0] };
     let explicit_fractions: &[f64] = if quick { &[0.25, 0.5, 0.9, 1.5, 2.0] } else { &[0.1, 0.25, 0.5, 0.75, 0.9, 1.0, 1.2, 1.5, 1.7, 1.8, 2.0] };
     let mut points = Vec::new();
-    for &k in implicit_multiples {
-        let dt = k * dt_c;
-        eprintln!("steps: V2 implicit dt = {dt}");
-        let run = bar_implicit(dt, BasisKind::Linear);
-        let e = bar.errors(&run.record);
-        points.push(Point {
-            scheme: "implicit",
-            dt,
-            steps: run.steps,
-            period_error: (e.period / bar.period() - 1.0).abs(),
-            vcm_error: e.vcm_error,
-            energy_growth: e.energy_growth,
-            wall_s: run.wall_s,
-            outcome: run.failure.unwrap_or_else(|| "ran to the end".into()),
-        });
+    let implicit_runs: [(&str, &dyn Fn(f64) -> DynRun); 2] =
+        [("implicit", &|dt| bar_implicit(dt, BasisKind::Linear)), ("UL-FEM implicit", &bar_fem_implicit)];
+    for (scheme, run_at) in implicit_runs {
+        for &k in implicit_multiples {
+            let dt = k * dt_c;
+            eprintln!("steps: V2 {scheme} dt = {dt}");
+            let run = run_at(dt);
+            let e = bar.errors(&run.record);
+            points.push(Point {
+                scheme,
+                dt,
+                steps: run.steps,
+                period_error: (e.period / bar.period() - 1.0).abs(),
+                vcm_error: e.vcm_error,
+                energy_growth: e.energy_growth,
+                wall_s: run.wall_s,
+                outcome: run.failure.unwrap_or_else(|| "ran to the end".into()),
+            });
+        }
     }
     for &f in explicit_fractions {
         let dt = f * dt_c;
@@ -83,7 +89,7 @@ pub fn run(quick: bool, out: &Path) -> Result<()> {
             outcome,
         });
     }
-    writeln!(md, "## V2 vibrating bar\n\nL = 25, E = 100, ρ = 1, h = 1, 2×2 points per cell, linear basis, t_end = 3T = 30, Δt_c = h/c = {dt_c}. Period error against the exact T = 10 (so the implicit figures include the trapezoidal elongation); v_cm error = max |v_cm − exact| / (2v₀/π). Energy growth: implicit W + ½Σm|v|², explicit the leapfrog energy.\n")?;
+    writeln!(md, "## V2 vibrating bar\n\nL = 25, E = 100, ρ = 1, h = 1, 2×2 points per cell, linear basis (UL-FEM: one element per cell, 2×2 Gauss points), t_end = 3T = 30, Δt_c = h/c = {dt_c}. Period error against the exact T = 10 (so the implicit figures include the trapezoidal elongation); v_cm error = max |v_cm − exact| / (2v₀/π). Energy growth: implicit W + ½Σm|v|², explicit the leapfrog energy.\n")?;
     writeln!(md, "| scheme | Δt | Δt/Δt_c | steps | period error | v_cm error | max energy growth | wall [s] | outcome |\n|---|---:|---:|---:|---:|---:|---:|---:|---|")?;
     for p in &points {
         writeln!(md, "| {} | {:.4} | {:.2} | {} | {:.2e} | {:.2e} | {:.2e} | {:.4} | {} |", p.scheme, p.dt, p.dt / dt_c, p.steps, p.period_error, p.vcm_error, p.energy_growth, p.wall_s, p.outcome)?;
@@ -93,10 +99,14 @@ pub fn run(quick: bool, out: &Path) -> Result<()> {
     let largest_explicit = points.iter().filter(|p| p.scheme == "explicit").filter(stable).map(|p| p.dt).fold(f64::NAN, f64::max);
     let first_unstable = points.iter().filter(|p| p.scheme == "explicit" && !stable(p)).map(|p| p.dt).fold(f64::NAN, f64::min);
     let implicit_1pct = points.iter().filter(|p| p.scheme == "implicit" && p.period_error < 0.01).max_by(|a, b| a.dt.total_cmp(&b.dt));
+    let fem_1pct = points.iter().filter(|p| p.scheme == "UL-FEM implicit" && p.period_error < 0.01).max_by(|a, b| a.dt.total_cmp(&b.dt));
     let explicit_1pct = points.iter().filter(|p| p.scheme == "explicit" && stable(p) && p.period_error < 0.01).min_by(|a, b| a.wall_s.total_cmp(&b.wall_s));
     writeln!(md, "\n- Largest stable explicit step: **{largest_explicit:.4}** ({:.2} Δt_c); the first unstable one tried: {first_unstable:.4} ({:.2} Δt_c).", largest_explicit / dt_c, first_unstable / dt_c)?;
     if let Some(p) = implicit_1pct {
         writeln!(md, "- Largest implicit step with period error < 1 %: **{:.4}** ({:.0} Δt_c), {} steps, {:.4} s.", p.dt, p.dt / dt_c, p.steps, p.wall_s)?;
+    }
+    if let Some(p) = fem_1pct {
+        writeln!(md, "- UL-FEM reference (same Newmark, Newton and laws; one element per cell, 2×2 Gauss points): largest step with period error < 1 %: **{:.4}** ({:.0} Δt_c), {} steps, {:.4} s.", p.dt, p.dt / dt_c, p.steps, p.wall_s)?;
     }
     if let Some(p) = explicit_1pct {
         writeln!(md, "- Cheapest stable explicit run with period error < 1 %: Δt = {:.4}, {} steps, {:.4} s.", p.dt, p.steps, p.wall_s)?;
@@ -109,10 +119,12 @@ pub fn run(quick: bool, out: &Path) -> Result<()> {
     };
     let mut plot = Plot { log_x: true, log_y: true, ..Plot::new("V2: period error against time step", "Δt", "|T/T_exact − 1|") };
     plot.series.push(Series::new("implicit trapezoidal", series("implicit", |p| p.dt)));
+    plot.series.push(Series::new("UL-FEM trapezoidal", series("UL-FEM implicit", |p| p.dt)).dashed());
     plot.series.push(Series::new("explicit MUSL (stable runs)", series("explicit", |p| p.dt)).dashed());
     plot.write(&out.join("bar_error_vs_dt.svg"))?;
     let mut plot = Plot { log_x: true, log_y: true, ..Plot::new("V2: period error against wall time", "wall time of the steps [s]", "|T/T_exact − 1|") };
     plot.series.push(Series::new("implicit trapezoidal", series("implicit", |p| p.wall_s)));
+    plot.series.push(Series::new("UL-FEM trapezoidal", series("UL-FEM implicit", |p| p.wall_s)).dashed());
     plot.series.push(Series::new("explicit MUSL (stable runs)", series("explicit", |p| p.wall_s)).dashed());
     plot.write(&out.join("bar_error_vs_wall.svg"))?;
     writeln!(md, "\n![error vs dt](bar_error_vs_dt.svg) ![error vs wall](bar_error_vs_wall.svg)\n")?;
@@ -123,29 +135,36 @@ pub fn run(quick: bool, out: &Path) -> Result<()> {
     let h = col.height / cells as f64;
     let model = || column_model::<2>(&col, h, cells, 2, BasisKind::Gimp, Kinematics::FiniteStrain);
     let reference = |y: f64| col.hencky_displacement(y);
-    writeln!(md, "## V1c column, quasi-static (large deformation)\n\n{cells} cells, GIMP, 2×2 points per cell, Hencky. Implicit: equal load steps, Newton to 1e-9. Explicit: MUSL, Cfl 0.5, gravity applied at once, local damping α, run until the kinetic energy has decayed; e_σ (V1 norm) sampled along the run against the wall time of the steps so far.\n")?;
+    writeln!(md, "## V1c column, quasi-static (large deformation)\n\n{cells} cells, GIMP, 2×2 points per cell, Hencky. Implicit: equal load steps, Newton to 1e-9. UL-FEM: the same implicit analysis on one bilinear element per cell with 2×2 Gauss points, the mesh moving with the body. Explicit: MUSL, Cfl 0.5, gravity applied at once, local damping α, run until the kinetic energy has decayed; e_σ (V1 norm) sampled along the run against the wall time of the steps so far.\n")?;
     writeln!(md, "| scheme | load steps / damping | steps | e_σ | wall [s] |\n|---|---:|---:|---:|---:|")?;
     let mut implicit_pts = Vec::new();
-    for steps in [1usize, 2, 5, 10, 20, 40, 80, 160] {
-        eprintln!("steps: V1c implicit, {steps} load steps");
-        let mut qs = QuasiStatic::new(model(), QuasiStaticSettings { load_steps: steps, ..Default::default() });
-        let t = Instant::now();
-        let mut failed = None;
-        while !qs.is_finished() {
-            if let Err(e) = qs.step() {
-                failed = Some(e.to_string());
-                break;
+    let mut fem_pts = Vec::new();
+    let fem_model = || column_fem_model::<2>(&col, h, cells, 2, Kinematics::FiniteStrain);
+    for (scheme, make, load_steps, pts) in [
+        ("implicit", &model as &dyn Fn() -> loam::model::Model<2>, &[1usize, 2, 5, 10, 20, 40, 80, 160][..], &mut implicit_pts),
+        ("UL-FEM implicit", &fem_model, &[1, 5, 20, 80][..], &mut fem_pts),
+    ] {
+        for &steps in load_steps {
+            eprintln!("steps: V1c {scheme}, {steps} load steps");
+            let mut qs = QuasiStatic::new(make(), QuasiStaticSettings { load_steps: steps, ..Default::default() });
+            let t = Instant::now();
+            let mut failed = None;
+            while !qs.is_finished() {
+                if let Err(e) = qs.step() {
+                    failed = Some(e.to_string());
+                    break;
+                }
             }
-        }
-        let wall = t.elapsed().as_secs_f64();
-        let e = column_errors(&qs.model().points, &col, 1, reference).stress;
-        match failed {
-            None => {
-                writeln!(md, "| implicit | {steps} | {steps} | {e:.3e} | {wall:.4} |")?;
-                writeln!(csv, "V1c,implicit,{steps},{steps},{e:e},,{wall:e},ok")?;
-                implicit_pts.push((wall, e, steps));
+            let wall = t.elapsed().as_secs_f64();
+            let e = column_errors(&qs.model().points, &col, 1, reference).stress;
+            match failed {
+                None => {
+                    writeln!(md, "| {scheme} | {steps} | {steps} | {e:.3e} | {wall:.4} |")?;
+                    writeln!(csv, "V1c,{scheme},{steps},{steps},{e:e},,{wall:e},ok")?;
+                    pts.push((wall, e, steps));
+                }
+                Some(f) => writeln!(md, "| {scheme} | {steps} | – | failed: {f} | {wall:.4} |")?,
             }
-            Some(f) => writeln!(md, "| implicit | {steps} | – | failed: {f} | {wall:.4} |")?,
         }
     }
     let c = (col.young / col.density).sqrt();
@@ -191,6 +210,7 @@ pub fn run(quick: bool, out: &Path) -> Result<()> {
     }
     let mut plot = Plot { log_x: true, log_y: true, ..Plot::new("V1c column: stress error against wall time", "wall time of the steps [s]", "e_σ") };
     plot.series.push(Series::new("implicit (load steps 1…160)", implicit_pts.iter().map(|p| (p.0, p.1)).collect()));
+    plot.series.push(Series::new("UL-FEM implicit (load steps 1…80)", fem_pts.iter().map(|p| (p.0, p.1)).collect()));
     for (damping, curve) in &explicit_curves {
         plot.series.push(Series::new(format!("explicit MUSL, damping {damping}"), curve.iter().copied().filter(|p| p.0 > 0.0).collect()).dashed());
     }

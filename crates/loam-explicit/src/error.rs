@@ -27,6 +27,11 @@ pub enum ExplicitError {
          smaller safety factor), or check the material and the loads"
     )]
     Unstable { step: usize, time: f64, point: usize, reason: String },
+    #[error(
+        "the model is an updated Lagrangian FEM mesh; explicit analysis runs MPM models only \
+         (use the implicit quasi-static or dynamic analysis for the FEM reference)"
+    )]
+    FemModel,
     #[error("the analysis is already finished ({0} steps)")]
     Finished(usize),
 }

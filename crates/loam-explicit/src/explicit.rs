@@ -99,6 +99,9 @@ impl<const D: usize> Explicit<D> {
     /// settings with [`ExplicitError::InvalidSettings`].
     pub fn new(model: Model<D>, settings: ExplicitSettings) -> Result<Self, ExplicitError> {
         settings.validate()?;
+        if model.mesh.is_some() {
+            return Err(ExplicitError::FemModel);
+        }
         tracing::info!(scheme = ?settings.scheme, flip = settings.flip, time_step = ?settings.time_step,
             damping = settings.damping, duration = settings.duration, "explicit analysis");
         let p_wave = model.materials.iter().map(|m| m.p_wave_modulus()).collect();

@@ -7,7 +7,7 @@
 //! The node → point adjacency lets every node *gather* its contributions in a fixed point
 //! order, which makes parallel assembly deterministic without atomics or colouring.
 
-use crate::{BasisError, BasisKind, Grid};
+use crate::{BasisError, BasisKind, ElementError, FeMesh, Grid};
 use nalgebra::SVector;
 use rayon::prelude::*;
 
@@ -155,9 +155,48 @@ impl<const D: usize> Connectivity<D> {
         half_lengths: &[SVector<f64, D>],
     ) -> Result<(), PointBasisError> {
         assert_eq!(positions.len(), half_lengths.len());
-        let n = positions.len();
-        let stride = self.stride;
         let basis = self.basis;
+        let h_min = grid.cell_size().min();
+        self.fill(positions.len(), grid.num_nodes(), |p, nodes, vals, grads| {
+            let c = basis.evaluate(grid, &positions[p], &half_lengths[p], nodes, vals, grads)?;
+            // A node where the weight and its gradient (nearly) vanish — a point on or
+            // within round-off of a grid node, linear basis — couples to nothing; kept, it
+            // would be an active node with a (numerically) empty row in the tangent.
+            // Dropping it changes the partition of unity by < 1e-14 and of its gradient by
+            // < 1e-8 / h.
+            let mut kept = 0;
+            for k in 0..c {
+                if vals[k] > NEGLIGIBLE_WEIGHT || grads[k].norm() * h_min > NEGLIGIBLE_GRADIENT {
+                    nodes[kept] = nodes[k];
+                    vals[kept] = vals[k];
+                    grads[kept] = grads[k];
+                    kept += 1;
+                }
+            }
+            Ok(kept)
+        })
+        .map_err(|(p, source)| PointBasisError { point: p, position: positions[p].iter().copied().collect(), source })
+    }
+
+    /// The connectivity of an updated Lagrangian FEM run: the points are the mesh's Gauss
+    /// points (element-major), their supports the element nodes, the gradients those of
+    /// the current node positions. The stride must hold 2^D nodes (`BasisKind::Linear`).
+    pub fn compute_mesh(&mut self, mesh: &FeMesh<D>) -> Result<(), ElementError> {
+        assert!(self.stride >= FeMesh::<D>::NODES_PER_ELEMENT, "stride too small for the element nodes");
+        self.fill(mesh.num_gauss_points(), mesh.num_nodes(), |p, nodes, vals, grads| mesh.evaluate(p, nodes, vals, grads))
+            .map_err(|(_, e)| e)
+    }
+
+    /// Evaluate every point's support with `evaluate` (nodes ascending, in a numbering of
+    /// `num_nodes` nodes), then number the active nodes and build the adjacency. The first
+    /// failing point (lowest index) is returned with its error.
+    fn fill<E: Send>(
+        &mut self,
+        n: usize,
+        num_nodes: usize,
+        evaluate: impl Fn(usize, &mut [u32], &mut [f64], &mut [SVector<f64, D>]) -> Result<usize, E> + Sync,
+    ) -> Result<(), (usize, E)> {
+        let stride = self.stride;
         self.count.resize(n, 0);
         self.grid_nodes.resize(n * stride, 0);
         self.active.resize(n * stride, 0);
@@ -171,46 +210,25 @@ impl<const D: usize> Connectivity<D> {
             .zip(self.gradients.par_chunks_mut(stride))
             .zip(self.count.par_iter_mut())
             .enumerate()
-            .filter_map(|(p, (((nodes, vals), grads), count))| {
-                match basis.evaluate(grid, &positions[p], &half_lengths[p], nodes, vals, grads) {
-                    Ok(c) => {
-                        // A node where the weight and its gradient (nearly) vanish — a
-                        // point on or within round-off of a grid node, linear basis —
-                        // couples to nothing; kept, it would be an active node with a
-                        // (numerically) empty row in the tangent. Dropping it changes the
-                        // partition of unity by < 1e-14 and of its gradient by < 1e-8 / h.
-                        let h_min = grid.cell_size().min();
-                        let mut kept = 0;
-                        for k in 0..c {
-                            if vals[k] > NEGLIGIBLE_WEIGHT || grads[k].norm() * h_min > NEGLIGIBLE_GRADIENT {
-                                nodes[kept] = nodes[k];
-                                vals[kept] = vals[k];
-                                grads[kept] = grads[k];
-                                kept += 1;
-                            }
-                        }
-                        *count = kept as u32;
-                        None
-                    }
-                    Err(e) => {
-                        *count = 0;
-                        Some((p, e))
-                    }
+            .filter_map(|(p, (((nodes, vals), grads), count))| match evaluate(p, nodes, vals, grads) {
+                Ok(c) => {
+                    *count = c as u32;
+                    None
+                }
+                Err(e) => {
+                    *count = 0;
+                    Some((p, e))
                 }
             })
             .min_by_key(|(p, _)| *p);
-        if let Some((p, source)) = first_error {
-            return Err(PointBasisError {
-                point: p,
-                position: positions[p].iter().copied().collect(),
-                source,
-            });
+        if let Some(e) = first_error {
+            return Err(e);
         }
 
         // Active numbering, ascending in grid index so that supports stay sorted.
         let an = &mut self.active_nodes;
         an.grid_to_active.clear();
-        an.grid_to_active.resize(grid.num_nodes(), INACTIVE);
+        an.grid_to_active.resize(num_nodes, INACTIVE);
         for p in 0..n {
             let s = p * stride;
             for &g in &self.grid_nodes[s..s + self.count[p] as usize] {

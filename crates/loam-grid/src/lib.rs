@@ -9,9 +9,11 @@
 
 mod basis;
 mod connectivity;
+mod mesh;
 
 pub use basis::{BasisError, BasisKind};
 pub use connectivity::{ActiveNodes, Connectivity, NodePointAdjacency, PointBasisError, INACTIVE};
+pub use mesh::{ElementError, FeMesh, MeshError};
 
 use nalgebra::SVector;
 

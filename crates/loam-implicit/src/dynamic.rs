@@ -9,6 +9,10 @@
 //! nodal update. A step Newton cannot solve is retried from the committed state with half
 //! the time step (cut-back), exactly as in quasi-static analysis.
 //!
+//! In the updated Lagrangian FEM reference (`Model::updated_lagrangian_fem`) the mesh
+//! nodes persist: they keep their velocity and acceleration from step to step and the
+//! Gauss points take interpolated values, the usual FEM Newmark update.
+//!
 //! Trapezoidal rule (β = ¼, γ = ½, α_B = 0): unconditionally stable, no amplitude decay,
 //! period elongation ωΔt / (2 arctan(ωΔt/2)). Bossak (α_B ∈ [−⅓, 0], β = (1 − α_B)²/4,
 //! γ = ½ − α_B): second order, damps the highest frequencies.
@@ -235,7 +239,13 @@ impl<const D: usize> Dynamic<D> {
     /// Try one time step of length `dt` from the committed state; commit on success.
     fn attempt_step(&mut self, dt: f64) -> Result<NewtonReport, NewtonError<PointUpdateError>> {
         let (beta, gamma, alpha) = (self.settings.beta, self.settings.gamma, self.settings.bossak_alpha);
-        self.map_to_nodes();
+        // MPM: the grid is new every step, so the nodal state is mapped from the points.
+        // FEM: the nodes persist and carry their own velocity and acceleration (mapped once,
+        // at the start, by `initial_acceleration`).
+        let fem = self.engine.model.mesh.is_some();
+        if !fem {
+            self.map_to_nodes();
+        }
         self.engine.external_forces(1.0);
         let n = self.engine.num_dofs();
         self.predictor.clear();
@@ -268,18 +278,36 @@ impl<const D: usize> Dynamic<D> {
             e.du.iter().zip(&self.predictor).map(|(u, p)| (u - p) / (beta * dt * dt)).collect();
         let conn = &e.conn;
         let pts = &mut e.model.points;
-        (pts.velocity.par_iter_mut(), pts.acceleration.par_iter_mut()).into_par_iter().enumerate().for_each(
-            |(p, (v, a))| {
-                let mut an = SVector::<f64, D>::zeros();
-                for (&node, &w) in conn.support_nodes(p).iter().zip(conn.support_values(p)) {
-                    for i in 0..D {
-                        an[i] += w * a_new[node as usize * D + i];
-                    }
+        let interpolate = |p: usize, field: &[f64]| {
+            let mut x = SVector::<f64, D>::zeros();
+            for (&node, &w) in conn.support_nodes(p).iter().zip(conn.support_values(p)) {
+                for i in 0..D {
+                    x[i] += w * field[node as usize * D + i];
                 }
-                *v += (*a * (1.0 - gamma) + an * gamma) * dt;
-                *a = an;
-            },
-        );
+            }
+            x
+        };
+        if fem {
+            for ((v, a), an) in self.velocity.iter_mut().zip(self.acceleration.iter_mut()).zip(&a_new) {
+                *v += dt * ((1.0 - gamma) * *a + gamma * an);
+                *a = *an;
+            }
+            let (vel, acc) = (&self.velocity, &self.acceleration);
+            (pts.velocity.par_iter_mut(), pts.acceleration.par_iter_mut()).into_par_iter().enumerate().for_each(
+                |(p, (v, a))| {
+                    *v = interpolate(p, vel);
+                    *a = interpolate(p, acc);
+                },
+            );
+        } else {
+            (pts.velocity.par_iter_mut(), pts.acceleration.par_iter_mut()).into_par_iter().enumerate().for_each(
+                |(p, (v, a))| {
+                    let an = interpolate(p, &a_new);
+                    *v += (*a * (1.0 - gamma) + an * gamma) * dt;
+                    *a = an;
+                },
+            );
+        }
         e.commit();
         Ok(report)
     }

@@ -14,6 +14,7 @@ use loam_solve::{
     gather_nodal, BlockPattern, LinearSolverKind, NewtonError, NewtonReport, NewtonSettings, NewtonSolver,
     SparseDirectSolver,
 };
+use nalgebra::SVector;
 use rayon::prelude::*;
 
 pub(crate) struct Engine<const D: usize> {
@@ -61,9 +62,13 @@ impl<const D: usize> Engine<D> {
             return Ok(());
         }
         let pts = &self.model.points;
-        self.conn
-            .compute(&self.model.grid, &pts.position, &pts.half_length)
-            .map_err(|source| StepError::PointOutsideGrid { step, source })?;
+        match &self.model.mesh {
+            None => self
+                .conn
+                .compute(&self.model.grid, &pts.position, &pts.half_length)
+                .map_err(|source| StepError::PointOutsideGrid { step, source })?,
+            Some(mesh) => self.conn.compute_mesh(mesh).map_err(|source| StepError::Element { step, source })?,
+        }
         self.pattern.update(&PointCouplings(&self.conn));
         self.model.constrained_dofs(self.conn.active_nodes(), &mut self.constrained);
         self.conn_current = true;
@@ -154,6 +159,11 @@ impl<const D: usize> Engine<D> {
                 *f = df * *f;
                 *l = stretched_half_length(l0, f);
             });
+        if let Some(mesh) = &mut self.model.mesh {
+            // Every mesh node belongs to an element, so all are active.
+            let g2a = &conn.active_nodes().grid_to_active;
+            mesh.displace(|n| SVector::from_fn(|i, _| du[g2a[n] as usize * D + i]));
+        }
         pts.stress.copy_from_slice(&trial.stress);
         pts.elastic_strain.copy_from_slice(&trial.elastic_strain);
         if hs > 0 {

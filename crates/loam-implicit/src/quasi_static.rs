@@ -9,7 +9,7 @@
 use loam_model::Model;
 use crate::engine::{advance, CutBack, Engine};
 use crate::step::PointUpdateError;
-use loam_grid::PointBasisError;
+use loam_grid::{ElementError, PointBasisError};
 use loam_solve::{LinearSolverKind, LinearSolverTimings, NewtonError, NewtonReport, NewtonSettings, SparseDirectSolver};
 use std::time::{Duration, Instant};
 
@@ -64,6 +64,8 @@ impl StepReport {
 pub enum StepError {
     #[error("step {step}: {source}; the point left the grid (enlarge the grid)")]
     PointOutsideGrid { step: usize, source: PointBasisError },
+    #[error("step {step}: {source} (updated Lagrangian FEM: the mesh is too distorted to go on)")]
+    Element { step: usize, source: ElementError },
     #[error("constraint {index} (axis {axis}, node plane {plane}) touches no active node: no material point has support on that plane")]
     ConstraintTouchesNoNode { index: usize, axis: usize, plane: usize },
     #[error("step {step} did not converge at load factor {load_factor:.6} after {cutbacks} cut-backs: {reason}")]

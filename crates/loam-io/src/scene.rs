@@ -4,7 +4,7 @@
 //! hold no node — before the first step runs.
 
 use loam_constitutive::{ConstitutiveLaw, Elastic};
-use loam_grid::{BasisKind, Grid};
+use loam_grid::{BasisKind, FeMesh, Grid, MeshError};
 use crate::analysis::{Analysis, AnalysisError};
 use loam_explicit::{Explicit, ExplicitError, ExplicitSettings, TimeStep, UpdateScheme};
 use loam_implicit::{
@@ -31,6 +31,9 @@ pub struct Scene {
     pub basis: BasisSpec,
     #[serde(default = "default_kinematics")]
     pub kinematics: KinematicsSpec,
+    /// The material point method (default), or the updated Lagrangian FEM reference.
+    #[serde(default)]
+    pub method: MethodSpec,
     pub materials: Vec<MaterialSpec>,
     pub bodies: Vec<BodySpec>,
     /// Body force per unit mass at full load; D components.
@@ -56,6 +59,18 @@ pub struct GridSpec {
 pub enum BasisSpec {
     Linear,
     Gimp,
+}
+
+/// How the bodies are discretised.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+pub enum MethodSpec {
+    /// Material points on the background grid, reset every step.
+    #[default]
+    Mpm,
+    /// The updated Lagrangian FEM reference: every Box body meshed by elements of about
+    /// one grid cell, `points_per_cell` Gauss points per axis (1–3) as the points; the mesh
+    /// moves with the body and is never reset. Implicit analyses only.
+    UpdatedLagrangianFem,
 }
 
 #[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
@@ -396,7 +411,10 @@ impl LoadedScene {
         if s.bodies.is_empty() {
             return Err(self.error(&[Seg::Key("bodies")], "no bodies: add at least one Body(material: ..., shape: Box(min: [...], max: [...]))"));
         }
+        let fem = s.method == MethodSpec::UpdatedLagrangianFem;
         let mut points = PointStore::<D>::new();
+        let mut mesh: Option<FeMesh<D>> = None;
+        let (mut block_density, mut block_material) = (Vec::new(), Vec::new());
         for (i, b) in s.bodies.iter().enumerate() {
             let at = |key| [Seg::Key("bodies"), Seg::Index(i), Seg::Key(key)];
             let Some(mi) = s.materials.iter().position(|m| m.name == b.material) else {
@@ -419,6 +437,24 @@ impl LoadedScene {
                     Shape::Polygon(vertices.iter().map(|v| Vector2::new(v[0], v[1])).collect())
                 }
             };
+            if fem {
+                let Shape::Box { min, max } = shape else {
+                    return Err(self.error(&at("shape"), format!("body {i}: the updated Lagrangian FEM meshes Box bodies only; use a Box or method: Mpm")));
+                };
+                let h = grid.cell_size();
+                let elements = std::array::from_fn(|a| (((max[a] - min[a]) / h[a]).round() as usize).max(1));
+                let block = FeMesh::block(min, max, elements, b.points_per_cell).map_err(|e| {
+                    let key = if matches!(e, MeshError::GaussOrder(_)) { "points_per_cell" } else { "shape" };
+                    self.error(&at(key), format!("body {i}: {e} (with method UpdatedLagrangianFem, points_per_cell is the Gauss order)"))
+                })?;
+                match &mut mesh {
+                    None => mesh = Some(block),
+                    Some(m) => m.append(block).map_err(|e| self.error(&at("points_per_cell"), format!("body {i}: {e}")))?,
+                }
+                block_density.push(s.materials[mi].density);
+                block_material.push(mi as u32);
+                continue;
+            }
             let added = points
                 .fill(&grid, &shape, b.points_per_cell, s.materials[mi].density, mi as u32)
                 .map_err(|e| self.error(&at("shape"), format!("body {i}: {e}")))?;
@@ -486,8 +522,30 @@ impl LoadedScene {
             KinematicsSpec::SmallStrain => Kinematics::SmallStrain,
             KinematicsSpec::FiniteStrain => Kinematics::FiniteStrain,
         };
-        let model = Model::new(grid, basis, kinematics, points, laws, constraints, gravity)
-            .map_err(|e| self.error(&[Seg::Key("bodies")], e.to_string()))?;
+        let model = match mesh {
+            None => Model::new(grid, basis, kinematics, points, laws, constraints, gravity)
+                .map_err(|e| self.error(&[Seg::Key("bodies")], e.to_string()))?,
+            Some(mesh) => {
+                let mut model = Model::updated_lagrangian_fem(
+                    grid, kinematics, mesh, &block_density, &block_material, laws, constraints, gravity,
+                )
+                .map_err(|e| self.error(&[Seg::Key("bodies")], e.to_string()))?;
+                // Initial velocities at the Gauss points of each body's block.
+                let mesh = model.mesh.as_ref().expect("FEM model has a mesh");
+                let per = mesh.gauss_per_element();
+                let blocks: Vec<usize> = (0..model.points.len()).map(|p| mesh.element_block(p / per)).collect();
+                for (i, b) in s.bodies.iter().enumerate() {
+                    if let Some(v) = &b.velocity {
+                        let field = self.velocity_field::<D>(v, i)?;
+                        let pts = &mut model.points;
+                        for p in (0..pts.len()).filter(|&p| blocks[p] == i) {
+                            pts.velocity[p] = field(&pts.position[p]);
+                        }
+                    }
+                }
+                model
+            }
+        };
         let at_analysis = |key: &'static str| [Seg::Key("analysis"), Seg::Key(key)];
         let mut analysis = match s.analysis {
             AnalysisSpec::QuasiStatic { load_steps, max_cutbacks } => {
@@ -537,6 +595,9 @@ impl LoadedScene {
                     damping,
                     duration,
                 };
+                if fem {
+                    return Err(self.error(&[Seg::Key("method")], "method UpdatedLagrangianFem runs with the implicit analyses (QuasiStatic, ImplicitDynamic) only; use method: Mpm for Explicit"));
+                }
                 match Explicit::new(model, settings) {
                     Ok(e) => Analysis::Explicit(e),
                     Err(ExplicitError::InvalidSettings { field, value, valid }) => {

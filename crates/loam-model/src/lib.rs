@@ -4,7 +4,7 @@
 //! (constrained dofs, stored energy, external work of dead loads) live here once.
 
 use loam_constitutive::ConstitutiveLaw;
-use loam_grid::{ActiveNodes, BasisKind, Connectivity, Grid};
+use loam_grid::{ActiveNodes, BasisKind, Connectivity, FeMesh, Grid};
 use loam_solve::Couplings;
 use loam_points::PointStore;
 use nalgebra::{Matrix3, SVector};
@@ -44,6 +44,10 @@ pub enum ModelError {
     MissingMaterial { point: usize, material: u32, count: usize },
     #[error("constraint {index} is on plane {plane} of axis {axis}, but that axis has planes 0..={max}")]
     ConstraintPlane { index: usize, axis: usize, plane: usize, max: usize },
+    #[error("mesh block {block} has no density or material ({densities} densities, {materials} materials given)")]
+    MeshBlock { block: usize, densities: usize, materials: usize },
+    #[error("mesh block {block} has density {value}; it must be a positive number")]
+    Density { block: usize, value: f64 },
     #[error("gravity component {axis} is {value}; it must be finite")]
     Gravity { axis: usize, value: f64 },
 }
@@ -61,6 +65,9 @@ pub struct Model<const D: usize> {
     pub gravity: SVector<f64, D>,
     /// Force on each point at full load (empty: none).
     pub point_forces: Vec<SVector<f64, D>>,
+    /// The body-fitted mesh of an updated Lagrangian FEM run, whose Gauss points are the
+    /// points; `None` for the MPM (see [`Model::updated_lagrangian_fem`]).
+    pub mesh: Option<FeMesh<D>>,
 }
 
 impl<const D: usize> Model<D> {
@@ -97,7 +104,57 @@ impl<const D: usize> Model<D> {
         let stride = materials.iter().map(|m| m.history_len()).max().unwrap_or(0);
         let material = points.material.clone();
         points.init_history(stride, |p, h| materials[material[p] as usize].init_history(h));
-        Ok(Self { grid, basis, kinematics, points, materials, constraints, gravity, point_forces: Vec::new() })
+        Ok(Self { grid, basis, kinematics, points, materials, constraints, gravity, point_forces: Vec::new(), mesh: None })
+    }
+
+    /// The updated Lagrangian FEM reference on the same grid planes, laws and loads: the
+    /// points are the Gauss points of `mesh` (volume det J · w, mass ρ of their element's
+    /// block times that volume, material of the block), the nodes are the mesh's, and the
+    /// mesh moves with the body and is never reset. `density[b]` and `material[b]` belong
+    /// to block b. Constraints on grid planes hold the mesh nodes that start on them; the
+    /// grid serves only to place those planes.
+    #[allow(clippy::too_many_arguments)]
+    pub fn updated_lagrangian_fem(
+        grid: Grid<D>,
+        kinematics: Kinematics,
+        mesh: FeMesh<D>,
+        density: &[f64],
+        material: &[u32],
+        materials: Vec<Arc<dyn ConstitutiveLaw>>,
+        constraints: Vec<PlaneConstraint>,
+        gravity: SVector<f64, D>,
+    ) -> Result<Self, ModelError> {
+        let per = mesh.gauss_per_element();
+        let mut points = PointStore::new();
+        for (p, (x, volume)) in mesh.gauss_points().into_iter().enumerate() {
+            let b = mesh.element_block(p / per);
+            let (Some(&rho), Some(&m)) = (density.get(b), material.get(b)) else {
+                return Err(ModelError::MeshBlock { block: b, densities: density.len(), materials: material.len() });
+            };
+            if !(rho.is_finite() && rho > 0.0) {
+                return Err(ModelError::Density { block: b, value: rho });
+            }
+            points.push(x, volume, rho, SVector::zeros(), m);
+        }
+        // The element functions are the bilinear (trilinear) tensor products of the linear
+        // basis: same support size, so the connectivity buffers have the right stride.
+        let mut model = Self::new(grid, BasisKind::Linear, kinematics, points, materials, constraints, gravity)?;
+        model.mesh = Some(mesh);
+        Ok(model)
+    }
+
+    /// Whether node `node` (grid node index in MPM, mesh node index in FEM) lies on the plane
+    /// of constraint `c`: a grid node on that node plane, or a mesh node that started on it
+    /// (within 1e-9 of a cell).
+    fn node_on_plane(&self, node: usize, c: &PlaneConstraint) -> bool {
+        match &self.mesh {
+            None => self.grid.node_coords(node)[c.axis] == c.plane,
+            Some(mesh) => {
+                let h = self.grid.cell_size()[c.axis];
+                let plane = self.grid.origin()[c.axis] + c.plane as f64 * h;
+                (mesh.reference_positions()[node][c.axis] - plane).abs() <= 1e-9 * h
+            }
+        }
     }
 
     /// Whether every material in use has a symmetric algorithmic tangent (so Cholesky
@@ -111,9 +168,8 @@ impl<const D: usize> Model<D> {
         out.clear();
         out.resize(active.len() * D, false);
         for (a, &g) in active.active_to_grid.iter().enumerate() {
-            let ijk = self.grid.node_coords(g as usize);
             for c in &self.constraints {
-                if ijk[c.axis] == c.plane {
+                if self.node_on_plane(g as usize, c) {
                     for i in 0..D {
                         out[a * D + i] |= c.fixed[i];
                     }
@@ -126,7 +182,7 @@ impl<const D: usize> Model<D> {
     /// support on its plane, so it would silently constrain nothing.
     pub fn constraint_without_nodes(&self, active: &ActiveNodes) -> Option<(usize, &PlaneConstraint)> {
         self.constraints.iter().enumerate().find(|(_, c)| {
-            !active.active_to_grid.iter().any(|&g| self.grid.node_coords(g as usize)[c.axis] == c.plane)
+            !active.active_to_grid.iter().any(|&g| self.node_on_plane(g as usize, c))
         })
     }
 
