@@ -38,9 +38,9 @@ fn block(n: usize) -> QuasiStatic<2> {
     points.fill(&grid, &shape, 2, 2000.0, 0).unwrap();
     let law = Elastic::new(1e7, 0.3).unwrap();
     let constraints = vec![
-        PlaneConstraint { axis: 1, plane: 0, fixed: [true, true, false] },
-        PlaneConstraint { axis: 0, plane: 1, fixed: [true, false, false] },
-        PlaneConstraint { axis: 0, plane: n + 1, fixed: [true, false, false] },
+        PlaneConstraint::new(1, 0, [true, true, false]),
+        PlaneConstraint::new(0, 1, [true, false, false]),
+        PlaneConstraint::new(0, n + 1, [true, false, false]),
     ];
     let m = Model::new(grid, BasisKind::Gimp, Kinematics::FiniteStrain, points, vec![Arc::new(law)], constraints, Vector2::new(0.0, -10.0))
         .unwrap();

@@ -189,9 +189,9 @@ fn column_parts<const D: usize>(column: &Column, width: f64, cells_high: usize) 
     for a in 0..D {
         let mut fixed = [false; 3];
         fixed[a] = true;
-        constraints.push(PlaneConstraint { axis: a, plane: 0, fixed });
+        constraints.push(PlaneConstraint::new(a, 0, fixed));
         if a != 1 {
-            constraints.push(PlaneConstraint { axis: a, plane: 1, fixed });
+            constraints.push(PlaneConstraint::new(a, 1, fixed));
         }
     }
     let mut gravity = SVector::<f64, D>::zeros();
@@ -320,9 +320,9 @@ impl VibratingBar {
         let cells_long = (self.length / h).round() as usize + 4;
         let grid = Grid::new(Vector2::zeros(), Vector2::new(h, h), [cells_long, 1]).expect("valid bar grid");
         let constraints = vec![
-            PlaneConstraint { axis: 0, plane: 0, fixed: [true, false, false] },
-            PlaneConstraint { axis: 1, plane: 0, fixed: [false, true, false] },
-            PlaneConstraint { axis: 1, plane: 1, fixed: [false, true, false] },
+            PlaneConstraint::new(0, 0, [true, false, false]),
+            PlaneConstraint::new(1, 0, [false, true, false]),
+            PlaneConstraint::new(1, 1, [false, true, false]),
         ];
         let law = Elastic::new(self.young, 0.0).expect("valid elastic constants");
         (grid, constraints, std::sync::Arc::new(law))
@@ -499,4 +499,52 @@ pub fn disks_model(kinematics: crate::implicit::Kinematics) -> crate::model::Mod
     let law = Elastic::new(1000.0, 0.3).expect("valid elastic constants");
     Model::new(grid, BasisKind::Linear, kinematics, points, vec![Arc::new(law)], vec![], Vector2::zeros())
         .expect("valid disk model")
+}
+
+/// V3: a rigid smooth strip footing on weightless soil (VERIFICATION.md V3), half model by
+/// symmetry. Footing half-width `b` = 1, domain `width`·b wide and `depth`·b deep,
+/// `cells_per_b` cells per b, 2×2 points per cell, linear basis, small strain; rollers on
+/// the symmetry plane x = 0 and the far side, the base fixed; the top nodes 0 ≤ x ≤ b pushed
+/// down by `settlement` at full load and held horizontally (rough). The footing pressure
+/// is −(reaction of constraint 0)_y / b.
+pub fn footing_model(
+    law: std::sync::Arc<dyn crate::constitutive::ConstitutiveLaw>,
+    cells_per_b: usize,
+    width: usize,
+    depth: usize,
+    settlement: f64,
+) -> crate::model::Model<2> {
+    use crate::grid::{BasisKind, Grid};
+    use crate::model::{Kinematics, Model, PlaneConstraint};
+    use crate::points::Shape;
+    use nalgebra::Vector2;
+    let b = 1.0;
+    let h = b / cells_per_b as f64;
+    let (nx, ny) = (width * cells_per_b, depth * cells_per_b);
+    // One empty row of cells above the surface keeps the top node plane inside the grid.
+    let grid = Grid::new(Vector2::zeros(), Vector2::new(h, h), [nx, ny + 1]).expect("valid footing grid");
+    let mut points = PointStore::new();
+    let top = depth as f64 * b;
+    points
+        .fill(&grid, &Shape::Box { min: Vector2::zeros(), max: Vector2::new(width as f64 * b, top) }, 2, 1.0, 0)
+        .expect("soil fits the grid");
+    let constraints = vec![
+        PlaneConstraint::new(1, ny, [true, true, false]).displaced([0.0, -settlement, 0.0]).within([0.0, top, 0.0], [b, top, 0.0]),
+        PlaneConstraint::new(0, 0, [true, false, false]),
+        PlaneConstraint::new(0, nx, [true, false, false]),
+        PlaneConstraint::new(1, 0, [true, true, false]),
+    ];
+    Model::new(grid, BasisKind::Linear, Kinematics::SmallStrain, points, vec![law], constraints, Vector2::zeros())
+        .expect("valid footing model")
+}
+
+/// Prandtl's bearing capacity factor N_c = (N_q − 1) cot φ with N_q = e^{π tan φ} tan²(45° + φ/2),
+/// and 2 + π at φ = 0 (the limit).
+pub fn prandtl_nc(friction_deg: f64) -> f64 {
+    if friction_deg == 0.0 {
+        return 2.0 + std::f64::consts::PI;
+    }
+    let phi = friction_deg.to_radians();
+    let nq = (std::f64::consts::PI * phi.tan()).exp() * (std::f64::consts::FRAC_PI_4 + phi / 2.0).tan().powi(2);
+    (nq - 1.0) / phi.tan()
 }

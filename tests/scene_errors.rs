@@ -209,3 +209,46 @@ fn fem_method_limits_are_named() {
     let e = check(&fem.replacen("QuasiStatic(load_steps: 40)", "Explicit(duration: 1.0)", 1)).unwrap_err();
     assert!(e.to_string().contains("implicit analyses") && e.line == line_of("basis: Gimp"), "{e}");
 }
+
+/// Plastic laws in scenes: each parameter out of range is refused at its own place, with
+/// what is valid; φ ≥ 90° and ψ > φ included (φ = 0 is valid: Tresca).
+#[test]
+fn plastic_law_parameters_are_checked() {
+    let mc = |c: &str, phi: &str, psi: &str| {
+        GOOD.replacen(
+            "law: Elastic(young: 1e5, poisson: 0.0)",
+            &format!("law: MohrCoulomb(young: 1e5, poisson: 0.0, cohesion: {c}, friction: {phi}, dilation: {psi})"),
+            1,
+        )
+    };
+    check(&mc("10.0", "0.0", "0.0")).unwrap();
+    check(&mc("10.0", "30.0", "5.0")).unwrap();
+    let line = line_of("law: Elastic");
+    for (scene, says) in [
+        (mc("10.0", "90.0", "0.0"), "friction = 90"),
+        (mc("10.0", "20.0", "25.0"), "dilation = 25"),
+        (mc("0.0", "0.0", "0.0"), "cohesion = 0"),
+        (mc("-1.0", "20.0", "0.0"), "cohesion = -1"),
+    ] {
+        let e = check(&scene).unwrap_err();
+        assert!(e.to_string().contains(says) && e.line == line, "{e}");
+    }
+    let vm = GOOD.replacen("law: Elastic(young: 1e5, poisson: 0.0)", "law: VonMises(young: 1e5, poisson: 0.0, yield_stress: 17.3)", 1);
+    check(&vm).unwrap();
+    let e = check(&vm.replacen("yield_stress: 17.3", "yield_stress: 0.0", 1)).unwrap_err();
+    assert!(e.to_string().contains("yield_stress = 0; it must be positive"), "{e}");
+}
+
+/// A prescribed displacement needs D entries with at least one Some, and only quasi-static
+/// analysis applies it.
+#[test]
+fn displacement_constraints_are_checked() {
+    let push = |d: &str| GOOD.replacen("Roller(axis: Y, at: 0.0),", &format!("Roller(axis: Y, at: 0.0),\n        Displacement(axis: Y, at: 10.0, displacement: {d}),"), 1);
+    check(&push("[None, Some(-0.1)]")).unwrap();
+    let e = check(&push("[None, None]")).unwrap_err();
+    assert!(e.to_string().contains("at least one Some"), "{e}");
+    let e = check(&push("[Some(-0.1)]")).unwrap_err();
+    assert!(e.to_string().contains("needs 2 entries"), "{e}");
+    let e = check(&push("[None, Some(-0.1)]").replacen("QuasiStatic(load_steps: 40)", "ImplicitDynamic(time_step: 0.1, duration: 1.0)", 1)).unwrap_err();
+    assert!(e.to_string().contains("QuasiStatic"), "{e}");
+}

@@ -5,6 +5,7 @@
 //! `cargo xtask bench`: run the criterion benchmarks.
 
 mod dynamics;
+mod footing;
 mod steps;
 mod svg;
 
@@ -335,6 +336,7 @@ fn verify(quick: bool, out: &Path) -> Result<()> {
     writeln!(md)?;
     let mut report = Report { md, rows, out: out.to_owned() };
     dynamics::verify(quick, &mut report)?;
+    footing::verify(quick, &mut report)?;
     let Report { mut md, rows, .. } = report;
     writeln!(md, "## Bounds\n\n| case | quantity | value | bound | pass |\n|---|---|---:|---:|---|")?;
     let mut csv = String::from("case,quantity,value,bound,pass\n");

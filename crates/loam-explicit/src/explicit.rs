@@ -102,6 +102,9 @@ impl<const D: usize> Explicit<D> {
         if model.mesh.is_some() {
             return Err(ExplicitError::FemModel);
         }
+        if let Some(index) = model.constraints.iter().position(|c| c.is_displaced()) {
+            return Err(ExplicitError::DisplacedConstraint { index });
+        }
         tracing::info!(scheme = ?settings.scheme, flip = settings.flip, time_step = ?settings.time_step,
             damping = settings.damping, duration = settings.duration, "explicit analysis");
         let p_wave = model.materials.iter().map(|m| m.p_wave_modulus()).collect();
@@ -659,7 +662,7 @@ mod tests {
     #[test]
     fn a_constraint_on_an_empty_plane_is_reported() {
         let mut model = block(Vector2::zeros(), Vector2::zeros());
-        model.constraints.push(loam_model::PlaneConstraint { axis: 1, plane: 0, fixed: [true, true, false] });
+        model.constraints.push(loam_model::PlaneConstraint::new(1, 0, [true, true, false]));
         let mut ex = Explicit::new(model, ExplicitSettings::new(1.0)).unwrap();
         let e = ex.check().unwrap_err();
         assert!(matches!(e, ExplicitError::ConstraintTouchesNoNode { index: 0, axis: 1, plane: 0 }), "{e}");

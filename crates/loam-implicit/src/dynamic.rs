@@ -127,6 +127,9 @@ impl<const D: usize> Dynamic<D> {
     /// a suddenly applied load starts from the right acceleration.
     pub fn new(model: Model<D>, settings: DynamicSettings) -> Result<Self, StepError> {
         settings.validate()?;
+        if let Some(index) = model.constraints.iter().position(|c| c.is_displaced()) {
+            return Err(StepError::DisplacementInDynamics { index });
+        }
         Ok(Self {
             engine: Engine::new(model, settings.newton, settings.linear_solver),
             settings,
@@ -338,6 +341,7 @@ impl<const D: usize> Dynamic<D> {
             residuals: done.residuals,
             active_nodes: done.active_nodes,
             dofs: done.dofs,
+            reactions: self.engine.reactions.clone(),
             wall_time: start.elapsed(),
         })
     }

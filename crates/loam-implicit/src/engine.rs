@@ -25,6 +25,10 @@ pub(crate) struct Engine<const D: usize> {
     pub values: Vec<f64>,
     pub constrained: Vec<bool>,
     pub f_ext: Vec<f64>,
+    pub reaction: Vec<f64>,
+    /// Per constraint, the support reaction Σ (f_int − f_ext) over its nodes and fixed
+    /// components, at the last committed state.
+    pub reactions: Vec<[f64; 3]>,
     pub du: Vec<f64>,
     pub trial: TrialState<D>,
     pub newton: NewtonSolver,
@@ -49,6 +53,8 @@ impl<const D: usize> Engine<D> {
             values: Vec::new(),
             constrained: Vec::new(),
             f_ext: Vec::new(),
+            reaction: Vec::new(),
+            reactions: Vec::new(),
             du: Vec::new(),
             trial: TrialState::default(),
             newton: NewtonSolver::new(newton, SparseDirectSolver::new(kind)),
@@ -124,6 +130,7 @@ impl<const D: usize> Engine<D> {
             values: &mut self.values,
             constrained: &self.constrained,
             f_ext: &self.f_ext,
+            reaction: &mut self.reaction,
             trial: &mut self.trial,
             inertia,
         };
@@ -134,6 +141,21 @@ impl<const D: usize> Engine<D> {
     /// elastic strain, history, and GIMP half-lengths stretched with F (iGIMP). The
     /// connectivity stays readable until the next `connect`.
     pub fn commit(&mut self) {
+        let active = self.conn.active_nodes();
+        self.reactions = self
+            .model
+            .constraints
+            .iter()
+            .map(|c| {
+                let mut sum = [0.0; 3];
+                for a in self.model.constraint_nodes(active, c) {
+                    for i in (0..D).filter(|&i| c.fixed[i]) {
+                        sum[i] += self.reaction.get(a * D + i).copied().unwrap_or(0.0);
+                    }
+                }
+                sum
+            })
+            .collect();
         let conn = &self.conn;
         let du = &self.du;
         let trial = &self.trial;

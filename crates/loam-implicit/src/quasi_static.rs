@@ -50,6 +50,10 @@ pub struct StepReport {
     pub residuals: Vec<f64>,
     pub active_nodes: usize,
     pub dofs: usize,
+    /// Per constraint (scene order), the support reaction Σ (f_int − f_ext) over its nodes
+    /// on its prescribed components: the force the support exerts is its negative. A
+    /// footing pushed down reports the (positive, compressive) load it carries here.
+    pub reactions: Vec<[f64; 3]>,
     pub wall_time: Duration,
 }
 
@@ -72,6 +76,8 @@ pub enum StepError {
     NotConverged { step: usize, load_factor: f64, cutbacks: usize, reason: String, residuals: Vec<f64> },
     #[error("invalid analysis setting {field} = {value}: valid is {valid}")]
     InvalidSettings { field: &'static str, value: f64, valid: &'static str },
+    #[error("constraint {index} prescribes a non-zero displacement; displacements follow the load factor of a quasi-static analysis and are not applied in dynamics")]
+    DisplacementInDynamics { index: usize },
     #[error("the analysis is already finished ({0} steps)")]
     Finished(usize),
 }
@@ -130,7 +136,12 @@ impl<const D: usize> QuasiStatic<D> {
     /// Try to reach `lambda` from the committed state. On success the state is committed.
     fn attempt(&mut self, lambda: f64) -> Result<NewtonReport, NewtonError<PointUpdateError>> {
         self.engine.external_forces(lambda);
-        self.engine.du.clear();
+        // Prescribed displacements enter as the starting increment on their dofs; Newton
+        // never corrects constrained dofs, so they keep it.
+        let e = &mut self.engine;
+        e.du.clear();
+        e.du.resize(e.num_dofs(), 0.0);
+        e.model.prescribed_increment(e.conn.active_nodes(), self.load_factor, lambda, &mut e.du);
         let (mut system, du, newton) = self.engine.system(None);
         let report = newton.solve(&mut system, du)?;
         self.engine.commit();
@@ -204,6 +215,7 @@ impl<const D: usize> QuasiStatic<D> {
             residuals: done.residuals,
             active_nodes: done.active_nodes,
             dofs: done.dofs,
+            reactions: self.engine.reactions.clone(),
             wall_time: start.elapsed(),
         })
     }

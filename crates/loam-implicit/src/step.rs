@@ -86,6 +86,9 @@ pub(crate) struct StepSystem<'a, const D: usize> {
     pub values: &'a mut Vec<f64>,
     pub constrained: &'a [bool],
     pub f_ext: &'a [f64],
+    /// f_int − f_ext on the constrained dofs at the last evaluation (the support
+    /// reactions); zero on free dofs.
+    pub reaction: &'a mut Vec<f64>,
     pub trial: &'a mut TrialState<D>,
     /// Inertia of a dynamic step; `None` in quasi-static analysis.
     pub inertia: Option<Inertia<'a>>,
@@ -275,9 +278,12 @@ impl<const D: usize> NewtonProblem for StepSystem<'_, D> {
                 }
             }
         }
-        for ((ri, &fe), &fixed) in r.iter_mut().zip(self.f_ext).zip(self.constrained) {
+        self.reaction.resize(r.len(), 0.0);
+        for (((ri, &fe), &fixed), reaction) in r.iter_mut().zip(self.f_ext).zip(self.constrained).zip(self.reaction.iter_mut()) {
+            *reaction = 0.0;
             if fixed {
                 reference += *ri * *ri;
+                *reaction = *ri - fe;
                 *ri = 0.0;
             } else {
                 reference += fe * fe;
@@ -342,7 +348,7 @@ mod tests {
         let shape = Shape::Box { min: Vector2::new(1.0, 0.0), max: Vector2::new(3.0, 2.0) };
         points.fill(&grid, &shape, 2, 1000.0, 0).unwrap();
         let law = Elastic::new(1e5, 0.3).unwrap();
-        let fixed = PlaneConstraint { axis: 1, plane: 0, fixed: [true, true, false] };
+        let fixed = PlaneConstraint::new(1, 0, [true, true, false]);
         let model = Model::new(grid, BasisKind::Gimp, kinematics, points, vec![Arc::new(law)], vec![fixed], Vector2::new(3.0, -10.0))
             .unwrap();
         let mut qs = QuasiStatic::new(model, QuasiStaticSettings { load_steps: 2, ..Default::default() });
@@ -387,6 +393,7 @@ mod tests {
                 values: &mut values,
                 constrained: &constrained,
                 f_ext: &f_ext,
+                reaction: &mut Vec::new(),
                 trial: &mut trial,
                 inertia: None,
             };

@@ -40,6 +40,8 @@ pub struct Progress {
     pub final_residual: f64,
     pub active_nodes: usize,
     pub dofs: usize,
+    /// Support reaction of each constraint (implicit analyses; empty for explicit steps).
+    pub reactions: Vec<[f64; 3]>,
     pub wall_time: Duration,
 }
 
@@ -57,6 +59,7 @@ impl Progress {
             final_residual: r.final_residual(),
             active_nodes: r.active_nodes,
             dofs: r.dofs,
+            reactions: r.reactions,
             wall_time: r.wall_time,
         }
     }
@@ -170,6 +173,7 @@ impl<const D: usize> Analysis<D> {
                     final_residual: f64::NAN,
                     active_nodes: r.active_nodes,
                     dofs: r.active_nodes * D,
+                    reactions: Vec::new(),
                     wall_time: r.wall_time,
                 }
             }

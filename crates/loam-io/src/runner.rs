@@ -97,22 +97,38 @@ fn run_dim<const D: usize>(
     std::fs::create_dir_all(out_dir).map_err(|source| RunFailure::OutputDir { path: out_dir.to_owned(), source })?;
     let out = &scene.scene.output;
     let end_time = analysis.end_time();
-    let mut log = CsvWriter::create(
-        out_dir.join("run_log.csv"),
-        &[
-            "step",
-            "time",
-            "load_factor",
-            "increment",
-            "substeps",
-            "cutbacks",
-            "iterations",
-            "final_residual",
-            "active_nodes",
-            "dofs",
-            "wall_time_s",
-        ],
-    )?;
+    // A displaced constraint (a footing) adds its prescribed displacement and reaction per
+    // prescribed component: the load–displacement curve.
+    const AXES: [&str; 3] = ["x", "y", "z"];
+    let displaced: Vec<(usize, usize, f64)> = analysis
+        .model()
+        .constraints
+        .iter()
+        .enumerate()
+        .filter(|(_, c)| c.is_displaced())
+        .flat_map(|(k, c)| (0..D).filter(|&i| c.fixed[i]).map(move |i| (k, i, c.displacement[i])))
+        .collect();
+    let mut header: Vec<String> = [
+        "step",
+        "time",
+        "load_factor",
+        "increment",
+        "substeps",
+        "cutbacks",
+        "iterations",
+        "final_residual",
+        "active_nodes",
+        "dofs",
+        "wall_time_s",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    for &(k, i, _) in &displaced {
+        header.push(format!("constraint{k}_displacement_{}", AXES[i]));
+        header.push(format!("constraint{k}_reaction_{}", AXES[i]));
+    }
+    let mut log = CsvWriter::create(out_dir.join("run_log.csv"), &header.iter().map(String::as_str).collect::<Vec<_>>())?;
     let mut pvd = if out.vtu_every > 0 { Some(PvdWriter::create(out_dir.join("points.pvd"))?) } else { None };
     if let Some(pvd) = pvd.as_mut() {
         write_frame(analysis.model(), out_dir, pvd, 0, 0.0)?;
@@ -132,7 +148,7 @@ fn run_dim<const D: usize>(
         iterations += r.iterations;
         max_its = max_its.max(r.iterations);
         cutbacks += r.cutbacks;
-        log.row_mixed(&[
+        let mut cells = vec![
             CsvCell::Int(r.step as i64),
             CsvCell::Float(r.time),
             CsvCell::Float(r.load_factor),
@@ -144,7 +160,12 @@ fn run_dim<const D: usize>(
             CsvCell::Int(r.active_nodes as i64),
             CsvCell::Int(r.dofs as i64),
             CsvCell::Float(r.wall_time.as_secs_f64()),
-        ])?;
+        ];
+        for &(k, i, u) in &displaced {
+            cells.push(CsvCell::Float(r.load_factor * u));
+            cells.push(CsvCell::Float(r.reactions.get(k).map_or(f64::NAN, |f| f[i])));
+        }
+        log.row_mixed(&cells)?;
         if let Some(h) = history.as_mut() {
             h.advance(model, r.load_factor);
             if r.step % out.history_every == 0 || last {

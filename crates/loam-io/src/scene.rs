@@ -3,7 +3,7 @@
 //! a scene is checked completely — down to points outside the grid and constraints that
 //! hold no node — before the first step runs.
 
-use loam_constitutive::{ConstitutiveLaw, Elastic};
+use loam_constitutive::{ConstitutiveLaw, Elastic, MohrCoulomb, VonMises};
 use loam_grid::{BasisKind, FeMesh, Grid, MeshError};
 use crate::analysis::{Analysis, AnalysisError};
 use loam_explicit::{Explicit, ExplicitError, ExplicitSettings, TimeStep, UpdateScheme};
@@ -100,6 +100,41 @@ pub struct MaterialSpec {
 pub enum LawSpec {
     /// Linear elasticity in small strain; Hencky elasticity in finite strain.
     Elastic { young: f64, poisson: f64 },
+    /// J2 plasticity: yield stress σ_y (c_u = σ_y/√3 in plane strain), linear hardening
+    /// (negative: softening) down to an optional residual yield stress.
+    VonMises {
+        young: f64,
+        poisson: f64,
+        yield_stress: f64,
+        #[serde(default)]
+        hardening: f64,
+        #[serde(default)]
+        residual_yield_stress: Option<f64>,
+    },
+    /// Mohr–Coulomb: cohesion, friction and dilation angles in degrees (associated when
+    /// dilation = friction), optional tension cut-off and linear softening.
+    MohrCoulomb {
+        young: f64,
+        poisson: f64,
+        cohesion: f64,
+        friction: f64,
+        dilation: f64,
+        #[serde(default)]
+        tension_cutoff: Option<f64>,
+        #[serde(default)]
+        softening: Option<SofteningSpec>,
+    },
+}
+
+/// Linear softening of Mohr–Coulomb strength to residual values (angles in degrees),
+/// reached at the accumulated plastic shear strain `plastic_strain`.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SofteningSpec {
+    pub cohesion: f64,
+    pub friction: f64,
+    pub dilation: f64,
+    pub plastic_strain: f64,
 }
 
 #[derive(Debug, Clone, Deserialize, PartialEq)]
@@ -161,9 +196,21 @@ impl Axis {
 #[serde(deny_unknown_fields)]
 pub enum ConstraintSpec {
     /// The displacement normal to the grid plane `axis = at` is zero.
-    Roller { axis: Axis, at: f64 },
+    Roller { axis: Axis, at: f64, #[serde(default)] within: Option<RegionSpec> },
     /// All displacement components on the grid plane `axis = at` are zero.
-    Fixed { axis: Axis, at: f64 },
+    Fixed { axis: Axis, at: f64, #[serde(default)] within: Option<RegionSpec> },
+    /// Prescribed displacement at full load on the nodes of the grid plane `axis = at`
+    /// (inside `within`, if given): one entry per axis, `Some(u)` prescribed, `None` free.
+    /// Applied with the load factor of a quasi-static analysis (a footing pushed down).
+    Displacement { axis: Axis, at: f64, displacement: Vec<Option<f64>>, #[serde(default)] within: Option<RegionSpec> },
+}
+
+/// A box limiting a constraint to part of its plane.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RegionSpec {
+    pub min: Vec<f64>,
+    pub max: Vec<f64>,
 }
 
 #[derive(Debug, Clone, Deserialize, PartialEq)]
@@ -394,18 +441,7 @@ impl LoadedScene {
             if s.materials[..i].iter().any(|o| o.name == m.name) {
                 return Err(self.error(&at("name"), format!("material name \"{}\" is used twice; names must be unique", m.name)));
             }
-            match m.law {
-                LawSpec::Elastic { young, poisson } => {
-                    if !(young.is_finite() && young > 0.0) {
-                        return Err(self.error(&[Seg::Key("materials"), Seg::Index(i), Seg::Key("law"), Seg::Key("young")], format!("material \"{}\": Young's modulus is {young}; it must be positive", m.name)));
-                    }
-                    if !(poisson.is_finite() && poisson > -1.0 && poisson < 0.5) {
-                        return Err(self.error(&[Seg::Key("materials"), Seg::Index(i), Seg::Key("law"), Seg::Key("poisson")], format!("material \"{}\": Poisson's ratio is {poisson}; it must lie in (-1, 0.5)", m.name)));
-                    }
-                    let law = Elastic::new(young, poisson).map_err(|e| self.error(&at("law"), e.to_string()))?;
-                    laws.push(Arc::new(law));
-                }
-            }
+            laws.push(self.law(i, m)?);
         }
         // Bodies.
         if s.bodies.is_empty() {
@@ -470,11 +506,12 @@ impl LoadedScene {
         let gravity = vec_d(&s.gravity, &[Seg::Key("gravity")], "gravity")?;
         let mut constraints = Vec::new();
         for (i, c) in s.constraints.iter().enumerate() {
-            let (axis, at, all) = match *c {
-                ConstraintSpec::Roller { axis, at } => (axis, at, false),
-                ConstraintSpec::Fixed { axis, at } => (axis, at, true),
-            };
             let here = [Seg::Key("constraints"), Seg::Index(i)];
+            let (axis, at, within) = match c {
+                ConstraintSpec::Roller { axis, at, within }
+                | ConstraintSpec::Fixed { axis, at, within }
+                | ConstraintSpec::Displacement { axis, at, within, .. } => (*axis, *at, within),
+            };
             let a = axis.index();
             if a >= D {
                 return Err(self.error(&here, format!("constraint {i} is on axis {axis:?}, which a {D}D scene does not have")));
@@ -487,12 +524,52 @@ impl LoadedScene {
                     grid.cells()[a]
                 )));
             };
-            let mut fixed = [all; 3];
-            if !all {
-                fixed = [false; 3];
-                fixed[a] = true;
+            let mut constraint = match c {
+                ConstraintSpec::Roller { .. } => {
+                    let mut fixed = [false; 3];
+                    fixed[a] = true;
+                    PlaneConstraint::new(a, plane, fixed)
+                }
+                ConstraintSpec::Fixed { .. } => PlaneConstraint::new(a, plane, [true; 3]),
+                ConstraintSpec::Displacement { displacement, .. } => {
+                    if displacement.len() != D || displacement.iter().flatten().any(|u| !u.is_finite()) || displacement.iter().all(Option::is_none) {
+                        return Err(self.error(&[Seg::Key("constraints"), Seg::Index(i), Seg::Key("displacement")], format!(
+                            "constraint {i}: displacement needs {D} entries, Some(u) (finite) for a prescribed component or None for a free one, at least one Some; got {displacement:?}"
+                        )));
+                    }
+                    let mut fixed = [false; 3];
+                    let mut u = [0.0; 3];
+                    for (k, d) in displacement.iter().enumerate() {
+                        fixed[k] = d.is_some();
+                        u[k] = d.unwrap_or(0.0);
+                    }
+                    PlaneConstraint::new(a, plane, fixed).displaced(u)
+                }
+            };
+            if let Some(r) = within {
+                let at_w = |key| [Seg::Key("constraints"), Seg::Index(i), Seg::Key("within"), Seg::Key(key)];
+                let lo = vec_d(&r.min, &at_w("min"), "within.min")?;
+                let hi = vec_d(&r.max, &at_w("max"), "within.max")?;
+                if let Some(k) = (0..D).find(|&k| k != a && lo[k] > hi[k]) {
+                    return Err(self.error(&at_w("min"), format!("constraint {i}: within.min[{k}] = {} exceeds within.max[{k}] = {}", lo[k], hi[k])));
+                }
+                let mut min = [f64::NEG_INFINITY; 3];
+                let mut max = [f64::INFINITY; 3];
+                for k in 0..D {
+                    min[k] = lo[k];
+                    max[k] = hi[k];
+                }
+                constraint = constraint.within(min, max);
             }
-            constraints.push(PlaneConstraint { axis: a, plane, fixed });
+            constraints.push(constraint);
+        }
+        if let Some(index) = constraints.iter().position(|c| c.is_displaced()) {
+            if !matches!(s.analysis, AnalysisSpec::QuasiStatic { .. }) {
+                return Err(self.error(&[Seg::Key("constraints"), Seg::Index(index)], format!(
+                    "constraint {index} prescribes a displacement, which follows the load factor of a QuasiStatic analysis; the {} analysis does not apply it",
+                    match s.analysis { AnalysisSpec::Explicit { .. } => "Explicit", _ => "ImplicitDynamic" }
+                )));
+            }
         }
         let sv = &s.solver;
         if !(sv.residual_tolerance > 0.0 && sv.residual_tolerance < 1.0) {
@@ -632,6 +709,60 @@ impl LoadedScene {
             }
         }
         Ok(analysis)
+    }
+
+    /// The constitutive law of material `i`, each parameter checked against what is valid
+    /// and refused at its own place in the file.
+    fn law(&self, i: usize, m: &MaterialSpec) -> Result<Arc<dyn ConstitutiveLaw>, SceneError> {
+        let at = |key: &'static str| [Seg::Key("materials"), Seg::Index(i), Seg::Key("law"), Seg::Key(key)];
+        let check = |key: &'static str, value: f64, ok: bool, valid: &str| {
+            if ok && value.is_finite() {
+                Ok(())
+            } else {
+                Err(self.error(&at(key), format!("material \"{}\": {key} = {value}; it must be {valid}", m.name)))
+            }
+        };
+        let (young, poisson) = match m.law {
+            LawSpec::Elastic { young, poisson }
+            | LawSpec::VonMises { young, poisson, .. }
+            | LawSpec::MohrCoulomb { young, poisson, .. } => (young, poisson),
+        };
+        check("young", young, young > 0.0, "positive (Young's modulus)")?;
+        check("poisson", poisson, poisson > -1.0 && poisson < 0.5, "in (-1, 0.5) (Poisson's ratio)")?;
+        let elastic = Elastic::new(young, poisson).map_err(|e| self.error(&at("young"), e.to_string()))?;
+        // Whatever the law still refuses (checked combinations) is reported at the law.
+        let refused = |e: loam_constitutive::ConstitutiveError| {
+            self.error(&[Seg::Key("materials"), Seg::Index(i), Seg::Key("law")], format!("material \"{}\": {e}", m.name))
+        };
+        Ok(match m.law {
+            LawSpec::Elastic { .. } => Arc::new(elastic),
+            LawSpec::VonMises { yield_stress, hardening, residual_yield_stress, .. } => {
+                check("yield_stress", yield_stress, yield_stress > 0.0, "positive")?;
+                let (_, mu) = elastic.lame();
+                check("hardening", hardening, hardening > -3.0 * mu, "above −3G (a hardening modulus; negative softens)")?;
+                let mut law = VonMises::new(elastic, yield_stress, hardening).map_err(refused)?;
+                if let Some(r) = residual_yield_stress {
+                    check("residual_yield_stress", r, (0.0..=yield_stress).contains(&r), "between 0 and yield_stress")?;
+                    law = law.with_residual_yield_stress(r).map_err(refused)?;
+                }
+                Arc::new(law)
+            }
+            LawSpec::MohrCoulomb { cohesion, friction, dilation, tension_cutoff, softening, .. } => {
+                check("friction", friction, (0.0..90.0).contains(&friction), "in [0, 90) degrees (0 is Tresca)")?;
+                check("cohesion", cohesion, cohesion >= 0.0 && (cohesion > 0.0 || friction > 0.0), "≥ 0, and > 0 when friction = 0")?;
+                check("dilation", dilation, (0.0..=friction).contains(&dilation), "in [0, friction] degrees (= friction: associated flow)")?;
+                let mut law = MohrCoulomb::from_degrees(elastic, cohesion, friction, dilation).map_err(refused)?;
+                if let Some(t) = tension_cutoff {
+                    let apex = if friction > 0.0 { cohesion / friction.to_radians().tan() } else { f64::INFINITY };
+                    check("tension_cutoff", t, t <= apex, "at most c cot φ (the apex of the cone)")?;
+                    law = law.with_tension_cutoff(t).map_err(refused)?;
+                }
+                if let Some(sf) = softening {
+                    law = law.with_softening(sf.cohesion, sf.friction, sf.dilation, sf.plastic_strain).map_err(refused)?;
+                }
+                Arc::new(law)
+            }
+        })
     }
 
     /// The initial velocity field of body `i`.

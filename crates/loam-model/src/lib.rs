@@ -23,16 +23,47 @@ pub enum Kinematics {
     FiniteStrain,
 }
 
-/// A constraint on the nodes of a grid plane: the listed displacement components are held
-/// at zero. A roller fixes the component normal to the plane; a fixed plane all of them.
+/// A constraint on the nodes of a grid plane: the listed displacement components are
+/// prescribed — zero (a roller fixes the component normal to the plane, a fixed plane all
+/// of them), or `displacement` at full load, applied in proportion to the load factor
+/// (a footing pushed into the ground). `within` limits it to the nodes of the plane inside
+/// a box (all axes; the plane's own axis is ignored).
 #[derive(Debug, Clone, PartialEq)]
 pub struct PlaneConstraint {
     /// Axis normal to the plane.
     pub axis: usize,
     /// Index of the node plane along `axis`.
     pub plane: usize,
-    /// Which displacement components are fixed (first D entries used).
+    /// Which displacement components are prescribed (first D entries used).
     pub fixed: [bool; 3],
+    /// Prescribed displacement of the fixed components at full load (zero: held).
+    pub displacement: [f64; 3],
+    /// Only nodes with min ≤ x ≤ max (per axis, to within 1e-9 of a cell), if given.
+    pub within: Option<([f64; 3], [f64; 3])>,
+}
+
+impl PlaneConstraint {
+    /// Hold the `fixed` components of every node of the plane at zero.
+    pub fn new(axis: usize, plane: usize, fixed: [bool; 3]) -> Self {
+        Self { axis, plane, fixed, displacement: [0.0; 3], within: None }
+    }
+
+    /// Prescribe `displacement` (at full load) on the fixed components instead of zero.
+    pub fn displaced(mut self, displacement: [f64; 3]) -> Self {
+        self.displacement = displacement;
+        self
+    }
+
+    /// Only the nodes of the plane inside the box [min, max].
+    pub fn within(mut self, min: [f64; 3], max: [f64; 3]) -> Self {
+        self.within = Some((min, max));
+        self
+    }
+
+    /// Whether the constraint prescribes a non-zero displacement.
+    pub fn is_displaced(&self) -> bool {
+        self.displacement.iter().zip(&self.fixed).any(|(d, &f)| f && *d != 0.0)
+    }
 }
 
 /// Errors in assembling a model.
@@ -147,14 +178,39 @@ impl<const D: usize> Model<D> {
     /// of constraint `c`: a grid node on that node plane, or a mesh node that started on it
     /// (within 1e-9 of a cell).
     fn node_on_plane(&self, node: usize, c: &PlaneConstraint) -> bool {
-        match &self.mesh {
-            None => self.grid.node_coords(node)[c.axis] == c.plane,
+        let h = self.grid.cell_size();
+        let (on_plane, x) = match &self.mesh {
+            None => (self.grid.node_coords(node)[c.axis] == c.plane, self.grid.node_position(node)),
             Some(mesh) => {
-                let h = self.grid.cell_size()[c.axis];
-                let plane = self.grid.origin()[c.axis] + c.plane as f64 * h;
-                (mesh.reference_positions()[node][c.axis] - plane).abs() <= 1e-9 * h
+                let x = mesh.reference_positions()[node];
+                let plane = self.grid.origin()[c.axis] + c.plane as f64 * h[c.axis];
+                ((x[c.axis] - plane).abs() <= 1e-9 * h[c.axis], x)
+            }
+        };
+        on_plane
+            && c.within.is_none_or(|(lo, hi)| {
+                (0..D).all(|a| a == c.axis || (x[a] >= lo[a] - 1e-9 * h[a] && x[a] <= hi[a] + 1e-9 * h[a]))
+            })
+    }
+
+    /// The prescribed displacement increments of a step from load factor `from` to `to`
+    /// on the constrained dofs (zero elsewhere), into `out` (sized like `constrained`).
+    pub fn prescribed_increment(&self, active: &ActiveNodes, from: f64, to: f64, out: &mut [f64]) {
+        out.iter_mut().for_each(|v| *v = 0.0);
+        for c in self.constraints.iter().filter(|c| c.is_displaced()) {
+            for (a, &g) in active.active_to_grid.iter().enumerate() {
+                if self.node_on_plane(g as usize, c) {
+                    for i in (0..D).filter(|&i| c.fixed[i]) {
+                        out[a * D + i] = (to - from) * c.displacement[i];
+                    }
+                }
             }
         }
+    }
+
+    /// The nodes (active indices) each constraint holds.
+    pub fn constraint_nodes(&self, active: &ActiveNodes, c: &PlaneConstraint) -> Vec<usize> {
+        (0..active.len()).filter(|&a| self.node_on_plane(active.active_to_grid[a] as usize, c)).collect()
     }
 
     /// Whether every material in use has a symmetric algorithmic tangent (so Cholesky

@@ -17,7 +17,7 @@ pub fn elastic(young: f64, poisson: f64) -> Arc<dyn ConstitutiveLaw> {
 pub fn roller(axis: usize, plane: usize) -> PlaneConstraint {
     let mut fixed = [false; 3];
     fixed[axis] = true;
-    PlaneConstraint { axis, plane, fixed }
+    PlaneConstraint::new(axis, plane, fixed)
 }
 
 /// One elastic material filling `shapes` with `ppc`² points per cell, no constraints or
