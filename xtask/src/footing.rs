@@ -28,18 +28,23 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
     for phi in [0.0, 10.0, 20.0, 30.0] {
         laws.push((format!("Mohr–Coulomb φ = ψ = {phi}°"), Arc::new(MohrCoulomb::from_degrees(elastic, C, phi, phi)?), prandtl_nc(phi)));
     }
+    let mut residuals = Vec::new();
     for (name, law, nc) in &laws {
         for &cells in meshes {
             eprintln!("verify: V3 {name}, {cells} cells per b");
             let mut qs = QuasiStatic::new(footing_model(law.clone(), cells, 10, 5, 0.1), QuasiStaticSettings { load_steps: 20, ..Default::default() });
             let t = Instant::now();
             let (mut q, mut max_its, mut cutbacks, mut failure) = (f64::NAN, 0, 0, None);
+            let mut mid_step = Vec::new();
             while !qs.is_finished() {
                 match qs.step() {
                     Ok(r) => {
                         q = -r.reactions[0][1];
                         max_its = max_its.max(r.iterations / r.substeps.max(1));
                         cutbacks += r.cutbacks;
+                        if r.step == 10 {
+                            mid_step = r.residuals;
+                        }
                     }
                     Err(e) => {
                         failure = Some(e.to_string());
@@ -54,8 +59,11 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
                 writeln!(md, "\n{name}, {cells} cells per b stopped: {f}\n")?;
             }
             report.rows.push(Row::info(format!("V3 {name} {cells}/b"), "q_over_q_ref_minus_1", ratio));
+            if cells == *meshes.last().unwrap() {
+                residuals.push(format!("- {name}, {cells} cells per b, step 10 (plastic): {}", mid_step.iter().map(|r| format!("{r:.1e}")).collect::<Vec<_>>().join(" → ")));
+            }
         }
     }
-    writeln!(md)?;
+    writeln!(md, "\nRelative residuals of one plastic load step on the finest mesh (the last sub-step if it was cut back):\n\n{}\n", residuals.join("\n"))?;
     Ok(())
 }
