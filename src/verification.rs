@@ -513,6 +513,7 @@ pub fn footing_model(
     width: usize,
     depth: usize,
     settlement: f64,
+    anti_locking: crate::model::AntiLocking,
 ) -> crate::model::Model<2> {
     use crate::grid::{BasisKind, Grid};
     use crate::model::{Kinematics, Model, PlaneConstraint};
@@ -535,6 +536,7 @@ pub fn footing_model(
         PlaneConstraint::new(1, 0, [true, true, false]),
     ];
     Model::new(grid, BasisKind::Linear, Kinematics::SmallStrain, points, vec![law], constraints, Vector2::zeros())
+        .and_then(|m| m.with_anti_locking(anti_locking))
         .expect("valid footing model")
 }
 

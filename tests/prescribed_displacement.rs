@@ -86,3 +86,36 @@ fn dynamics_refuses_a_prescribed_displacement() {
     let err = Dynamic::new(block(0.01, None), DynamicSettings::trapezoidal(0.1, 1.0)).err().unwrap();
     assert!(matches!(err, StepError::DisplacementInDynamics { index: 0 }), "{err}");
 }
+
+/// B-bar on a nearly incompressible elastic block (ν = 0.49): the same oedometric push
+/// gives the same exact stress (a uniform strain is unchanged by averaging), so B-bar
+/// costs nothing where there is no locking; and it converges in one Newton correction
+/// (linear problem, consistent tangent).
+#[test]
+fn bbar_leaves_a_uniform_strain_exact() {
+    let delta = 0.01;
+    let (e, nu) = (1000.0, 0.49);
+    let grid = Grid::new(Vector2::zeros(), Vector2::new(0.5, 0.5), [4, 9]).unwrap();
+    let mut points = PointStore::new();
+    points.fill(&grid, &Shape::Box { min: Vector2::zeros(), max: Vector2::new(2.0, 4.0) }, 2, 1.0, 0).unwrap();
+    let constraints = vec![
+        PlaneConstraint::new(1, 8, [false, true, false]).displaced([0.0, -delta, 0.0]),
+        PlaneConstraint::new(1, 0, [true, true, false]),
+        PlaneConstraint::new(0, 0, [true, false, false]),
+        PlaneConstraint::new(0, 4, [true, false, false]),
+    ];
+    let law = Elastic::new(e, nu).unwrap();
+    let model = Model::new(grid, BasisKind::Linear, Kinematics::SmallStrain, points, vec![Arc::new(law)], constraints, Vector2::zeros())
+        .unwrap()
+        .with_anti_locking(loam::model::AntiLocking::BBar)
+        .unwrap();
+    let mut qs = QuasiStatic::new(model, QuasiStaticSettings { load_steps: 1, ..Default::default() });
+    let r = qs.step().unwrap();
+    let m = e * (1.0 - nu) / ((1.0 + nu) * (1.0 - 2.0 * nu));
+    let sigma = -m * delta / 4.0;
+    for p in 0..qs.model().points.len() {
+        let s = qs.model().points.stress[p][(1, 1)];
+        assert!((s / sigma - 1.0).abs() < 1e-9, "point {p}: σ_yy {s} vs {sigma}");
+    }
+    assert!(r.iterations <= 2, "{} iterations", r.iterations);
+}

@@ -252,3 +252,14 @@ fn displacement_constraints_are_checked() {
     let e = check(&push("[None, Some(-0.1)]").replacen("QuasiStatic(load_steps: 40)", "ImplicitDynamic(time_step: 0.1, duration: 1.0)", 1)).unwrap_err();
     assert!(e.to_string().contains("QuasiStatic"), "{e}");
 }
+
+/// B-bar is refused where it does not apply (finite strain, GIMP), naming the key.
+#[test]
+fn bbar_needs_small_strain_and_the_linear_basis() {
+    let e = check(&GOOD.replacen("basis: Gimp,", "basis: Gimp,\n    anti_locking: BBar,", 1)).unwrap_err();
+    assert!(e.to_string().contains("small-strain") && e.line == line_of("basis: Gimp") + 1, "{e}");
+    let small = GOOD.replacen("kinematics: FiniteStrain,", "kinematics: SmallStrain,\n    anti_locking: BBar,", 1);
+    let e = check(&small).unwrap_err();
+    assert!(e.to_string().contains("Linear basis"), "{e}");
+    check(&small.replacen("basis: Gimp,", "basis: Linear,", 1)).unwrap();
+}

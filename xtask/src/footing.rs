@@ -6,7 +6,7 @@
 use crate::{Report, Row};
 use anyhow::Result;
 use loam::constitutive::{ConstitutiveLaw, Elastic, MohrCoulomb, VonMises};
-use loam::implicit::{QuasiStatic, QuasiStaticSettings};
+use loam::implicit::{AntiLocking, QuasiStatic, QuasiStaticSettings};
 use loam::verification::{footing_model, prandtl_nc};
 use std::fmt::Write as _;
 use std::sync::Arc;
@@ -29,10 +29,13 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
         laws.push((format!("Mohr–Coulomb φ = ψ = {phi}°"), Arc::new(MohrCoulomb::from_degrees(elastic, C, phi, phi)?), prandtl_nc(phi)));
     }
     let mut residuals = Vec::new();
+    let variants: &[(AntiLocking, &str)] = &[(AntiLocking::None, "plain"), (AntiLocking::BBar, "B-bar")];
     for (name, law, nc) in &laws {
+        for &(anti_locking, variant) in variants {
+        let name = &format!("{name}, {variant}");
         for &cells in meshes {
             eprintln!("verify: V3 {name}, {cells} cells per b");
-            let mut qs = QuasiStatic::new(footing_model(law.clone(), cells, 10, 5, 0.1), QuasiStaticSettings { load_steps: 20, ..Default::default() });
+            let mut qs = QuasiStatic::new(footing_model(law.clone(), cells, 10, 5, 0.1, anti_locking), QuasiStaticSettings { load_steps: 20, ..Default::default() });
             let t = Instant::now();
             let (mut q, mut max_its, mut cutbacks, mut failure) = (f64::NAN, 0, 0, None);
             let mut mid_step = Vec::new();
@@ -62,6 +65,7 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
             if cells == *meshes.last().unwrap() {
                 residuals.push(format!("- {name}, {cells} cells per b, step 10 (plastic): {}", mid_step.iter().map(|r| format!("{r:.1e}")).collect::<Vec<_>>().join(" → ")));
             }
+        }
         }
     }
     writeln!(md, "\nRelative residuals of one plastic load step on the finest mesh (the last sub-step if it was cut back):\n\n{}\n", residuals.join("\n"))?;

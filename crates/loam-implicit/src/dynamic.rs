@@ -215,12 +215,21 @@ impl<const D: usize> Dynamic<D> {
         let conn = &e.conn;
         let pts = &e.model.points;
         let mut f_int = vec![0.0; e.f_ext.len()];
+        let bbar = (e.model.anti_locking == loam_model::AntiLocking::BBar).then_some(&e.bbar);
+        let stride = conn.stride();
         gather_nodal(&PointCouplings(conn), D, &mut f_int, |p, a, out| {
             let g = &conn.support_gradients(p)[a];
             let s = &pts.stress[p];
             for i in 0..D {
                 for j in 0..D {
                     out[i] += pts.volume[p] * s[(i, j)] * g[j];
+                }
+            }
+            // B-bar's mean-stress term, as in the step residual.
+            if let Some(bbar) = bbar {
+                let d = bbar[p * stride + a] - g;
+                for i in 0..D {
+                    out[i] += pts.volume[p] * s.trace() / 3.0 * d[i];
                 }
             }
         });

@@ -8,7 +8,7 @@ use crate::step::{Inertia, PointCouplings, StepSystem, TrialState};
 use crate::step::PointUpdateError;
 use crate::StepError;
 use loam_grid::Connectivity;
-use loam_model::Model;
+use loam_model::{AntiLocking, Model};
 use loam_points::stretched_half_length;
 use loam_solve::{
     gather_nodal, BlockPattern, LinearSolverKind, NewtonError, NewtonReport, NewtonSettings, NewtonSolver,
@@ -30,6 +30,8 @@ pub(crate) struct Engine<const D: usize> {
     /// components, at the last committed state.
     pub reactions: Vec<[f64; 3]>,
     pub du: Vec<f64>,
+    /// B-bar: the cell-averaged support gradients, `stride` per point (empty without it).
+    pub bbar: Vec<SVector<f64, D>>,
     pub trial: TrialState<D>,
     pub newton: NewtonSolver,
 }
@@ -56,6 +58,7 @@ impl<const D: usize> Engine<D> {
             reaction: Vec::new(),
             reactions: Vec::new(),
             du: Vec::new(),
+            bbar: Vec::new(),
             trial: TrialState::default(),
             newton: NewtonSolver::new(newton, SparseDirectSolver::new(kind)),
         }
@@ -77,6 +80,9 @@ impl<const D: usize> Engine<D> {
         }
         self.pattern.update(&PointCouplings(&self.conn));
         self.model.constrained_dofs(self.conn.active_nodes(), &mut self.constrained);
+        if self.model.anti_locking == AntiLocking::BBar {
+            cell_averaged_gradients(&self.model, &self.conn, &mut self.bbar);
+        }
         self.conn_current = true;
         Ok(())
     }
@@ -133,6 +139,7 @@ impl<const D: usize> Engine<D> {
             reaction: &mut self.reaction,
             trial: &mut self.trial,
             inertia,
+            bbar: (self.model.anti_locking == AntiLocking::BBar).then_some(self.bbar.as_slice()),
         };
         (system, &mut self.du, &mut self.newton)
     }
@@ -193,6 +200,39 @@ impl<const D: usize> Engine<D> {
             pts.history.copy_from_slice(&trial.history[..n]);
         }
         self.conn_current = false;
+    }
+}
+
+/// B-bar's b̄ of every point's support slot: Σ_q v_q ∂N_a(x_q) / Σ_q v_q over the points q
+/// of its averaging cell (docs/theory.md §13), `stride` per point. Points are grouped by
+/// sorting on the cell, so the sums run in a fixed order (deterministic).
+pub(crate) fn cell_averaged_gradients<const D: usize>(model: &Model<D>, conn: &Connectivity<D>, out: &mut Vec<SVector<f64, D>>) {
+    let n = model.points.len();
+    let stride = conn.stride();
+    let mut order: Vec<(usize, usize)> = (0..n).map(|p| (model.averaging_cell(p), p)).collect();
+    order.sort_unstable();
+    out.clear();
+    out.resize(n * stride, SVector::zeros());
+    let mut sums: Vec<(u32, SVector<f64, D>)> = Vec::new();
+    for group in order.chunk_by(|a, b| a.0 == b.0) {
+        sums.clear();
+        let mut volume = 0.0;
+        for &(_, p) in group {
+            let v = model.points.volume[p];
+            volume += v;
+            for (&node, g) in conn.support_nodes(p).iter().zip(conn.support_gradients(p)) {
+                match sums.iter_mut().find(|(m, _)| *m == node) {
+                    Some((_, s)) => *s += g * v,
+                    None => sums.push((node, g * v)),
+                }
+            }
+        }
+        for &(_, p) in group {
+            for (k, node) in conn.support_nodes(p).iter().enumerate() {
+                let s = sums.iter().find(|(m, _)| m == node).map_or(SVector::zeros(), |(_, s)| *s);
+                out[p * stride + k] = s / volume;
+            }
+        }
     }
 }
 

@@ -8,7 +8,7 @@ mod engine;
 mod quasi_static;
 mod step;
 
-pub use loam_model::{Kinematics, Model, ModelError, PlaneConstraint};
+pub use loam_model::{AntiLocking, Kinematics, Model, ModelError, PlaneConstraint};
 pub use dynamic::{Dynamic, DynamicSettings, MassMatrix};
 pub use quasi_static::{IterationProfile, QuasiStatic, QuasiStaticSettings, RunError, StepError, StepReport};
 pub use step::PointUpdateError;

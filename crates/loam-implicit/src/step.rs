@@ -36,6 +36,9 @@ pub(crate) struct TrialState<const D: usize> {
     pub tangent: Vec<SMatrix<f64, 9, 9>>,
     /// Spatial gradients ∂N/∂x, `stride` per point.
     pub grad_x: Vec<SVector<f64, D>>,
+    /// B-bar only: v (I : D) and v (D : I) as 3×3 and v (I : D : I), the volumetric
+    /// contractions of the point's tangent that the averaged dilatation couples through.
+    pub volumetric: Vec<(Matrix3<f64>, Matrix3<f64>, f64)>,
 }
 
 impl<const D: usize> TrialState<D> {
@@ -48,6 +51,7 @@ impl<const D: usize> TrialState<D> {
         self.volume.resize(n_points, 0.0);
         self.tangent.resize(n_points, SMatrix::zeros());
         self.grad_x.resize(n_points * stride, SVector::zeros());
+        self.volumetric.resize(n_points, (Matrix3::zeros(), Matrix3::zeros(), 0.0));
     }
 }
 
@@ -92,6 +96,9 @@ pub(crate) struct StepSystem<'a, const D: usize> {
     pub trial: &'a mut TrialState<D>,
     /// Inertia of a dynamic step; `None` in quasi-static analysis.
     pub inertia: Option<Inertia<'a>>,
+    /// B-bar: the volume-averaged gradient b̄ of each point's support slot over its cell
+    /// (element), `stride` per point (THEORY: docs/theory.md §13); `None` without it.
+    pub bbar: Option<&'a [SVector<f64, D>]>,
 }
 
 /// Embed the in-plane displacement-increment gradient in 3×3 (plane strain: zero out of plane).
@@ -134,6 +141,7 @@ impl<const D: usize> StepSystem<'_, D> {
         let hs = pts.history_stride();
         let stride = conn.stride();
         let kin = model.kinematics;
+        let bbar = self.bbar;
         let t = &mut *self.trial;
         let hist_chunks = t.history.par_chunks_mut(hs.max(1));
         let first_error = (
@@ -145,9 +153,9 @@ impl<const D: usize> StepSystem<'_, D> {
             t.grad_x.par_chunks_mut(stride),
         )
             .into_par_iter()
-            .zip(hist_chunks)
+            .zip(hist_chunks.zip(t.volumetric.par_iter_mut()))
             .enumerate()
-            .filter_map(|(p, ((df, stress, elastic, volume, tangent, grad_x), h_out))| {
+            .filter_map(|(p, ((df, stress, elastic, volume, tangent, grad_x), (h_out, vol_terms)))| {
                 let nodes = conn.support_nodes(p);
                 let grads = conn.support_gradients(p);
                 let mut g = SMatrix::<f64, D, D>::zeros();
@@ -180,7 +188,18 @@ impl<const D: usize> StepSystem<'_, D> {
                         *tangent = in_plane::<D>(&upd.spatial_tangent, *volume);
                     }
                     Kinematics::SmallStrain => {
-                        let g3 = embed(&g);
+                        let mut g3 = embed(&g);
+                        if let Some(bbar) = bbar {
+                            // ε̄ = ε + (θ̄ − θ)/3 I with θ̄ = Σ_a u_a · b̄_a (Hughes 1980).
+                            let bb = &bbar[p * stride..p * stride + nodes.len()];
+                            let theta_bar: f64 = nodes
+                                .iter()
+                                .zip(bb)
+                                .map(|(&node, b)| (0..D).map(|i| du[node as usize * D + i] * b[i]).sum::<f64>())
+                                .sum();
+                            let theta = g.trace();
+                            g3 += Matrix3::identity() * ((theta_bar - theta) / 3.0);
+                        }
                         let upd = match small_strain_update(law, &g3, &pts.elastic_strain[p], h_n, h_out) {
                             Ok(u) => u,
                             Err(source) => return Some(PointUpdateError { point: p, source }),
@@ -191,6 +210,14 @@ impl<const D: usize> StepSystem<'_, D> {
                         *elastic = upd.elastic_strain;
                         *volume = pts.volume[p];
                         *tangent = in_plane::<D>(&upd.tangent, *volume);
+                        if bbar.is_some() {
+                            let a = &upd.tangent;
+                            let v = *volume;
+                            let id = Matrix3::from_fn(|k, l| v * (0..3).map(|m| a[(4 * m, 3 * k + l)]).sum::<f64>());
+                            let di = Matrix3::from_fn(|i, j| v * (0..3).map(|m| a[(3 * i + j, 4 * m)]).sum::<f64>());
+                            let idi = v * (0..3).flat_map(|m| (0..3).map(move |n| (m, n))).map(|(m, n)| a[(4 * m, 4 * n)]).sum::<f64>();
+                            *vol_terms = (id, di, idi);
+                        }
                     }
                 }
                 None
@@ -249,6 +276,7 @@ impl<const D: usize> NewtonProblem for StepSystem<'_, D> {
         let trial = &*self.trial;
         let conn = self.conn;
         let stride = conn.stride();
+        let bbar = self.bbar;
         gather_nodal(&PointCouplings(conn), D, r, |p, a, out| {
             let s = &trial.stress[p];
             let g = &trial.grad_x[p * stride + a];
@@ -259,6 +287,14 @@ impl<const D: usize> NewtonProblem for StepSystem<'_, D> {
                     f += s[(i, j)] * g[j];
                 }
                 out[i] += v * f;
+            }
+            // B-bar: σ : (⅓ (b̄_a − ∂N_a) ⊗ e_i) I adds the mean stress times b̄ − ∂N.
+            if let Some(bbar) = bbar {
+                let d = bbar[p * stride + a] - g;
+                let mean = v * s.trace() / 3.0;
+                for i in 0..D {
+                    out[i] += mean * d[i];
+                }
             }
         });
         // r = M x + f_int − f_ext; the reference is the external and inertial force on
@@ -301,6 +337,7 @@ impl<const D: usize> NewtonProblem for StepSystem<'_, D> {
         // Inertia adds c m_p N_a N_b (consistent) or c m_p N_a on the diagonal block
         // (lumped: the row sum) to every component.
         let inertia = self.inertia.as_ref().map(|i| (i.factor, i.consistent));
+        let bbar = self.bbar;
         self.pattern.assemble(&PointCouplings(conn), self.constrained, self.values, |p, a, b, out| {
             if let Some((c, consistent)) = inertia {
                 let n = conn.support_values(p);
@@ -311,6 +348,23 @@ impl<const D: usize> NewtonProblem for StepSystem<'_, D> {
             }
             let ga = &trial.grad_x[p * stride + a];
             let gb = &trial.grad_x[p * stride + b];
+            if let Some(bbar) = bbar {
+                // E_a,i = e_i ⊗ ∂N_a + ⅓ d_a,i I with d = b̄ − ∂N: the cross and
+                // volumetric terms of E_a,i : D : E_b,k beside the plain one below.
+                let (id, di, idi) = &trial.volumetric[p];
+                let da = bbar[p * stride + a] - ga;
+                let db = bbar[p * stride + b] - gb;
+                for i in 0..D {
+                    for k in 0..D {
+                        let mut s = idi * da[i] * db[k] / 9.0;
+                        for l in 0..D {
+                            s += da[i] * id[(k, l)] * gb[l] / 3.0;
+                            s += db[k] * ga[l] * di[(i, l)] / 3.0;
+                        }
+                        out[i * D + k] += s;
+                    }
+                }
+            }
             let t = &trial.tangent[p];
             for i in 0..D {
                 for k in 0..D {
@@ -334,7 +388,7 @@ impl<const D: usize> NewtonProblem for StepSystem<'_, D> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{PlaneConstraint, QuasiStatic, QuasiStaticSettings};
+    use crate::{AntiLocking, PlaneConstraint, QuasiStatic, QuasiStaticSettings};
     use loam_constitutive::Elastic;
     use loam_grid::{BasisKind, Grid};
     use loam_points::{PointStore, Shape};
@@ -342,14 +396,16 @@ mod tests {
     use std::sync::Arc;
 
     /// A 2×2-cell block on a 5×5 grid, GIMP, pre-loaded by gravity to a stressed state.
-    fn stressed_block(kinematics: Kinematics) -> Model<2> {
+    fn stressed_block_with(kinematics: Kinematics, basis: BasisKind, anti_locking: AntiLocking) -> Model<2> {
         let grid = Grid::new(Vector2::zeros(), Vector2::new(1.0, 1.0), [5, 5]).unwrap();
         let mut points = PointStore::new();
         let shape = Shape::Box { min: Vector2::new(1.0, 0.0), max: Vector2::new(3.0, 2.0) };
         points.fill(&grid, &shape, 2, 1000.0, 0).unwrap();
         let law = Elastic::new(1e5, 0.3).unwrap();
         let fixed = PlaneConstraint::new(1, 0, [true, true, false]);
-        let model = Model::new(grid, BasisKind::Gimp, kinematics, points, vec![Arc::new(law)], vec![fixed], Vector2::new(3.0, -10.0))
+        let model = Model::new(grid, basis, kinematics, points, vec![Arc::new(law)], vec![fixed], Vector2::new(3.0, -10.0))
+            .unwrap()
+            .with_anti_locking(anti_locking)
             .unwrap();
         let mut qs = QuasiStatic::new(model, QuasiStaticSettings { load_steps: 2, ..Default::default() });
         qs.step().unwrap();
@@ -374,8 +430,13 @@ mod tests {
     /// residual of magnitude ~1e3 carry truncation ~1e-10 and rounding ~1e-9 relative.
     #[test]
     fn assembled_tangent_is_the_derivative_of_the_residual() {
-        for kinematics in [Kinematics::FiniteStrain, Kinematics::SmallStrain] {
-            let model = stressed_block(kinematics);
+        let cases = [
+            (Kinematics::FiniteStrain, BasisKind::Gimp, AntiLocking::None),
+            (Kinematics::SmallStrain, BasisKind::Gimp, AntiLocking::None),
+            (Kinematics::SmallStrain, BasisKind::Linear, AntiLocking::BBar),
+        ];
+        for (kinematics, basis, anti_locking) in cases {
+            let model = stressed_block_with(kinematics, basis, anti_locking);
             let mut conn = Connectivity::new(model.basis);
             conn.compute(&model.grid, &model.points.position, &model.points.half_length).unwrap();
             let mut pattern = BlockPattern::new(2);
@@ -386,6 +447,8 @@ mod tests {
             let mut values = Vec::new();
             let mut trial = TrialState::default();
             trial.resize(model.points.len(), conn.stride(), model.points.history_stride());
+            let mut bbar = Vec::new();
+            crate::engine::cell_averaged_gradients(&model, &conn, &mut bbar);
             let mut sys = StepSystem {
                 model: &model,
                 conn: &conn,
@@ -396,6 +459,7 @@ mod tests {
                 reaction: &mut Vec::new(),
                 trial: &mut trial,
                 inertia: None,
+                bbar: (anti_locking == AntiLocking::BBar).then_some(bbar.as_slice()),
             };
             // A finite increment (up to 2 % of a cell) so that ΔF ≠ I.
             let du: Vec<f64> = noise(n, 7).iter().map(|x| 0.02 * x).collect();
@@ -412,7 +476,7 @@ mod tests {
             pattern.mul_vec(sys.values, &v, &mut kv);
             let diff: f64 = kv.iter().zip(rp.iter().zip(&rm)).map(|(k, (p, m))| (k - (p - m) / (2.0 * eps)).powi(2)).sum::<f64>().sqrt();
             let scale: f64 = kv.iter().map(|k| k * k).sum::<f64>().sqrt();
-            assert!(diff <= 1e-6 * scale, "{kinematics:?}: |Kv - FD| / |Kv| = {:e}", diff / scale);
+            assert!(diff <= 1e-6 * scale, "{kinematics:?} {anti_locking:?}: |Kv - FD| / |Kv| = {:e}", diff / scale);
             // Hyperelastic (Hencky) and linear elastic tangents are symmetric as a whole.
             let asym = pattern.asymmetry(sys.values);
             assert!(asym < 1e-10, "{kinematics:?}: asymmetry {asym:e}");

@@ -8,7 +8,7 @@ use loam_grid::{BasisKind, FeMesh, Grid, MeshError};
 use crate::analysis::{Analysis, AnalysisError};
 use loam_explicit::{Explicit, ExplicitError, ExplicitSettings, TimeStep, UpdateScheme};
 use loam_implicit::{
-    Dynamic, DynamicSettings, Kinematics, MassMatrix, Model, PlaneConstraint, QuasiStatic, QuasiStaticSettings, StepError,
+    AntiLocking, Dynamic, DynamicSettings, Kinematics, MassMatrix, Model, PlaneConstraint, QuasiStatic, QuasiStaticSettings, StepError,
 };
 use loam_points::{PointStore, Shape};
 use loam_solve::{LinearSolverKind, NewtonSettings};
@@ -34,6 +34,10 @@ pub struct Scene {
     /// The material point method (default), or the updated Lagrangian FEM reference.
     #[serde(default)]
     pub method: MethodSpec,
+    /// Volumetric-locking treatment: `None` (default) or `BBar` (small strain; linear
+    /// basis or the FEM reference).
+    #[serde(default)]
+    pub anti_locking: AntiLockingSpec,
     pub materials: Vec<MaterialSpec>,
     pub bodies: Vec<BodySpec>,
     /// Body force per unit mass at full load; D components.
@@ -59,6 +63,15 @@ pub struct GridSpec {
 pub enum BasisSpec {
     Linear,
     Gimp,
+}
+
+/// Volumetric-locking treatment.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+pub enum AntiLockingSpec {
+    #[default]
+    None,
+    /// B-bar: each point's dilatation averaged over its cell (element).
+    BBar,
 }
 
 /// How the bodies are discretised.
@@ -623,6 +636,12 @@ impl LoadedScene {
                 model
             }
         };
+        let model = model
+            .with_anti_locking(match s.anti_locking {
+                AntiLockingSpec::None => AntiLocking::None,
+                AntiLockingSpec::BBar => AntiLocking::BBar,
+            })
+            .map_err(|e| self.error(&[Seg::Key("anti_locking")], e.to_string()))?;
         let at_analysis = |key: &'static str| [Seg::Key("analysis"), Seg::Key(key)];
         let mut analysis = match s.analysis {
             AnalysisSpec::QuasiStatic { load_steps, max_cutbacks } => {

@@ -23,6 +23,19 @@ pub enum Kinematics {
     FiniteStrain,
 }
 
+/// Treatment of volumetric locking (near-incompressible elastic or plastic flow).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum AntiLocking {
+    /// The plain formulation: every point's own strain (full integration).
+    #[default]
+    None,
+    /// B-bar (Hughes 1980): each point's dilatation is replaced by the volume average over
+    /// the points of its cell (its element in the FEM reference), the deviatoric strain
+    /// kept. Small strain; linear basis or the FEM mesh, where all points of a cell share
+    /// its nodes so the average adds no couplings.
+    BBar,
+}
+
 /// A constraint on the nodes of a grid plane: the listed displacement components are
 /// prescribed — zero (a roller fixes the component normal to the plane, a fixed plane all
 /// of them), or `displacement` at full load, applied in proportion to the load factor
@@ -79,6 +92,8 @@ pub enum ModelError {
     MeshBlock { block: usize, densities: usize, materials: usize },
     #[error("mesh block {block} has density {value}; it must be a positive number")]
     Density { block: usize, value: f64 },
+    #[error("{0}")]
+    AntiLocking(String),
     #[error("gravity component {axis} is {value}; it must be finite")]
     Gravity { axis: usize, value: f64 },
 }
@@ -99,6 +114,8 @@ pub struct Model<const D: usize> {
     /// The body-fitted mesh of an updated Lagrangian FEM run, whose Gauss points are the
     /// points; `None` for the MPM (see [`Model::updated_lagrangian_fem`]).
     pub mesh: Option<FeMesh<D>>,
+    /// Volumetric-locking treatment (set with [`Model::with_anti_locking`]).
+    pub anti_locking: AntiLocking,
 }
 
 impl<const D: usize> Model<D> {
@@ -135,7 +152,7 @@ impl<const D: usize> Model<D> {
         let stride = materials.iter().map(|m| m.history_len()).max().unwrap_or(0);
         let material = points.material.clone();
         points.init_history(stride, |p, h| materials[material[p] as usize].init_history(h));
-        Ok(Self { grid, basis, kinematics, points, materials, constraints, gravity, point_forces: Vec::new(), mesh: None })
+        Ok(Self { grid, basis, kinematics, points, materials, constraints, gravity, point_forces: Vec::new(), mesh: None, anti_locking: AntiLocking::None })
     }
 
     /// The updated Lagrangian FEM reference on the same grid planes, laws and loads: the
@@ -172,6 +189,41 @@ impl<const D: usize> Model<D> {
         let mut model = Self::new(grid, BasisKind::Linear, kinematics, points, materials, constraints, gravity)?;
         model.mesh = Some(mesh);
         Ok(model)
+    }
+
+    /// Use the given anti-locking treatment; B-bar needs small strain and the linear basis
+    /// (or the FEM mesh).
+    pub fn with_anti_locking(mut self, anti_locking: AntiLocking) -> Result<Self, ModelError> {
+        if anti_locking == AntiLocking::BBar {
+            if self.kinematics != Kinematics::SmallStrain {
+                return Err(ModelError::AntiLocking("B-bar is a small-strain treatment; use kinematics SmallStrain".into()));
+            }
+            if self.mesh.is_none() && self.basis != BasisKind::Linear {
+                return Err(ModelError::AntiLocking(
+                    "B-bar averages over the points of a cell, which share their nodes only with the Linear basis".into(),
+                ));
+            }
+        }
+        self.anti_locking = anti_locking;
+        Ok(self)
+    }
+
+    /// The volume-averaging group of every point for B-bar: its grid cell (the face rule
+    /// of the basis: a cell owns [x_i, x_{i+1})), or its element in the FEM reference.
+    pub fn averaging_cell(&self, p: usize) -> usize {
+        if let Some(mesh) = &self.mesh {
+            return p / mesh.gauss_per_element();
+        }
+        let x = &self.points.position[p];
+        let cells = self.grid.cells();
+        let (mut idx, mut stride) = (0, 1);
+        for a in 0..D {
+            let xi = ((x[a] - self.grid.origin()[a]) / self.grid.cell_size()[a]).floor();
+            let i = (xi.max(0.0) as usize).min(cells[a] - 1);
+            idx += i * stride;
+            stride *= cells[a];
+        }
+        idx
     }
 
     /// Whether node `node` (grid node index in MPM, mesh node index in FEM) lies on the plane
