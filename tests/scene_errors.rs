@@ -263,3 +263,13 @@ fn bbar_needs_small_strain_and_the_linear_basis() {
     assert!(e.to_string().contains("Linear basis"), "{e}");
     check(&small.replacen("basis: Gimp,", "basis: Linear,", 1)).unwrap();
 }
+
+/// A geostatic start is checked against the laws: an elastic column takes any K0 > 0, a
+/// non-positive K0 is refused at its key.
+#[test]
+fn geostatic_initial_stress_is_checked() {
+    let k0 = |v: &str| GOOD.replacen("basis: Gimp,", &format!("basis: Gimp,\n    initial_stress: Geostatic(k0: {v}),"), 1);
+    check(&k0("0.5")).unwrap();
+    let e = check(&k0("-0.5")).unwrap_err();
+    assert!(e.to_string().contains("K0 is -0.5") && e.line == line_of("basis: Gimp") + 1, "{e}");
+}

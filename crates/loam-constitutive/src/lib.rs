@@ -87,6 +87,11 @@ pub trait ConstitutiveLaw: Send + Sync + std::fmt::Debug {
         h_n: &[f64],
         h_out: &mut [f64],
     ) -> Result<StressUpdate, ConstitutiveError>;
+    /// The law's isotropic elasticity, if it has one: initial stress states (K0) are turned
+    /// into elastic strains with it.
+    fn elasticity(&self) -> Option<Elastic> {
+        None
+    }
     /// P-wave (constrained) modulus λ + 2μ: the stiffness of the explicit CFL condition
     /// (THEORY §9) and of stiffness scaling.
     fn p_wave_modulus(&self) -> f64;

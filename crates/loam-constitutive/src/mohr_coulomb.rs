@@ -1014,6 +1014,10 @@ fn in_cone(v: &Vector3<f64>, gens: &[Vector3<f64>]) -> bool {
 }
 
 impl ConstitutiveLaw for MohrCoulomb {
+    fn elasticity(&self) -> Option<Elastic> {
+        Some(self.elastic)
+    }
+
     fn name(&self) -> &'static str {
         "mohr-coulomb"
     }

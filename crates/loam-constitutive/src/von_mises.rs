@@ -184,6 +184,10 @@ impl VonMises {
 }
 
 impl ConstitutiveLaw for VonMises {
+    fn elasticity(&self) -> Option<Elastic> {
+        Some(self.elastic)
+    }
+
     fn name(&self) -> &'static str {
         "von-mises"
     }

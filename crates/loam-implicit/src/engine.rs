@@ -112,9 +112,9 @@ impl<const D: usize> Engine<D> {
         self.f_ext.resize(conn.active_nodes().len() * D, 0.0);
         gather_nodal(&PointCouplings(conn), D, &mut self.f_ext, |p, a, out| {
             let n = conn.support_values(p)[a];
-            let f = model.point_load(p);
+            let f = model.point_load_at(p, lambda);
             for i in 0..D {
-                out[i] += lambda * n * f[i];
+                out[i] += n * f[i];
             }
         });
     }

@@ -38,6 +38,10 @@ pub struct Scene {
     /// basis or the FEM reference).
     #[serde(default)]
     pub anti_locking: AntiLockingSpec,
+    /// Initial stress: `None` (default: unstressed, gravity applied with the load factor)
+    /// or `Geostatic(k0: ..)` (level or layered ground; gravity acts in full from the start).
+    #[serde(default)]
+    pub initial_stress: InitialStressSpec,
     pub materials: Vec<MaterialSpec>,
     pub bodies: Vec<BodySpec>,
     /// Body force per unit mass at full load; D components.
@@ -63,6 +67,15 @@ pub struct GridSpec {
 pub enum BasisSpec {
     Linear,
     Gimp,
+}
+
+/// Initial stress of the points.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Default)]
+pub enum InitialStressSpec {
+    #[default]
+    None,
+    /// σ_v = weight of the material above, σ_h = k0 σ_v.
+    Geostatic { k0: f64 },
 }
 
 /// Volumetric-locking treatment.
@@ -642,6 +655,10 @@ impl LoadedScene {
                 AntiLockingSpec::BBar => AntiLocking::BBar,
             })
             .map_err(|e| self.error(&[Seg::Key("anti_locking")], e.to_string()))?;
+        let mut model = model;
+        if let InitialStressSpec::Geostatic { k0 } = s.initial_stress {
+            model.geostatic_stress(k0).map_err(|e| self.error(&[Seg::Key("initial_stress")], e.to_string()))?;
+        }
         let at_analysis = |key: &'static str| [Seg::Key("analysis"), Seg::Key(key)];
         let mut analysis = match s.analysis {
             AnalysisSpec::QuasiStatic { load_steps, max_cutbacks } => {

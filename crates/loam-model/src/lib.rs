@@ -94,6 +94,8 @@ pub enum ModelError {
     Density { block: usize, value: f64 },
     #[error("{0}")]
     AntiLocking(String),
+    #[error("geostatic initial stress: {0}")]
+    Geostatic(String),
     #[error("gravity component {axis} is {value}; it must be finite")]
     Gravity { axis: usize, value: f64 },
 }
@@ -116,6 +118,10 @@ pub struct Model<const D: usize> {
     pub mesh: Option<FeMesh<D>>,
     /// Volumetric-locking treatment (set with [`Model::with_anti_locking`]).
     pub anti_locking: AntiLocking,
+    /// Gravity acts in full from the start (the points carry a geostatic initial stress,
+    /// [`Model::geostatic_stress`]); only point forces and prescribed displacements follow
+    /// the load factor.
+    pub gravity_preloaded: bool,
 }
 
 impl<const D: usize> Model<D> {
@@ -152,7 +158,7 @@ impl<const D: usize> Model<D> {
         let stride = materials.iter().map(|m| m.history_len()).max().unwrap_or(0);
         let material = points.material.clone();
         points.init_history(stride, |p, h| materials[material[p] as usize].init_history(h));
-        Ok(Self { grid, basis, kinematics, points, materials, constraints, gravity, point_forces: Vec::new(), mesh: None, anti_locking: AntiLocking::None })
+        Ok(Self { grid, basis, kinematics, points, materials, constraints, gravity, point_forces: Vec::new(), mesh: None, anti_locking: AntiLocking::None, gravity_preloaded: false })
     }
 
     /// The updated Lagrangian FEM reference on the same grid planes, laws and loads: the
@@ -297,11 +303,107 @@ impl<const D: usize> Model<D> {
     /// Dead load on point `p` at full load: gravity on its mass plus its point force.
     #[inline]
     pub fn point_load(&self, p: usize) -> SVector<f64, D> {
-        let f = self.gravity * self.points.mass[p];
+        self.point_load_at(p, 1.0)
+    }
+
+    /// Dead load on point `p` at load factor `lambda`: gravity scaled with it (in full when
+    /// preloaded by a geostatic stress) plus the scaled point force.
+    #[inline]
+    pub fn point_load_at(&self, p: usize, lambda: f64) -> SVector<f64, D> {
+        let g = if self.gravity_preloaded { 1.0 } else { lambda };
+        let f = self.gravity * (g * self.points.mass[p]);
         match self.point_forces.get(p) {
-            Some(fp) => f + fp,
+            Some(fp) => f + fp * lambda,
             None => f,
         }
+    }
+
+    /// Put the points in a geostatic initial stress: the vertical stress is the weight of
+    /// the material above each point in its grid column, σ_v = −|g| Σ m / A (A the column's
+    /// horizontal area; points at the same height count half), the horizontal ones K0 σ_v,
+    /// with the elastic strain that carries it (small strain ε^e = C⁻¹σ, finite strain
+    /// b^e = exp(2 C⁻¹σ)). Gravity then acts in full from the start
+    /// (`gravity_preloaded`). K0 applies to level or layered ground; a slope is brought to
+    /// equilibrium by gravity loading instead. Fails if gravity is not along one axis, a
+    /// law has no isotropic elasticity, or the state lies outside a yield surface.
+    pub fn geostatic_stress(&mut self, k0: f64) -> Result<(), ModelError> {
+        if !(k0.is_finite() && k0 > 0.0) {
+            return Err(ModelError::Geostatic(format!("K0 is {k0}; it must be a positive number")));
+        }
+        let vertical = (0..D).max_by(|&a, &b| self.gravity[a].abs().total_cmp(&self.gravity[b].abs())).unwrap_or(0);
+        let g = self.gravity[vertical];
+        if g == 0.0 || (0..D).any(|a| a != vertical && self.gravity[a] != 0.0) {
+            return Err(ModelError::Geostatic("a geostatic stress needs gravity along one axis".into()));
+        }
+        // Down is the direction of gravity; "above" is against it.
+        let up = -g.signum();
+        let h = self.grid.cell_size();
+        let area: f64 = (0..D).filter(|&a| a != vertical).map(|a| h[a]).product();
+        let pts = &self.points;
+        let n = pts.len();
+        let column = |p: usize| -> usize {
+            let (mut idx, mut stride) = (0usize, 1usize);
+            for a in (0..D).filter(|&a| a != vertical) {
+                let i = ((pts.position[p][a] - self.grid.origin()[a]) / h[a]).floor().max(0.0) as usize;
+                idx += i.min(self.grid.cells()[a] - 1) * stride;
+                stride *= self.grid.cells()[a];
+            }
+            idx
+        };
+        // Points sorted by column, then from the top down.
+        let mut order: Vec<usize> = (0..n).collect();
+        order.sort_by(|&a, &b| column(a).cmp(&column(b)).then((up * pts.position[b][vertical]).total_cmp(&(up * pts.position[a][vertical]))));
+        let tol = 1e-9 * h[vertical];
+        let mut sigma_v = vec![0.0; n];
+        for col in order.chunk_by(|&a, &b| column(a) == column(b)) {
+            let mut above = 0.0;
+            let mut k = 0;
+            while k < col.len() {
+                // The points of one row (same height).
+                let y = pts.position[col[k]][vertical];
+                let row_end = k + col[k..].iter().take_while(|&&q| (pts.position[q][vertical] - y).abs() <= tol).count();
+                let row_mass: f64 = col[k..row_end].iter().map(|&q| pts.mass[q]).sum();
+                for &q in &col[k..row_end] {
+                    sigma_v[q] = -g.abs() * (above + 0.5 * row_mass) / area;
+                }
+                above += row_mass;
+                k = row_end;
+            }
+        }
+        let hs = pts.history_stride();
+        let mut h_out = vec![0.0; hs];
+        let mut strains = Vec::with_capacity(n);
+        let mut stresses = Vec::with_capacity(n);
+        for (p, &sv) in sigma_v.iter().enumerate() {
+            let law = &self.materials[pts.material[p] as usize];
+            let Some(elastic) = law.elasticity() else {
+                return Err(ModelError::Geostatic(format!("material {} ({}) has no isotropic elasticity to carry an initial stress", pts.material[p], law.name())));
+            };
+            let mut sigma = Matrix3::identity() * (k0 * sv);
+            sigma[(vertical, vertical)] = sv;
+            let eps = elastic.strain(&sigma);
+            // Admissible: the law's own update from that elastic strain returns the stress.
+            let upd = law
+                .update(&eps, pts.history(p), &mut h_out)
+                .map_err(|e| ModelError::Geostatic(format!("point {p}: {e}")))?;
+            if (upd.stress - sigma).norm() > 1e-8 * sigma.norm().max(f64::MIN_POSITIVE) {
+                return Err(ModelError::Geostatic(format!(
+                    "point {p} at {:?}: the K0 = {k0} stress (σ_v = {:.4e}) lies outside the yield surface of material {} ({}); use a K0 inside it or gravity loading",
+                    pts.position[p].as_slice(), sv, pts.material[p], law.name()
+                )));
+            }
+            let be = match self.kinematics {
+                Kinematics::SmallStrain => eps,
+                Kinematics::FiniteStrain => loam_constitutive::tensor::sym_exp(&(eps * 2.0))
+                    .map_err(|e| ModelError::Geostatic(format!("point {p}: {e}")))?,
+            };
+            strains.push(be);
+            stresses.push(sigma);
+        }
+        self.points.elastic_strain = strains;
+        self.points.stress = stresses;
+        self.gravity_preloaded = true;
+        Ok(())
     }
 
     /// Stored elastic energy Σ_p V⁰_p W(ε^e_p): with finite strain ε^e = ½ ln b^e and W
@@ -346,10 +448,14 @@ impl<const D: usize> ExternalWork<D> {
     /// Add the work done since the last call; the load factor went linearly from the last
     /// one to `load_factor`. Returns the accumulated work.
     pub fn advance(&mut self, model: &Model<D>, load_factor: f64) -> f64 {
-        let mean = 0.5 * (self.previous_factor + load_factor);
         let pts = &model.points;
-        let dw: f64 = (0..pts.len()).map(|p| model.point_load(p).dot(&(pts.position[p] - self.previous[p]))).sum();
-        self.work += mean * dw;
+        let dw: f64 = (0..pts.len())
+            .map(|p| {
+                let mean = (model.point_load_at(p, self.previous_factor) + model.point_load_at(p, load_factor)) * 0.5;
+                mean.dot(&(pts.position[p] - self.previous[p]))
+            })
+            .sum();
+        self.work += dw;
         self.previous.copy_from_slice(&pts.position);
         self.previous_factor = load_factor;
         self.work

@@ -2,7 +2,8 @@
 //!
 //! Each iteration solves K δ = −R, adds δ to the increment and re-evaluates. A step is
 //! converged when the relative residual ‖R‖ / ‖reference force‖ and the relative correction
-//! ‖δ‖ / ‖Δu‖ are both below their tolerances, after at least one correction. It fails —
+//! ‖δ‖ / ‖Δu‖ are both below their tolerances, after at least one correction — or, for a
+//! step that starts in equilibrium, when its first correction keeps the residual there. It fails —
 //! and the caller must cut the step back — on a non-finite residual, a residual that grows
 //! past `divergence_factor` times the initial one, a failed factorisation or the iteration
 //! limit. An unconverged step is never reported as converged.
@@ -168,8 +169,12 @@ impl NewtonSolver {
             if rk > s.divergence_factor * r0.max(s.residual_tolerance) {
                 return Err(NewtonError::Diverged(report));
             }
+            // The relative correction means nothing when the step started in equilibrium
+            // (a geostatic state, a load step that adds nothing): Δu is then round-off
+            // itself, and ‖δ‖/‖Δu‖ ≈ 1 for ever. Such a step is converged when its one
+            // correction kept the residual within tolerance.
             let inc = *report.increments.last().unwrap();
-            if rk <= s.residual_tolerance && inc <= s.increment_tolerance {
+            if rk <= s.residual_tolerance && (inc <= s.increment_tolerance || r0 <= s.residual_tolerance) {
                 return Ok(report);
             }
         }
