@@ -331,6 +331,8 @@ pub struct SolverSpec {
     pub max_iterations: usize,
     /// `None`: chosen from the tangent's symmetry.
     pub linear: Option<LinearSpec>,
+    /// Quasi-static: start each load step from the last increment, scaled (default true).
+    pub extrapolate: bool,
 }
 
 impl Default for SolverSpec {
@@ -341,6 +343,7 @@ impl Default for SolverSpec {
             increment_tolerance: n.increment_tolerance,
             max_iterations: n.max_iterations,
             linear: None,
+            extrapolate: QuasiStaticSettings::default().extrapolate,
         }
     }
 }
@@ -667,7 +670,7 @@ impl LoadedScene {
                 }
                 Analysis::QuasiStatic(QuasiStatic::new(
                     model,
-                    QuasiStaticSettings { load_steps, newton, max_cutbacks, linear_solver },
+                    QuasiStaticSettings { load_steps, newton, max_cutbacks, linear_solver, extrapolate: sv.extrapolate },
                 ))
             }
             AnalysisSpec::ImplicitDynamic { time_step, duration, beta, gamma, bossak_alpha, mass, max_cutbacks } => {
