@@ -331,7 +331,7 @@ pub struct SolverSpec {
     pub max_iterations: usize,
     /// `None`: chosen from the tangent's symmetry.
     pub linear: Option<LinearSpec>,
-    /// Quasi-static: start each load step from the last increment, scaled (default true).
+    /// Quasi-static: start each load step from the last increment, scaled (default false).
     pub extrapolate: bool,
 }
 
