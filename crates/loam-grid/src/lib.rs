@@ -137,6 +137,15 @@ impl<const D: usize> Grid<D> {
         })
     }
 
+    /// Integer coordinates of the cell that owns `x` (each cell owns `[x_i, x_{i+1})`),
+    /// clamped to the grid: points on or beyond its faces count to the nearest cell.
+    pub fn cell_coords(&self, x: &SVector<f64, D>) -> [usize; D] {
+        std::array::from_fn(|a| {
+            let xi = ((x[a] - self.origin[a]) / self.cell_size[a]).floor().max(0.0) as usize;
+            xi.min(self.cells[a] - 1)
+        })
+    }
+
     /// The index of the grid plane of nodes normal to `axis` at `coordinate`, if a plane of
     /// nodes lies there (within 1e-9 of a cell).
     pub fn node_plane(&self, axis: usize, coordinate: f64) -> Option<usize> {
@@ -179,6 +188,15 @@ mod tests {
             Grid::<2>::new(Vector2::zeros(), Vector2::new(1.0, 1.0), [1, 0]),
             Err(GridError::CellCount { axis: 1, .. })
         ));
+    }
+
+    #[test]
+    fn cells_own_their_lower_faces_and_clamp_at_the_grid() {
+        let g = Grid::<2>::new(Vector2::zeros(), Vector2::new(1.0, 0.5), [3, 2]).unwrap();
+        assert_eq!(g.cell_coords(&Vector2::new(1.0, 0.49)), [1, 0]);
+        assert_eq!(g.cell_coords(&Vector2::new(0.99, 0.5)), [0, 1]);
+        assert_eq!(g.cell_coords(&Vector2::new(3.0, 1.0)), [2, 1]);
+        assert_eq!(g.cell_coords(&Vector2::new(-0.1, -5.0)), [0, 0]);
     }
 
     #[test]

@@ -220,16 +220,9 @@ impl<const D: usize> Model<D> {
         if let Some(mesh) = &self.mesh {
             return p / mesh.gauss_per_element();
         }
-        let x = &self.points.position[p];
+        let ijk = self.grid.cell_coords(&self.points.position[p]);
         let cells = self.grid.cells();
-        let (mut idx, mut stride) = (0, 1);
-        for a in 0..D {
-            let xi = ((x[a] - self.grid.origin()[a]) / self.grid.cell_size()[a]).floor();
-            let i = (xi.max(0.0) as usize).min(cells[a] - 1);
-            idx += i * stride;
-            stride *= cells[a];
-        }
-        idx
+        (0..D).rev().fold(0, |idx, a| idx * cells[a] + ijk[a])
     }
 
     /// Whether node `node` (grid node index in MPM, mesh node index in FEM) lies on the plane
@@ -341,33 +334,26 @@ impl<const D: usize> Model<D> {
         let area: f64 = (0..D).filter(|&a| a != vertical).map(|a| h[a]).product();
         let pts = &self.points;
         let n = pts.len();
-        let column = |p: usize| -> usize {
-            let (mut idx, mut stride) = (0usize, 1usize);
-            for a in (0..D).filter(|&a| a != vertical) {
-                let i = ((pts.position[p][a] - self.grid.origin()[a]) / h[a]).floor().max(0.0) as usize;
-                idx += i.min(self.grid.cells()[a] - 1) * stride;
-                stride *= self.grid.cells()[a];
-            }
-            idx
+        // The column of a point: its cell's coordinates across gravity (the vertical one
+        // zeroed), so points sort by column, then from the top down.
+        let column = |p: usize| {
+            let mut ijk = self.grid.cell_coords(&pts.position[p]);
+            ijk[vertical] = 0;
+            ijk
         };
-        // Points sorted by column, then from the top down.
-        let mut order: Vec<usize> = (0..n).collect();
-        order.sort_by(|&a, &b| column(a).cmp(&column(b)).then((up * pts.position[b][vertical]).total_cmp(&(up * pts.position[a][vertical]))));
+        let mut order: Vec<([usize; D], usize)> = (0..n).map(|p| (column(p), p)).collect();
+        order.sort_by(|(ca, a), (cb, b)| ca.cmp(cb).then((up * pts.position[*b][vertical]).total_cmp(&(up * pts.position[*a][vertical]))));
         let tol = 1e-9 * h[vertical];
         let mut sigma_v = vec![0.0; n];
-        for col in order.chunk_by(|&a, &b| column(a) == column(b)) {
+        for col in order.chunk_by(|a, b| a.0 == b.0) {
             let mut above = 0.0;
-            let mut k = 0;
-            while k < col.len() {
-                // The points of one row (same height).
-                let y = pts.position[col[k]][vertical];
-                let row_end = k + col[k..].iter().take_while(|&&q| (pts.position[q][vertical] - y).abs() <= tol).count();
-                let row_mass: f64 = col[k..row_end].iter().map(|&q| pts.mass[q]).sum();
-                for &q in &col[k..row_end] {
+            // The rows of the column: points at the same height, top down.
+            for row in col.chunk_by(|&(_, a), &(_, b)| (pts.position[a][vertical] - pts.position[b][vertical]).abs() <= tol) {
+                let row_mass: f64 = row.iter().map(|&(_, q)| pts.mass[q]).sum();
+                for &(_, q) in row {
                     sigma_v[q] = -g.abs() * (above + 0.5 * row_mass) / area;
                 }
                 above += row_mass;
-                k = row_end;
             }
         }
         let hs = pts.history_stride();
