@@ -355,15 +355,13 @@ fn sign(x: f64) -> f64 {
     }
 }
 
-/// −v_p σ_p ∇N_I, the internal force of one point on one node (in-plane components of σ).
+/// Subtract point p's internal force (`loam_model::internal_force`) at one node from the
+/// nodal force: the explicit update accumulates f_ext − f_int.
 #[inline]
-fn add_internal<const D: usize>(out: &mut [f64], volume: f64, stress: &Matrix3<f64>, grad: &SVector<f64, D>) {
+fn subtract_internal<const D: usize>(out: &mut [f64], volume: f64, stress: &Matrix3<f64>, grad: &SVector<f64, D>) {
+    let f = loam_model::internal_force(volume, stress, grad, None);
     for i in 0..D {
-        let mut f = 0.0;
-        for j in 0..D {
-            f += stress[(i, j)] * grad[j];
-        }
-        out[i] -= volume * f;
+        out[i] -= f[i];
     }
 }
 
@@ -382,7 +380,7 @@ fn gather_grid<const D: usize>(model: &Model<D>, conn: &Connectivity<D>, with_in
             o[1 + D + i] += n * load[i];
         }
         if with_internal {
-            add_internal(&mut o[1 + D..], pts.volume[p], &pts.stress[p], &conn.support_gradients(p)[a]);
+            subtract_internal(&mut o[1 + D..], pts.volume[p], &pts.stress[p], &conn.support_gradients(p)[a]);
         }
     });
 }
@@ -394,7 +392,7 @@ fn internal_force<const D: usize>(model: &Model<D>, conn: &Connectivity<D>, sc: 
     let pts = &model.points;
     gather_nodal(&PointCouplings(conn), D, out, |p, a, o| {
         let v = if finite { sc.volume[p] } else { pts.volume[p] };
-        add_internal(o, v, &sc.stress[p], &conn.support_gradients(p)[a]);
+        subtract_internal(o, v, &sc.stress[p], &conn.support_gradients(p)[a]);
     });
 }
 

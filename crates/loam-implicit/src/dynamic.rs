@@ -20,7 +20,7 @@
 use crate::engine::{advance, CutBack, Engine};
 use crate::step::{Inertia, PointCouplings, PointUpdateError};
 use crate::{StepError, StepReport};
-use loam_model::Model;
+use loam_model::{internal_force, Model};
 use loam_solve::{gather_nodal, LinearSolverKind, NewtonError, NewtonReport, NewtonSettings};
 use nalgebra::SVector;
 use rayon::prelude::*;
@@ -219,18 +219,9 @@ impl<const D: usize> Dynamic<D> {
         let stride = conn.stride();
         gather_nodal(&PointCouplings(conn), D, &mut f_int, |p, a, out| {
             let g = &conn.support_gradients(p)[a];
-            let s = &pts.stress[p];
+            let f = internal_force(pts.volume[p], &pts.stress[p], g, bbar.map(|b| &b[p * stride + a]));
             for i in 0..D {
-                for j in 0..D {
-                    out[i] += pts.volume[p] * s[(i, j)] * g[j];
-                }
-            }
-            // B-bar's mean-stress term, as in the step residual.
-            if let Some(bbar) = bbar {
-                let d = bbar[p * stride + a] - g;
-                for i in 0..D {
-                    out[i] += pts.volume[p] * s.trace() / 3.0 * d[i];
-                }
+                out[i] += f[i];
             }
         });
         for (k, a) in self.acceleration.iter_mut().enumerate() {

@@ -7,7 +7,7 @@
 //!   f_int,I = Σ_p v_p σ_p ∂N_I/∂x,   K_IJ = Σ_p v_p (∂N_I/∂x)_j a_ijkl (∂N_J/∂x)_l
 //! with a the spatial tangent (finite strain, THEORY.md §2) or D (small strain, §3).
 
-use loam_model::{Kinematics, Model};
+use loam_model::{internal_force, Kinematics, Model};
 use loam_constitutive::{finite_strain_update, small_strain_update, ConstitutiveError, Tensor4};
 use loam_grid::Connectivity;
 pub(crate) use loam_model::PointCouplings;
@@ -36,9 +36,10 @@ pub(crate) struct TrialState<const D: usize> {
     pub tangent: Vec<SMatrix<f64, 9, 9>>,
     /// Spatial gradients ∂N/∂x, `stride` per point.
     pub grad_x: Vec<SVector<f64, D>>,
-    /// B-bar only: v (I : D) and v (D : I) as 3×3 and v (I : D : I), the volumetric
-    /// contractions of the point's tangent that the averaged dilatation couples through.
-    pub volumetric: Vec<(Matrix3<f64>, Matrix3<f64>, f64)>,
+    /// B-bar only: v (I : D) and v (D : I) as 3×3, the volumetric contractions of the
+    /// point's tangent that the averaged dilatation couples through (v I : D : I is the
+    /// trace of the first).
+    pub volumetric: Vec<(Matrix3<f64>, Matrix3<f64>)>,
 }
 
 impl<const D: usize> TrialState<D> {
@@ -51,7 +52,7 @@ impl<const D: usize> TrialState<D> {
         self.volume.resize(n_points, 0.0);
         self.tangent.resize(n_points, SMatrix::zeros());
         self.grad_x.resize(n_points * stride, SVector::zeros());
-        self.volumetric.resize(n_points, (Matrix3::zeros(), Matrix3::zeros(), 0.0));
+        self.volumetric.resize(n_points, (Matrix3::zeros(), Matrix3::zeros()));
     }
 }
 
@@ -215,8 +216,7 @@ impl<const D: usize> StepSystem<'_, D> {
                             let v = *volume;
                             let id = Matrix3::from_fn(|k, l| v * (0..3).map(|m| a[(4 * m, 3 * k + l)]).sum::<f64>());
                             let di = Matrix3::from_fn(|i, j| v * (0..3).map(|m| a[(3 * i + j, 4 * m)]).sum::<f64>());
-                            let idi = v * (0..3).flat_map(|m| (0..3).map(move |n| (m, n))).map(|(m, n)| a[(4 * m, 4 * n)]).sum::<f64>();
-                            *vol_terms = (id, di, idi);
+                            *vol_terms = (id, di);
                         }
                     }
                 }
@@ -278,23 +278,10 @@ impl<const D: usize> NewtonProblem for StepSystem<'_, D> {
         let stride = conn.stride();
         let bbar = self.bbar;
         gather_nodal(&PointCouplings(conn), D, r, |p, a, out| {
-            let s = &trial.stress[p];
-            let g = &trial.grad_x[p * stride + a];
-            let v = trial.volume[p];
+            let k = p * stride + a;
+            let f = internal_force(trial.volume[p], &trial.stress[p], &trial.grad_x[k], bbar.map(|b| &b[k]));
             for i in 0..D {
-                let mut f = 0.0;
-                for j in 0..D {
-                    f += s[(i, j)] * g[j];
-                }
-                out[i] += v * f;
-            }
-            // B-bar: σ : (⅓ (b̄_a − ∂N_a) ⊗ e_i) I adds the mean stress times b̄ − ∂N.
-            if let Some(bbar) = bbar {
-                let d = bbar[p * stride + a] - g;
-                let mean = v * s.trace() / 3.0;
-                for i in 0..D {
-                    out[i] += mean * d[i];
-                }
+                out[i] += f[i];
             }
         });
         // r = M x + f_int − f_ext; the reference is the external and inertial force on
@@ -351,7 +338,8 @@ impl<const D: usize> NewtonProblem for StepSystem<'_, D> {
             if let Some(bbar) = bbar {
                 // E_a,i = e_i ⊗ ∂N_a + ⅓ d_a,i I with d = b̄ − ∂N: the cross and
                 // volumetric terms of E_a,i : D : E_b,k beside the plain one below.
-                let (id, di, idi) = &trial.volumetric[p];
+                let (id, di) = &trial.volumetric[p];
+                let idi = id.trace();
                 let da = bbar[p * stride + a] - ga;
                 let db = bbar[p * stride + b] - gb;
                 for i in 0..D {

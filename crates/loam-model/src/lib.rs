@@ -415,6 +415,23 @@ impl<const D: usize> Model<D> {
     }
 }
 
+/// Internal force of a point at one support node, v σ ∂N_a, and with B-bar (b̄_a given)
+/// also σ : (⅓ (b̄_a − ∂N_a) ⊗ e_i) I = v (tr σ / 3)(b̄_a − ∂N_a): the one kernel of the
+/// implicit residual, the dynamic start and the explicit grid update.
+#[inline]
+pub fn internal_force<const D: usize>(
+    volume: f64,
+    stress: &Matrix3<f64>,
+    grad: &SVector<f64, D>,
+    bbar: Option<&SVector<f64, D>>,
+) -> SVector<f64, D> {
+    let mut f = SVector::<f64, D>::from_fn(|i, _| volume * (0..D).map(|j| stress[(i, j)] * grad[j]).sum::<f64>());
+    if let Some(b) = bbar {
+        f += (b - grad) * (volume * stress.trace() / 3.0);
+    }
+    f
+}
+
 /// Work of the dead loads (gravity, point forces) on the points' motion, accumulated
 /// step by step with the trapezoidal rule in the load factor: exact for loads held
 /// constant, and for loads ramped linearly with displacement increments of one step.
