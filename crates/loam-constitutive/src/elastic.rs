@@ -48,14 +48,14 @@ impl Elastic {
         isotropic(lambda, mu)
     }
 
-    /// Stress for a given (symmetric) strain.
-    #[inline]
     /// The strain of a given stress, inverting Hooke's law:
     /// ε = (1+ν)/E σ − ν/E tr(σ) I.
     pub fn strain(&self, stress: &Matrix3<f64>) -> Matrix3<f64> {
         (stress * (1.0 + self.poisson) - Matrix3::identity() * (self.poisson * stress.trace())) / self.young
     }
 
+    /// Stress for a given (symmetric) strain.
+    #[inline]
     pub fn stress(&self, eps: &Matrix3<f64>) -> Matrix3<f64> {
         let (lambda, mu) = self.lame();
         Matrix3::identity() * (lambda * eps.trace()) + eps * (2.0 * mu)

@@ -59,7 +59,7 @@ pub struct StepReport {
     pub dofs: usize,
     /// Per constraint (scene order), the support reaction Σ (f_int − f_ext) over its nodes
     /// on its prescribed components: the force the support exerts is its negative. A
-    /// footing pushed down reports the (positive, compressive) load it carries here.
+    /// footing pushed down reads negative here; the load it carries is −reaction.
     pub reactions: Vec<[f64; 3]>,
     pub wall_time: Duration,
 }
@@ -95,13 +95,15 @@ pub struct QuasiStatic<const D: usize> {
     settings: QuasiStaticSettings,
     step: usize,
     load_factor: f64,
-    /// The last converged increment per grid (mesh) node dof and its load increment.
-    previous: Option<(Vec<f64>, f64)>,
+    /// The last converged increment per grid (mesh) node dof (reused from step to step)
+    /// and its load increment; `None` until a step has converged.
+    previous: Vec<f64>,
+    previous_increment: Option<f64>,
 }
 
 impl<const D: usize> QuasiStatic<D> {
     pub fn new(model: Model<D>, settings: QuasiStaticSettings) -> Self {
-        Self { engine: Engine::new(model, settings.newton, settings.linear_solver), settings, step: 0, load_factor: 0.0, previous: None }
+        Self { engine: Engine::new(model, settings.newton, settings.linear_solver), settings, step: 0, load_factor: 0.0, previous: Vec::new(), previous_increment: None }
     }
 
     pub fn model(&self) -> &Model<D> {
@@ -152,11 +154,11 @@ impl<const D: usize> QuasiStatic<D> {
         e.du.resize(e.num_dofs(), 0.0);
         e.model.prescribed_increment(e.conn.active_nodes(), self.load_factor, lambda, &mut e.du);
         let increment = lambda - self.load_factor;
-        if let (true, Some((previous, previous_increment))) = (self.settings.extrapolate, &self.previous) {
+        if let (true, Some(previous_increment)) = (self.settings.extrapolate, self.previous_increment) {
             let ratio = increment / previous_increment;
             for (a, &g) in e.conn.active_nodes().active_to_grid.iter().enumerate() {
                 for i in (0..D).filter(|&i| !e.constrained[a * D + i]) {
-                    e.du[a * D + i] = ratio * previous.get(g as usize * D + i).copied().unwrap_or(0.0);
+                    e.du[a * D + i] = ratio * self.previous[g as usize * D + i];
                 }
             }
         }
@@ -164,12 +166,13 @@ impl<const D: usize> QuasiStatic<D> {
         let report = newton.solve(&mut system, du)?;
         if self.settings.extrapolate {
             let e = &self.engine;
-            let nodes = e.model.mesh.as_ref().map_or(e.model.grid.num_nodes(), |m| m.num_nodes());
-            let mut previous = vec![0.0; nodes * D];
+            let nodes = e.conn.active_nodes().grid_to_active.len();
+            self.previous.clear();
+            self.previous.resize(nodes * D, 0.0);
             for (a, &g) in e.conn.active_nodes().active_to_grid.iter().enumerate() {
-                previous[g as usize * D..(g as usize + 1) * D].copy_from_slice(&e.du[a * D..(a + 1) * D]);
+                self.previous[g as usize * D..(g as usize + 1) * D].copy_from_slice(&e.du[a * D..(a + 1) * D]);
             }
-            self.previous = Some((previous, increment));
+            self.previous_increment = Some(increment);
         }
         self.engine.commit();
         self.load_factor = lambda;
