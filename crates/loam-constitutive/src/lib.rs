@@ -76,7 +76,11 @@ pub trait ConstitutiveLaw: Send + Sync + std::fmt::Debug {
     fn history_len(&self) -> usize {
         0
     }
-    fn init_history(&self, _h: &mut [f64]) {}
+    /// The history of an unloaded point: zero (accumulated plastic strains) unless a law
+    /// says otherwise.
+    fn init_history(&self, h: &mut [f64]) {
+        h.iter_mut().for_each(|v| *v = 0.0);
+    }
     /// true when the algorithmic tangent is symmetric (elastic, associated flow)
     fn symmetric_tangent(&self) -> bool {
         true

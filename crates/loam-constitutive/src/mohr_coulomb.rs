@@ -1026,10 +1026,6 @@ impl ConstitutiveLaw for MohrCoulomb {
         2
     }
 
-    fn init_history(&self, h: &mut [f64]) {
-        h.iter_mut().for_each(|v| *v = 0.0);
-    }
-
     /// Symmetric for associated flow (ψ = φ) without softening. Softening couples the yield
     /// normals to κ (and κ to the plastic strain norm), which breaks symmetry in general.
     fn symmetric_tangent(&self) -> bool {

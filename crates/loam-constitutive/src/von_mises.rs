@@ -196,10 +196,6 @@ impl ConstitutiveLaw for VonMises {
         1
     }
 
-    fn init_history(&self, h: &mut [f64]) {
-        h.iter_mut().for_each(|v| *v = 0.0);
-    }
-
     fn update(
         &self,
         eps_trial: &Matrix3<f64>,
