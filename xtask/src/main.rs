@@ -114,6 +114,7 @@ impl Method {
         match self {
             Method::Mpm(BasisKind::Gimp) => "GIMP",
             Method::Mpm(BasisKind::Linear) => "linear",
+            Method::Mpm(BasisKind::QuadraticBSpline) => "B-spline",
             Method::Fem => "UL-FEM",
         }
     }
@@ -275,7 +276,7 @@ fn verify(quick: bool, out: &Path) -> Result<()> {
     };
     let mut residual_doc = String::new();
     for case in &cases {
-        for method in [Method::Mpm(BasisKind::Gimp), Method::Mpm(BasisKind::Linear), Method::Fem] {
+        for method in [Method::Mpm(BasisKind::Gimp), Method::Mpm(BasisKind::QuadraticBSpline), Method::Mpm(BasisKind::Linear), Method::Fem] {
             if case.id == "V1a-small" && method == Method::Mpm(BasisKind::Linear) {
                 continue;
             }

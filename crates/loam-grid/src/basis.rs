@@ -7,6 +7,19 @@
 //!   antiderivative of the tent. For l ≤ h/2 this is exactly the five-piece table of
 //!   THEORY.md §5; written as a difference of antiderivatives it also holds for l up to h,
 //!   which iGIMP domains reach when stretched (Charlton et al. 2017).
+//! - `QuadraticBSpline`: node-centred quadratic B-splines (Steffen, Kirby & Berzins 2008),
+//!   C¹ across cells, so a point crossing a face sees no jump in its gradient. Each grid
+//!   node carries one function. Along an axis of n cells the knot vector is
+//!   [0, 0, 0, 1.5, 2.5, …, n − 1.5, n, n, n] (in cells): the interior functions are the
+//!   uniform ones centred on their nodes, and the open (repeated) knots at the grid faces
+//!   are the boundary treatment — the basis stays a partition of unity up to the face and
+//!   interpolates there (only the face node is non-zero on the face), so a constraint on a
+//!   grid face fixes the displacement itself. Inside the grid the nodal values are control
+//!   values, not displacements: a constraint on an interior plane acts on them, and the
+//!   nodes next to a face reproduce linear fields from their Greville points
+//!   ([`bspline_greville`], 0.75 cells from the face) rather than their positions; the
+//!   space still holds every linear field, which is what the patch test needs. An axis of
+//!   a single cell falls back to the tent (degree is at most the number of cells there).
 //!
 //! Face rule, used by every function here: along each axis a cell owns `[x_i, x_{i+1})`.
 //! A point exactly on a face belongs to the cell above it, so the linear basis picks one
@@ -20,6 +33,7 @@ use nalgebra::SVector;
 pub enum BasisKind {
     Linear,
     Gimp,
+    QuadraticBSpline,
 }
 
 /// A point whose basis support leaves the grid.
@@ -46,6 +60,7 @@ impl BasisKind {
         match self {
             BasisKind::Linear => 2,
             BasisKind::Gimp => 4,
+            BasisKind::QuadraticBSpline => 3,
         }
     }
 
@@ -93,6 +108,10 @@ impl BasisKind {
             };
             count[a] = match self {
                 BasisKind::Linear => linear_1d(xi, n_cells, &mut idx[a], &mut w[a], &mut dw[a]),
+                BasisKind::QuadraticBSpline if n_cells == 1 => {
+                    linear_1d(xi, n_cells, &mut idx[a], &mut w[a], &mut dw[a])
+                }
+                BasisKind::QuadraticBSpline => bspline_1d(xi, n_cells, &mut idx[a], &mut w[a], &mut dw[a]),
                 BasisKind::Gimp if l < MIN_HALF_LENGTH || xi < 0.0 || xi >= n_cells as f64 => {
                     linear_1d(xi, n_cells, &mut idx[a], &mut w[a], &mut dw[a])
                 }
@@ -166,6 +185,63 @@ fn linear_1d(
     dw[0] = -1.0;
     dw[1] = 1.0;
     Some(2)
+}
+
+/// Knot `j` of the open node-centred quadratic knot vector of an axis of `n` ≥ 2 cells
+/// (module docs): three knots at 0, the cell midpoints from 1.5 to n − 1.5, three at n.
+#[inline]
+fn bspline_knot(j: usize, n: usize) -> f64 {
+    if j <= 2 {
+        0.0
+    } else if j > n {
+        n as f64
+    } else {
+        j as f64 - 1.5
+    }
+}
+
+/// The Greville abscissa of node `i` on an axis of `n` ≥ 2 cells, (t_{i+1} + t_{i+2}) / 2, in
+/// cells: the control value that reproduces a linear field. It is the node itself except
+/// next to a face (0.75 and n − 0.75), so nodal values are control values there.
+pub fn bspline_greville(i: usize, n: usize) -> f64 {
+    0.5 * (bspline_knot(i + 1, n) + bspline_knot(i + 2, n))
+}
+
+/// Quadratic B-splines in cell units on the knot span holding `xi` (half-open, like the
+/// cells): the three non-zero functions, which belong to nodes k − 2, k − 1, k of span
+/// [t_k, t_{k+1}), by the Cox–de Boor recursion; derivatives from the degree-1 functions
+/// (Piegl & Tiller, The NURBS Book, A2.2 and eq. 2.9). Needs n ≥ 2.
+fn bspline_1d(
+    xi: f64,
+    n_cells: usize,
+    idx: &mut [usize; 4],
+    w: &mut [f64; 4],
+    dw: &mut [f64; 4],
+) -> Option<usize> {
+    let n = n_cells;
+    if !(0.0..n as f64).contains(&xi) {
+        return None;
+    }
+    // Span k ∈ [2, n]: t_k ≤ xi < t_{k+1}.
+    let k = if xi < 1.5 { 2 } else { ((xi + 1.5).floor() as usize).min(n) };
+    let t = |j: usize| bspline_knot(j, n);
+    // Degree 1 on the span: N_{k−1,1} and N_{k,1}.
+    let (t_km1, t_k, t_k1, t_k2) = (t(k - 1), t(k), t(k + 1), t(k + 2));
+    let n1_left = (t_k1 - xi) / (t_k1 - t_k);
+    let n1_right = (xi - t_k) / (t_k1 - t_k);
+    // Degree 2: N_{k−2,2}, N_{k−1,2}, N_{k,2}.
+    let a = n1_left / (t_k1 - t_km1);
+    let b = n1_right / (t_k2 - t_k);
+    w[0] = (t_k1 - xi) * a;
+    w[1] = (xi - t_km1) * a + (t_k2 - xi) * b;
+    w[2] = (xi - t_k) * b;
+    dw[0] = -2.0 * a;
+    dw[1] = 2.0 * (a - b);
+    dw[2] = 2.0 * b;
+    idx[0] = k - 2;
+    idx[1] = k - 1;
+    idx[2] = k;
+    Some(3)
 }
 
 /// The tent N(s) = max(0, 1 − |s|) in cell units.
@@ -281,17 +357,24 @@ mod tests {
         /// completeness (Σ N x_I = x), which every basis here must reproduce exactly.
         #[test]
         fn partition_of_unity_and_linear_reproduction(
-            x in 1.3f64..6.7, y in 1.3f64..6.7, l in 0.0f64..1.0, gimp in any::<bool>()
+            x in 0.0f64..7.999, y in 0.0f64..7.999, l in 0.0f64..1.0, kind in 0usize..3
         ) {
-            let kind = if gimp { BasisKind::Gimp } else { BasisKind::Linear };
+            let kind = [BasisKind::Linear, BasisKind::Gimp, BasisKind::QuadraticBSpline][kind];
+            // GIMP domains are clipped at the faces, which is tested on its own below.
+            let (x, y) = if kind == BasisKind::Gimp { (x.clamp(1.3, 6.7), y.clamp(1.3, 6.7)) } else { (x, y) };
             let g = grid2(8);
             let p = Vector2::new(x, y);
             let s = eval2(kind, &g, p, l);
             let sum: f64 = s.iter().map(|t| t.1).sum();
             let gsum: Vector2<f64> = s.iter().map(|t| t.2).sum();
-            let xr: Vector2<f64> = s.iter().map(|t| g.node_position(t.0 as usize) * t.1).sum();
-            let grad_x: nalgebra::Matrix2<f64> =
-                s.iter().map(|t| g.node_position(t.0 as usize) * t.2.transpose()).sum();
+            // Linear fields are reproduced from the control values at the Greville points
+            // (the nodes themselves for the interpolating bases).
+            let control = |node: u32| {
+                let c = g.node_coords(node as usize);
+                Vector2::from_fn(|a, _| if kind == BasisKind::QuadraticBSpline { bspline_greville(c[a], 8) } else { c[a] as f64 })
+            };
+            let xr: Vector2<f64> = s.iter().map(|t| control(t.0) * t.1).sum();
+            let grad_x: nalgebra::Matrix2<f64> = s.iter().map(|t| control(t.0) * t.2.transpose()).sum();
             prop_assert!((sum - 1.0).abs() < 1e-13);
             prop_assert!(gsum.norm() < 1e-12);
             prop_assert!((xr - p).norm() < 1e-12);
@@ -322,6 +405,89 @@ mod tests {
                     prop_assert!((fd - t.2[axis]).abs() < 1e-6, "node {} axis {axis}: {fd} vs {}", t.0, t.2[axis]);
                 }
             }
+        }
+    }
+
+    /// The closed form of the uniform node-centred quadratic B-spline (Steffen et al. 2008,
+    /// eq. 17), in cell units: 3/4 − d² for |d| ≤ 1/2, (3/2 − |d|)²/2 for 1/2 ≤ |d| ≤ 3/2.
+    fn uniform_bspline(d: f64) -> (f64, f64) {
+        let a = d.abs();
+        if a <= 0.5 {
+            (0.75 - d * d, -2.0 * d)
+        } else if a <= 1.5 {
+            (0.5 * (1.5 - a).powi(2), -(1.5 - a) * d.signum())
+        } else {
+            (0.0, 0.0)
+        }
+    }
+
+    proptest! {
+        /// From 3.5 cells off one face to 2.5 off the other (where every function in the
+        /// support has simple knots) the open knot vector gives the uniform functions:
+        /// the recursion and the closed form agree to rounding.
+        #[test]
+        fn interior_bsplines_are_the_uniform_ones(x in 3.5f64..5.5, y in 3.5f64..5.5) {
+            let g = grid2(8);
+            for (node, n, dn) in eval2(BasisKind::QuadraticBSpline, &g, Vector2::new(x, y), 0.0) {
+                let c = g.node_coords(node as usize);
+                let (wx, dwx) = uniform_bspline(x - c[0] as f64);
+                let (wy, dwy) = uniform_bspline(y - c[1] as f64);
+                prop_assert!((n - wx * wy).abs() < 1e-14);
+                prop_assert!((dn - Vector2::new(dwx * wy, wx * dwy)).norm() < 1e-13);
+            }
+        }
+
+        /// B-spline gradients are the derivatives of the values, near the faces as well
+        /// (central differences, step 1e-6; the functions are C¹, piecewise quadratic, so
+        /// the truncation error is O(1e-12) except within 1e-6 of a knot, O(1e-6) there).
+        #[test]
+        fn bspline_gradient_is_the_derivative(x in 0.01f64..7.99, y in 0.01f64..7.99) {
+            let g = grid2(8);
+            let p = Vector2::new(x, y);
+            let base = eval2(BasisKind::QuadraticBSpline, &g, p, 0.0);
+            let eps = 1e-6;
+            for axis in 0..2 {
+                let mut dp = Vector2::zeros();
+                dp[axis] = eps;
+                let plus = eval2(BasisKind::QuadraticBSpline, &g, p + dp, 0.0);
+                let minus = eval2(BasisKind::QuadraticBSpline, &g, p - dp, 0.0);
+                let at = |v: &Vec<(u32, f64, Vector2<f64>)>, node: u32| {
+                    v.iter().find(|t| t.0 == node).map_or(0.0, |t| t.1)
+                };
+                for t in &base {
+                    let fd = (at(&plus, t.0) - at(&minus, t.0)) / (2.0 * eps);
+                    prop_assert!((fd - t.2[axis]).abs() < 1e-6, "node {} axis {axis}: {fd} vs {}", t.0, t.2[axis]);
+                }
+            }
+        }
+    }
+
+    /// The open knots make the basis interpolate at the grid faces: on a face only the
+    /// face node is non-zero, so a constraint there fixes the displacement itself.
+    #[test]
+    fn bsplines_interpolate_at_the_grid_faces() {
+        let g = grid2(8);
+        let s = eval2(BasisKind::QuadraticBSpline, &g, Vector2::new(0.0, 3.0), 0.0);
+        for (node, n, _) in s {
+            let c = g.node_coords(node as usize);
+            if c[0] == 0 {
+                assert_relative_eq!(n, uniform_bspline(3.0 - c[1] as f64).0, epsilon = 1e-15);
+            } else {
+                assert_eq!(n, 0.0);
+            }
+        }
+        // Near the far face (n − 1e-12) the last node carries the whole weight.
+        let s = eval2(BasisKind::QuadraticBSpline, &g, Vector2::new(3.0, 8.0 - 1e-12), 0.0);
+        let top: f64 = s.iter().filter(|t| g.node_coords(t.0 as usize)[1] == 8).map(|t| t.1).sum();
+        assert_relative_eq!(top, 1.0, epsilon = 1e-11);
+        // A single-cell axis falls back to the tent; two cells give the quadratic Bernstein
+        // functions on [0, 2]: (1 − x/2)², x(1 − x/2), (x/2)².
+        let g = Grid::new(Vector2::zeros(), Vector2::new(1.0, 1.0), [2, 1]).unwrap();
+        let s = eval2(BasisKind::QuadraticBSpline, &g, Vector2::new(0.5, 0.25), 0.0);
+        assert_eq!(s.len(), 6);
+        let along_x: Vec<f64> = s.iter().filter(|t| g.node_coords(t.0 as usize)[1] == 0).map(|t| t.1 / 0.75).collect();
+        for (got, want) in along_x.iter().zip([0.5625, 0.375, 0.0625]) {
+            assert_relative_eq!(*got, want, epsilon = 1e-15);
         }
     }
 

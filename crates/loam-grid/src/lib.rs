@@ -11,7 +11,7 @@ mod basis;
 mod connectivity;
 mod mesh;
 
-pub use basis::{BasisError, BasisKind};
+pub use basis::{bspline_greville, BasisError, BasisKind};
 pub use connectivity::{ActiveNodes, Connectivity, NodePointAdjacency, PointBasisError, INACTIVE};
 pub use mesh::{ElementError, FeMesh, MeshError};
 

@@ -67,6 +67,7 @@ pub struct GridSpec {
 pub enum BasisSpec {
     Linear,
     Gimp,
+    QuadraticBSpline,
 }
 
 /// Initial stress of the points.
@@ -623,6 +624,7 @@ impl LoadedScene {
         let basis = match s.basis {
             BasisSpec::Linear => BasisKind::Linear,
             BasisSpec::Gimp => BasisKind::Gimp,
+            BasisSpec::QuadraticBSpline => BasisKind::QuadraticBSpline,
         };
         let kinematics = match s.kinematics {
             KinematicsSpec::SmallStrain => Kinematics::SmallStrain,
