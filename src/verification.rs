@@ -550,3 +550,73 @@ pub fn prandtl_nc(friction_deg: f64) -> f64 {
     let nq = (std::f64::consts::PI * phi.tan()).exp() * (std::f64::consts::FRAC_PI_4 + phi / 2.0).tan().powi(2);
     (nq - 1.0) / phi.tan()
 }
+
+/// The geometry of a V4 slope (VERIFICATION.md V4), in units of the slope height H: the
+/// foundation layer `depth` deep, the toe `toe` from the left side, the face rising over a
+/// horizontal `run` (1 for 45°, 2 for a 2:1 slope), the crest flat `crest` long.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SlopeGeometry {
+    pub height: f64,
+    pub depth: f64,
+    pub toe: f64,
+    pub run: f64,
+    pub crest: f64,
+}
+
+impl SlopeGeometry {
+    /// The undrained 45° slope: a foundation layer H deep (Taylor's depth factor 2), 2 H of
+    /// ground before the toe and behind the crest, room for the base failure of φ = 0.
+    pub const UNDRAINED: Self = Self { height: 10.0, depth: 1.0, toe: 2.0, run: 1.0, crest: 2.0 };
+    /// Griffiths & Lane (1999), their first example: a 2:1 slope on a foundation layer H
+    /// deep (depth factor 2); 1.2 H before the toe and 2 H behind the crest.
+    pub const GRIFFITHS_LANE: Self = Self { height: 10.0, depth: 1.0, toe: 1.2, run: 2.0, crest: 2.0 };
+
+    /// The body's outline, counter-clockwise from the origin.
+    pub fn outline(&self) -> Vec<nalgebra::Vector2<f64>> {
+        use nalgebra::Vector2;
+        let h = self.height;
+        let width = (self.toe + self.run + self.crest) * h;
+        let (toe_y, crest_y) = (self.depth * h, (self.depth + 1.0) * h);
+        vec![
+            Vector2::new(0.0, 0.0),
+            Vector2::new(width, 0.0),
+            Vector2::new(width, crest_y),
+            Vector2::new((self.toe + self.run) * h, crest_y),
+            Vector2::new(self.toe * h, toe_y),
+            Vector2::new(0.0, toe_y),
+        ]
+    }
+}
+
+/// A V4 slope as a model: linear basis, 2×2 points per cell, `cells_per_h` cells over the
+/// slope height, small strain, base fixed, sides on rollers, gravity −`gravity` along y
+/// applied with the load factor (so a quasi-static run is a gravity-increase analysis),
+/// one empty row of cells above the crest.
+pub fn slope_model(
+    geometry: &SlopeGeometry,
+    law: std::sync::Arc<dyn crate::constitutive::ConstitutiveLaw>,
+    density: f64,
+    gravity: f64,
+    cells_per_h: usize,
+    anti_locking: crate::model::AntiLocking,
+) -> crate::model::Model<2> {
+    use crate::grid::{BasisKind, Grid};
+    use crate::model::{Kinematics, Model, PlaneConstraint};
+    use crate::points::Shape;
+    use nalgebra::Vector2;
+    let g = geometry;
+    let h = g.height / cells_per_h as f64;
+    let nx = ((g.toe + g.run + g.crest) * cells_per_h as f64).round() as usize;
+    let ny = ((g.depth + 1.0) * cells_per_h as f64).round() as usize;
+    let grid = Grid::new(Vector2::zeros(), Vector2::new(h, h), [nx, ny + 1]).expect("valid slope grid");
+    let mut points = PointStore::new();
+    points.fill(&grid, &Shape::Polygon(g.outline()), 2, density, 0).expect("slope fits the grid");
+    let constraints = vec![
+        PlaneConstraint::new(0, 0, [true, false, false]),
+        PlaneConstraint::new(0, nx, [true, false, false]),
+        PlaneConstraint::new(1, 0, [true, true, false]),
+    ];
+    Model::new(grid, BasisKind::Linear, Kinematics::SmallStrain, points, vec![law], constraints, Vector2::new(0.0, -gravity))
+        .and_then(|m| m.with_anti_locking(anti_locking))
+        .expect("valid slope model")
+}

@@ -6,6 +6,7 @@
 
 mod dynamics;
 mod footing;
+mod slope;
 mod steps;
 mod svg;
 
@@ -338,6 +339,7 @@ fn verify(quick: bool, out: &Path) -> Result<()> {
     let mut report = Report { md, rows, out: out.to_owned() };
     dynamics::verify(quick, &mut report)?;
     footing::verify(quick, &mut report)?;
+    slope::verify(quick, &mut report)?;
     let Report { mut md, rows, .. } = report;
     writeln!(md, "## Bounds\n\n| case | quantity | value | bound | pass |\n|---|---|---:|---:|---|")?;
     let mut csv = String::from("case,quantity,value,bound,pass\n");

@@ -96,6 +96,14 @@ pub trait ConstitutiveLaw: Send + Sync + std::fmt::Debug {
     fn elasticity(&self) -> Option<Elastic> {
         None
     }
+    /// The law with its strength divided by `factor` > 0, for a strength-reduction analysis
+    /// (Griffiths & Lane 1999): c/F and tan φ/F, the dilation capped at the reduced
+    /// friction, yield stresses over F. `None` for a law without a strength (elastic); an
+    /// error where the reduced parameters are invalid.
+    fn with_strength_reduced(&self, factor: f64) -> Option<Result<std::sync::Arc<dyn ConstitutiveLaw>, ConstitutiveError>> {
+        let _ = factor;
+        None
+    }
     /// P-wave (constrained) modulus λ + 2μ: the stiffness of the explicit CFL condition
     /// (THEORY §9) and of stiffness scaling.
     fn p_wave_modulus(&self) -> f64;

@@ -1018,6 +1018,29 @@ impl ConstitutiveLaw for MohrCoulomb {
         Some(self.elastic)
     }
 
+    /// c/F, φ_F = atan(tan φ / F), ψ_F = min(ψ, φ_F) (a dilation above the reduced
+    /// friction would break ψ ≤ φ), the tension cut-off over F (the apex c cot φ is
+    /// unchanged) and the residual values of softening alike.
+    fn with_strength_reduced(&self, factor: f64) -> Option<Result<std::sync::Arc<dyn ConstitutiveLaw>, ConstitutiveError>> {
+        if !(factor.is_finite() && factor > 0.0) {
+            return Some(Err(ConstitutiveError::InvalidParameter { name: "strength reduction factor", value: factor }));
+        }
+        let reduce = |phi: f64| (phi.tan() / factor).atan();
+        let friction = reduce(self.friction);
+        let law = Self {
+            elastic: self.elastic,
+            cohesion: self.cohesion / factor,
+            friction,
+            dilation: self.dilation.min(friction),
+            tension_cutoff: self.tension_cutoff.map(|t| t / factor),
+            softening: self.softening.map(|s| {
+                let friction_res = reduce(s.friction);
+                Softening { cohesion: s.cohesion / factor, friction: friction_res, dilation: s.dilation.min(friction_res).min(self.dilation.min(friction)), kappa: s.kappa }
+            }),
+        };
+        Some(law.validate().map(|()| std::sync::Arc::new(law) as std::sync::Arc<dyn ConstitutiveLaw>))
+    }
+
     fn name(&self) -> &'static str {
         "mohr-coulomb"
     }
@@ -1147,6 +1170,30 @@ mod tests {
         // Angles are stored in radians.
         assert!((law.friction - 30f64.to_radians()).abs() < 1e-15);
         assert_eq!(law.history_len(), 2);
+    }
+
+    #[test]
+    fn strength_reduction_divides_c_and_tan_phi() {
+        // Plane-strain pure shear past yield with ψ = 0: the mean stress stays 0 and the
+        // shear stress sits on the surface at τ = c cos φ (Mohr's circle through the origin
+        // touching the envelope), so the reduced law must give (c/F) cos(atan(tan φ/F)).
+        let law = MohrCoulomb::from_degrees(el(), 10.0, 30.0, 0.0).unwrap();
+        let gamma = 0.05;
+        let eps = Matrix3::new(0.0, gamma / 2.0, 0.0, gamma / 2.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+        for factor in [1.0, 1.4, 2.5] {
+            let reduced = law.with_strength_reduced(factor).unwrap().unwrap();
+            let mut h = vec![0.0; reduced.history_len()];
+            let h0 = h.clone();
+            let tau = reduced.update(&eps, &h0, &mut h).unwrap().stress[(0, 1)];
+            let phi_f = (30f64.to_radians().tan() / factor).atan();
+            let want = 10.0 / factor * phi_f.cos();
+            assert!((tau - want).abs() < 1e-9 * want, "F = {factor}: τ = {tau}, want {want}");
+        }
+        // Associated flow keeps ψ ≤ φ: ψ_F = φ_F, still associated (symmetric tangent).
+        let assoc = MohrCoulomb::from_degrees(el(), 10.0, 30.0, 30.0).unwrap();
+        assert!(assoc.with_strength_reduced(1.5).unwrap().unwrap().symmetric_tangent());
+        assert!(assoc.with_strength_reduced(0.0).unwrap().is_err());
+        assert!(el().with_strength_reduced(1.5).is_none());
     }
 
     #[test]

@@ -188,6 +188,15 @@ impl ConstitutiveLaw for VonMises {
         Some(self.elastic)
     }
 
+    /// σ_y, H and the residual σ_y over F: the undrained strength c_u = σ_y/√3 over F.
+    fn with_strength_reduced(&self, factor: f64) -> Option<Result<std::sync::Arc<dyn ConstitutiveLaw>, ConstitutiveError>> {
+        Some(
+            VonMises::new(self.elastic, self.yield_stress / factor, self.hardening / factor)
+                .and_then(|law| law.with_residual_yield_stress(self.residual_yield_stress / factor))
+                .map(|law| std::sync::Arc::new(law) as std::sync::Arc<dyn ConstitutiveLaw>),
+        )
+    }
+
     fn name(&self) -> &'static str {
         "von-mises"
     }

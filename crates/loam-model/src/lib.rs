@@ -98,6 +98,8 @@ pub enum ModelError {
     Geostatic(String),
     #[error("gravity component {axis} is {value}; it must be finite")]
     Gravity { axis: usize, value: f64 },
+    #[error("strength reduction: {0}")]
+    StrengthReduction(String),
 }
 
 /// A complete MPM model. Build it, then hand it to an analysis.
@@ -195,6 +197,32 @@ impl<const D: usize> Model<D> {
         let mut model = Self::new(grid, BasisKind::Linear, kinematics, points, materials, constraints, gravity)?;
         model.mesh = Some(mesh);
         Ok(model)
+    }
+
+    /// The same model with every material's strength divided by `factor` (c/F, tan φ/F,
+    /// σ_y/F: `ConstitutiveLaw::with_strength_reduced`); elastic materials are kept. A
+    /// model without any material that has a strength is refused.
+    pub fn with_strength_reduced(&self, factor: f64) -> Result<Self, ModelError> {
+        if !(factor.is_finite() && factor > 0.0) {
+            return Err(ModelError::StrengthReduction(format!("the factor is {factor}; it must be a positive number")));
+        }
+        let mut reduced_any = false;
+        let materials = self
+            .materials
+            .iter()
+            .enumerate()
+            .map(|(m, law)| match law.with_strength_reduced(factor) {
+                None => Ok(law.clone()),
+                Some(r) => {
+                    reduced_any = true;
+                    r.map_err(|e| ModelError::StrengthReduction(format!("material {m} at F = {factor}: {e}")))
+                }
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        if !reduced_any {
+            return Err(ModelError::StrengthReduction("no material has a strength to reduce (all are elastic)".into()));
+        }
+        Ok(Self { materials, ..self.clone() })
     }
 
     /// Use the given anti-locking treatment; B-bar needs small strain and the linear basis

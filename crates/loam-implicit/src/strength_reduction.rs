@@ -1,0 +1,141 @@
+//! Strength-reduction analysis (Griffiths & Lane 1999, Géotechnique 49(3)): the factor of
+//! safety F of a slope is the factor by which c and tan φ (σ_y for von Mises) must be
+//! divided for the slope to fail under its own weight. Each trial rebuilds the model with
+//! the reduced strength (`Model::with_strength_reduced`) and applies gravity in
+//! quasi-static load steps from zero; a trial whose load cannot be carried — a step that
+//! does not converge after all its cut-backs — has failed. Bisection between a stable and a
+//! failed factor brackets F to the asked tolerance. The failure criterion is Griffiths &
+//! Lane's (non-convergence of the equilibrium iterations), with Newton and cut-back in
+//! place of their viscoplastic iterations.
+
+use crate::quasi_static::{QuasiStatic, QuasiStaticSettings, StepError};
+use loam_model::{Model, ModelError};
+use std::time::{Duration, Instant};
+
+/// Settings of a strength-reduction analysis.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StrengthReduction {
+    /// How each trial applies gravity (load steps, Newton, cut-backs).
+    pub trial: QuasiStaticSettings,
+    /// Factors that bracket F: the lower must hold, the upper must fail.
+    pub bracket: (f64, f64),
+    /// Bisection stops when the bracket is narrower than this.
+    pub tolerance: f64,
+}
+
+/// One trial factor and what it did.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StrengthTrial {
+    pub factor: f64,
+    /// The full load was carried.
+    pub stable: bool,
+    /// Load factor reached (1 when stable).
+    pub load_factor: f64,
+    /// Newton corrections over the trial, cut-back attempts included only where converged.
+    pub iterations: usize,
+    pub cutbacks: usize,
+    /// Largest point displacement at the end of the trial (at the last converged step).
+    pub max_displacement: f64,
+    pub wall_time: Duration,
+}
+
+/// The bracketed factor of safety and every trial.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FactorOfSafety {
+    /// The largest factor that held.
+    pub stable: f64,
+    /// The smallest factor that failed.
+    pub failed: f64,
+    pub trials: Vec<StrengthTrial>,
+}
+
+impl FactorOfSafety {
+    /// The bracket's midpoint.
+    pub fn value(&self) -> f64 {
+        0.5 * (self.stable + self.failed)
+    }
+}
+
+/// Why a strength-reduction analysis could not give a factor.
+#[derive(Debug, thiserror::Error)]
+pub enum StrengthReductionError {
+    #[error("invalid strength-reduction setting {field} = {value}: valid is {valid}")]
+    InvalidSettings { field: &'static str, value: f64, valid: &'static str },
+    #[error("the slope already fails at the lower bracket factor F = {0}: lower it")]
+    FailsAtLower(f64),
+    #[error("the slope still holds at the upper bracket factor F = {0}: raise it")]
+    HoldsAtUpper(f64),
+    #[error(transparent)]
+    Model(#[from] ModelError),
+    #[error("trial F = {factor}: {source}")]
+    Trial { factor: f64, source: StepError },
+}
+
+impl StrengthReduction {
+    /// Bracket the factor of safety of `model` (at full strength, unloaded), calling
+    /// `on_trial` after each trial.
+    pub fn factor_of_safety<const D: usize>(
+        &self,
+        model: &Model<D>,
+        mut on_trial: impl FnMut(&StrengthTrial),
+    ) -> Result<FactorOfSafety, StrengthReductionError> {
+        let (lo, hi) = self.bracket;
+        if !(lo.is_finite() && lo > 0.0) {
+            return Err(StrengthReductionError::InvalidSettings { field: "bracket.0", value: lo, valid: "a positive number" });
+        }
+        if !(hi.is_finite() && hi > lo) {
+            return Err(StrengthReductionError::InvalidSettings { field: "bracket.1", value: hi, valid: "a number above the lower factor" });
+        }
+        if !(self.tolerance.is_finite() && self.tolerance > 0.0) {
+            return Err(StrengthReductionError::InvalidSettings { field: "tolerance", value: self.tolerance, valid: "a positive number" });
+        }
+        let mut trials = Vec::new();
+        let mut run = |factor: f64| -> Result<bool, StrengthReductionError> {
+            let t = self.trial(model, factor)?;
+            on_trial(&t);
+            let stable = t.stable;
+            trials.push(t);
+            Ok(stable)
+        };
+        if !run(lo)? {
+            return Err(StrengthReductionError::FailsAtLower(lo));
+        }
+        if run(hi)? {
+            return Err(StrengthReductionError::HoldsAtUpper(hi));
+        }
+        let (mut stable, mut failed) = (lo, hi);
+        while failed - stable > self.tolerance {
+            let mid = 0.5 * (stable + failed);
+            if run(mid)? {
+                stable = mid;
+            } else {
+                failed = mid;
+            }
+        }
+        Ok(FactorOfSafety { stable, failed, trials })
+    }
+
+    /// Apply the full load to the model reduced by `factor`.
+    pub fn trial<const D: usize>(&self, model: &Model<D>, factor: f64) -> Result<StrengthTrial, StrengthReductionError> {
+        let start = Instant::now();
+        let mut qs = QuasiStatic::new(model.with_strength_reduced(factor)?, self.trial.clone());
+        let (mut iterations, mut cutbacks, mut stable) = (0, 0, true);
+        while !qs.is_finished() {
+            match qs.step() {
+                Ok(r) => {
+                    iterations += r.iterations;
+                    cutbacks += r.cutbacks;
+                }
+                Err(StepError::NotConverged { cutbacks: c, .. }) => {
+                    cutbacks += c;
+                    stable = false;
+                    break;
+                }
+                Err(source) => return Err(StrengthReductionError::Trial { factor, source }),
+            }
+        }
+        let p = &qs.model().points;
+        let max_displacement = p.position.iter().zip(&p.position0).map(|(x, x0)| (x - x0).norm()).fold(0.0, f64::max);
+        Ok(StrengthTrial { factor, stable, load_factor: qs.load_factor(), iterations, cutbacks, max_displacement, wall_time: start.elapsed() })
+    }
+}

@@ -1,0 +1,121 @@
+//! V4 slopes (VERIFICATION.md V4): the undrained 45° slope by gravity increase against
+//! Taylor's stability number, and the Griffiths & Lane (1999) frictional slope by strength
+//! reduction against their factor of safety 1.4.
+
+use crate::{Report, Row};
+use anyhow::Result;
+use loam::constitutive::{ConstitutiveLaw, Elastic, MohrCoulomb, VonMises};
+use loam::implicit::{AntiLocking, QuasiStatic, QuasiStaticSettings, StrengthReduction};
+use loam::verification::{slope_model, SlopeGeometry};
+use std::fmt::Write as _;
+use std::sync::Arc;
+use std::time::Instant;
+
+/// Undrained strength c_u, E, ν (E/c_u = 10⁴; the collapse load does not depend on E).
+const C_U: f64 = 10.0;
+const YOUNG: f64 = 1e5;
+const POISSON: f64 = 0.3;
+/// γH/c_u reached at load factor 1, and the load steps to get there: 0.1 per step, refined
+/// by up to 8 halvings where Newton fails, so collapse is located to 0.1/256.
+const N_MAX: f64 = 8.0;
+const GRAVITY_STEPS: usize = 80;
+/// Taylor (1937): N_s = c_u/(γH) ≈ 0.18 for a 45° slope on a deep foundation, 1/N_s ≈ 5.5.
+const TAYLOR: f64 = 5.5;
+/// Griffiths & Lane (1999), example 1: c/(γH) = 0.05, φ = 20°, ψ = 0, F ≈ 1.4.
+const GL_FOS: f64 = 1.4;
+
+struct Collapse {
+    n: f64,
+    /// The whole load was carried: `n` is only a lower bound.
+    carried: bool,
+    max_iterations: usize,
+    crest_settlement: f64,
+    stop: String,
+    wall_s: f64,
+}
+
+/// Gravity increase on the undrained slope: γH/c_u at the last load the slope carried.
+fn undrained(cells: usize, anti_locking: AntiLocking) -> Result<Collapse> {
+    let g = SlopeGeometry::UNDRAINED;
+    let law: Arc<dyn ConstitutiveLaw> = Arc::new(VonMises::new(Elastic::new(YOUNG, POISSON)?, 3f64.sqrt() * C_U, 0.0)?);
+    let gamma = N_MAX * C_U / g.height;
+    let model = slope_model(&g, law, gamma / 10.0, 10.0, cells, anti_locking);
+    let mut qs = QuasiStatic::new(model, QuasiStaticSettings { load_steps: GRAVITY_STEPS, ..Default::default() });
+    let t = Instant::now();
+    let (mut max_iterations, mut stop, mut carried) = (0, "carried the whole load (no collapse up to γH/c_u = 8)".to_string(), true);
+    while !qs.is_finished() {
+        match qs.step() {
+            Ok(r) => max_iterations = max_iterations.max(r.iterations / r.substeps.max(1)),
+            Err(e) => {
+                stop = e.to_string();
+                carried = false;
+                break;
+            }
+        }
+    }
+    // Settlement of the crest edge: the point nearest the top of the slope face.
+    let p = &qs.model().points;
+    let (cx, cy) = ((g.toe + g.run) * g.height, (g.depth + 1.0) * g.height);
+    let distance = |a: usize| (p.position0[a][0] - cx).hypot(p.position0[a][1] - cy);
+    let k = (0..p.len()).min_by(|&a, &b| distance(a).total_cmp(&distance(b))).unwrap_or(0);
+    Ok(Collapse {
+        n: qs.load_factor() * N_MAX,
+        carried,
+        max_iterations,
+        crest_settlement: p.position0[k][1] - p.position[k][1],
+        stop,
+        wall_s: t.elapsed().as_secs_f64(),
+    })
+}
+
+pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
+    let meshes: &[usize] = if quick { &[5, 10] } else { &[5, 10, 20] };
+    let md = &mut report.md;
+    writeln!(md, "## V4a undrained slope: gravity increase\n\n45° slope, H = 10, on a foundation layer H deep (Taylor's depth factor 2), 2 H of ground before the toe and behind the crest; base fixed, sides on rollers; von Mises with c_u = {C_U} (σ_y = √3 c_u), E = {YOUNG:e}, ν = {POISSON}; linear basis, 2×2 points per cell, small strain, B-bar. Gravity grows by γH/c_u = 0.1 per load step (up to 8 halvings of a step that fails); collapse is the last load the slope carried. Reference: Taylor's 1/N_s ≈ {TAYLOR} (N_s ≈ 0.18 for 45°, deep foundation). Bound: within 10 % on the finest mesh.\n")?;
+    writeln!(md, "| cells per H | treatment | γH/c_u at collapse | /5.5 − 1 | crest settlement before collapse [m] | max Newton its per sub-step | wall [s] |\n|---:|---|---:|---:|---:|---:|---:|")?;
+    let mut finest = f64::NAN;
+    let mut stops = Vec::new();
+    for &cells in meshes {
+        eprintln!("verify: V4a undrained slope, B-bar, {cells} cells per H");
+        let r = undrained(cells, AntiLocking::BBar)?;
+        anyhow::ensure!(!r.carried, "V4a: the B-bar slope at {cells} cells per H carried γH/c_u = {N_MAX} without collapsing");
+        let rel = r.n / TAYLOR - 1.0;
+        writeln!(md, "| {cells} | B-bar | {:.3} | {rel:+.3} | {:.4} | {} | {:.2} |", r.n, r.crest_settlement, r.max_iterations, r.wall_s)?;
+        stops.push(format!("- {cells} cells per H: {}", r.stop));
+        report.rows.push(Row::info(format!("V4a undrained slope {cells}/H"), "gammaH_over_cu_at_collapse", r.n));
+        finest = rel;
+    }
+    let cells = meshes[1];
+    eprintln!("verify: V4a undrained slope, plain, {cells} cells per H");
+    let plain = undrained(cells, AntiLocking::None)?;
+    let at_least = if plain.carried { "> " } else { "" };
+    writeln!(md, "| {cells} | plain | {at_least}{:.3} | {at_least}{:+.3} | {:.4} | {} | {:.2} |", plain.n, plain.n / TAYLOR - 1.0, plain.crest_settlement, plain.max_iterations, plain.wall_s)?;
+    stops.push(format!("- {cells} cells per H, plain: {}", plain.stop));
+    writeln!(md, "\nWhy each run stopped (the collapse criterion is a load step that Newton cannot carry after all its cut-backs; at the limit load the tangent of a perfectly plastic body turns singular, which the Cholesky factorisation reports):\n\n{}\n", stops.join("\n"))?;
+    report.rows.push(Row::upper("V4a undrained slope (finest)", "abs_gammaH_over_cu_over_5.5_minus_1", finest.abs(), 0.10));
+
+    writeln!(md, "## V4b Griffiths & Lane slope: strength reduction\n\n2:1 slope (26.57°), H = 10, foundation layer H deep, 1.2 H before the toe, 2 H behind the crest; Mohr–Coulomb c = 10, φ = 20°, ψ = 0 (non-associated: sparse LU), γ = 20 (c/(γH) = 0.05), E = {YOUNG:e}, ν = {POISSON}; linear basis, B-bar. Each trial divides c and tan φ by F and applies gravity in 10 load steps (up to 4 halvings); F is bisected between a trial that holds and one that fails, to 0.005. Reference: F ≈ {GL_FOS} (Griffiths & Lane 1999; Bishop's method gives 1.38). Bound: within 5 % on the finest mesh.\n")?;
+    writeln!(md, "| cells per H | F (bracket) | /1.4 − 1 | trials | largest displacement at the last stable trial [m] | wall [s] |\n|---:|---:|---:|---:|---:|---:|")?;
+    let mut finest = f64::NAN;
+    for &cells in meshes {
+        eprintln!("verify: V4b Griffiths & Lane slope, {cells} cells per H");
+        let g = SlopeGeometry::GRIFFITHS_LANE;
+        let law: Arc<dyn ConstitutiveLaw> = Arc::new(MohrCoulomb::from_degrees(Elastic::new(YOUNG, POISSON)?, 10.0, 20.0, 0.0)?);
+        let model = slope_model(&g, law, 2.0, 10.0, cells, AntiLocking::BBar);
+        let srf = StrengthReduction {
+            trial: QuasiStaticSettings { load_steps: 10, max_cutbacks: 4, ..Default::default() },
+            bracket: (1.0, 2.0),
+            tolerance: 0.005,
+        };
+        let t = Instant::now();
+        let fos = srf.factor_of_safety(&model, |_| {})?;
+        let last_stable = fos.trials.iter().filter(|t| t.stable).max_by(|a, b| a.factor.total_cmp(&b.factor)).map_or(f64::NAN, |t| t.max_displacement);
+        let rel = fos.value() / GL_FOS - 1.0;
+        writeln!(md, "| {cells} | {:.3} ({:.4}–{:.4}) | {rel:+.3} | {} | {last_stable:.3} | {:.1} |", fos.value(), fos.stable, fos.failed, fos.trials.len(), t.elapsed().as_secs_f64())?;
+        report.rows.push(Row::info(format!("V4b Griffiths-Lane slope {cells}/H"), "factor_of_safety", fos.value()));
+        finest = rel;
+    }
+    writeln!(md)?;
+    report.rows.push(Row::upper("V4b Griffiths-Lane slope (finest)", "abs_fos_over_1.4_minus_1", finest.abs(), 0.05));
+    Ok(())
+}
