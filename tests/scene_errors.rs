@@ -273,3 +273,21 @@ fn geostatic_initial_stress_is_checked() {
     let e = check(&k0("-0.5")).unwrap_err();
     assert!(e.to_string().contains("K0 is -0.5") && e.line == line_of("basis: Gimp") + 1, "{e}");
 }
+
+/// Strength reduction is checked at its keys: a bracket that is not (holds, fails) with
+/// 0 < holds < fails, a tolerance wider than the bracket, and a scene with only elastic
+/// materials (nothing to reduce) are refused before any trial runs.
+#[test]
+fn strength_reduction_is_checked() {
+    let srf = |spec: &str| GOOD.replacen("QuasiStatic(load_steps: 40)", &format!("QuasiStatic(load_steps: 40,\n        strength_reduction: Some({spec}))"), 1);
+    let at = line_of("QuasiStatic(load_steps: 40)") + 1;
+    let e = check(&srf("(bracket: (2.0, 1.0))")).unwrap_err();
+    assert!(e.to_string().contains("0 < F_holds < F_fails") && e.line == at, "{e}");
+    let e = check(&srf("(bracket: (1.0, 1.5), tolerance: 0.6)")).unwrap_err();
+    assert!(e.to_string().contains("below the bracket's width") && e.line == at, "{e}");
+    let e = check(&srf("(tolerance: 0.01)")).unwrap_err();
+    assert!(e.to_string().contains("every material here is elastic"), "{e}");
+    let plastic = GOOD.replacen("law: Elastic(young: 1e5, poisson: 0.0)", "law: VonMises(young: 1e5, poisson: 0.0, yield_stress: 1e6)", 1);
+    assert_ne!(plastic, GOOD, "test setup: the law is in the example");
+    check(&plastic.replacen("QuasiStatic(load_steps: 40)", "QuasiStatic(load_steps: 40, strength_reduction: Some(()))", 1)).unwrap();
+}

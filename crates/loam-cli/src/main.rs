@@ -71,6 +71,17 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             let out = out.unwrap_or_else(|| {
                 PathBuf::from("out").join(scene.file_stem().map(|s| s.to_owned()).unwrap_or_default())
             });
+            if let loam_io::scene::AnalysisSpec::QuasiStatic { strength_reduction: Some(srf), .. } = &loaded.scene.analysis {
+                if !quiet {
+                    println!(
+                        "strength reduction: bisecting F between {} and {} to {}, one trial per row in {}",
+                        srf.bracket.0,
+                        srf.bracket.1,
+                        srf.tolerance,
+                        out.join("strength_reduction.csv").display()
+                    );
+                }
+            }
             let bar = if quiet { ProgressBar::hidden() } else { ProgressBar::new(1000) };
             bar.set_style(
                 ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:40} {msg}").expect("valid template"),
@@ -93,6 +104,16 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             })
             .with_context(|| format!("running {}", scene.display()))?;
             bar.finish_and_clear();
+            if let Some(fos) = &summary.factor_of_safety {
+                println!(
+                    "factor of safety F = {:.4}: holds at {:.4}, fails at {:.4} ({} trials); the run below is at F = {:.4}",
+                    fos.value(),
+                    fos.stable,
+                    fos.failed,
+                    fos.trials.len(),
+                    fos.stable
+                );
+            }
             println!(
                 "{}: {} analysis, {} steps, {} points, {} Newton iterations (max {} per step), {} cut-backs, {}, {:.3} s; outputs in {}",
                 scene.display(),

@@ -5,7 +5,8 @@
 
 use crate::analysis::{Analysis, AnalysisError, Progress};
 use crate::output::{write_csv_table, write_vtu, CsvCell, CsvWriter, OutputError, PointCloud, PvdWriter};
-use crate::scene::{LoadedScene, SceneError};
+use crate::scene::{AnalysisSpec, LoadedScene, SceneError};
+use loam_implicit::{FactorOfSafety, QuasiStatic, StrengthReduction, StrengthReductionError};
 use loam_model::{ExternalWork, Model};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -21,6 +22,8 @@ pub enum RunFailure {
     Output(#[from] OutputError),
     #[error("cannot create the output folder {}: {source}", path.display())]
     OutputDir { path: PathBuf, source: std::io::Error },
+    #[error("strength reduction: {0}")]
+    StrengthReduction(#[from] StrengthReductionError),
 }
 
 /// What a finished run did.
@@ -35,6 +38,8 @@ pub struct RunSummary {
     pub wall_time: Duration,
     pub solver: String,
     pub output_dir: PathBuf,
+    /// The bracketed factor of safety, when the scene asked for strength reduction.
+    pub factor_of_safety: Option<FactorOfSafety>,
 }
 
 /// Run a scene, writing its outputs into `out_dir`; `progress` is called after each step
@@ -95,6 +100,15 @@ fn run_dim<const D: usize>(
     let start = Instant::now();
     let mut analysis: Analysis<D> = scene.build::<D>()?;
     std::fs::create_dir_all(out_dir).map_err(|source| RunFailure::OutputDir { path: out_dir.to_owned(), source })?;
+    let factor_of_safety = match (&scene.scene.analysis, &analysis) {
+        (AnalysisSpec::QuasiStatic { strength_reduction: Some(spec), .. }, Analysis::QuasiStatic(qs)) => {
+            let fos = factor_of_safety(qs, spec.bracket, spec.tolerance, out_dir)?;
+            let reduced = qs.model().with_strength_reduced(fos.stable).map_err(StrengthReductionError::from)?;
+            analysis = Analysis::QuasiStatic(QuasiStatic::new(reduced, qs.settings().clone()));
+            Some(fos)
+        }
+        _ => None,
+    };
     let out = &scene.scene.output;
     let end_time = analysis.end_time();
     // A displaced constraint (a footing) adds its prescribed displacement and reaction per
@@ -192,7 +206,37 @@ fn run_dim<const D: usize>(
         wall_time: start.elapsed(),
         solver: analysis.solver(),
         output_dir: out_dir.to_owned(),
+        factor_of_safety,
     })
+}
+
+/// Bracket the factor of safety of the quasi-static analysis's model, one row per trial in
+/// `strength_reduction.csv` (flushed as it goes, so a long search shows its progress).
+fn factor_of_safety<const D: usize>(
+    qs: &QuasiStatic<D>,
+    bracket: (f64, f64),
+    tolerance: f64,
+    out_dir: &Path,
+) -> Result<FactorOfSafety, RunFailure> {
+    let header = ["factor", "stable", "load_factor", "iterations", "cutbacks", "max_displacement", "wall_time_s"];
+    let mut csv = CsvWriter::create(out_dir.join("strength_reduction.csv"), &header)?;
+    let srf = StrengthReduction { trial: qs.settings().clone(), bracket, tolerance };
+    let mut written = Ok(());
+    let fos = srf.factor_of_safety(qs.model(), |t| {
+        if written.is_ok() {
+            written = csv.row_mixed(&[
+                CsvCell::Float(t.factor),
+                CsvCell::Int(t.stable as i64),
+                CsvCell::Float(t.load_factor),
+                CsvCell::Int(t.iterations as i64),
+                CsvCell::Int(t.cutbacks as i64),
+                CsvCell::Float(t.max_displacement),
+                CsvCell::Float(t.wall_time.as_secs_f64()),
+            ]);
+        }
+    });
+    written?;
+    Ok(fos?)
 }
 
 /// Flattened per-point fields shared by the VTU and CSV writers.

@@ -248,6 +248,10 @@ pub enum AnalysisSpec {
         load_steps: usize,
         #[serde(default = "default_cutbacks")]
         max_cutbacks: usize,
+        /// Find the factor of safety first (strength reduction), then run the analysis with
+        /// the largest factor that held, so the outputs show the state just before failure.
+        #[serde(default)]
+        strength_reduction: Option<StrengthReductionSpec>,
     },
     /// Implicit Newmark dynamics (Bossak with `bossak_alpha` < 0), loads applied in full at
     /// t = 0, Newton per time step, a failed step halved up to `max_cutbacks` times.
@@ -318,6 +322,26 @@ pub enum SchemeSpec {
     Usl,
     #[default]
     Musl,
+}
+
+/// A strength-reduction analysis (Griffiths & Lane 1999): each trial divides c and tan φ
+/// (σ_y for von Mises) by F and applies the loads in the analysis's load steps; F is
+/// bisected between `bracket.0` (must hold) and `bracket.1` (must fail) to `tolerance`.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct StrengthReductionSpec {
+    #[serde(default = "default_bracket")]
+    pub bracket: (f64, f64),
+    #[serde(default = "default_srf_tolerance")]
+    pub tolerance: f64,
+}
+
+fn default_bracket() -> (f64, f64) {
+    (1.0, 3.0)
+}
+
+fn default_srf_tolerance() -> f64 {
+    0.01
 }
 
 fn default_cutbacks() -> usize {
@@ -666,9 +690,22 @@ impl LoadedScene {
         }
         let at_analysis = |key: &'static str| [Seg::Key("analysis"), Seg::Key(key)];
         let mut analysis = match s.analysis {
-            AnalysisSpec::QuasiStatic { load_steps, max_cutbacks } => {
+            AnalysisSpec::QuasiStatic { load_steps, max_cutbacks, strength_reduction } => {
                 if load_steps == 0 {
                     return Err(self.error(&at_analysis("load_steps"), "load_steps is 0; it must be at least 1"));
+                }
+                if let Some(srf) = strength_reduction {
+                    let at = |key: &'static str| [Seg::Key("analysis"), Seg::Key("strength_reduction"), Seg::Key(key)];
+                    let (lo, hi) = srf.bracket;
+                    if !(lo.is_finite() && lo > 0.0 && hi.is_finite() && hi > lo) {
+                        return Err(self.error(&at("bracket"), format!("bracket is ({lo}, {hi}); it must be (F_holds, F_fails) with 0 < F_holds < F_fails")));
+                    }
+                    if !(srf.tolerance.is_finite() && srf.tolerance > 0.0 && srf.tolerance < hi - lo) {
+                        return Err(self.error(&at("tolerance"), format!("tolerance is {}; it must be positive and below the bracket's width {}", srf.tolerance, hi - lo)));
+                    }
+                    if !model.materials.iter().any(|law| law.with_strength_reduced(1.0).is_some()) {
+                        return Err(self.error(&[Seg::Key("materials")], "strength reduction needs a material with a strength (VonMises or MohrCoulomb); every material here is elastic"));
+                    }
                 }
                 Analysis::QuasiStatic(QuasiStatic::new(
                     model,

@@ -1,0 +1,53 @@
+//! V4 slopes: strength reduction against gravity increase and Taylor's chart.
+
+use loam::constitutive::{ConstitutiveLaw, Elastic, VonMises};
+use loam::implicit::{AntiLocking, QuasiStatic, QuasiStaticSettings, StrengthReduction, StrengthReductionError};
+use loam::verification::{slope_model, SlopeGeometry};
+use std::sync::Arc;
+
+fn clay() -> Arc<dyn ConstitutiveLaw> {
+    Arc::new(VonMises::new(Elastic::new(1e5, 0.3).unwrap(), 3f64.sqrt() * 10.0, 0.0).unwrap())
+}
+
+/// For φ = 0 the collapse load is proportional to c_u, so dividing c_u by F at γH/c_u = 4
+/// (strength reduction) and raising γ at full c_u (gravity increase) must find the same
+/// stability number, 4F = γ_c H/c_u: two procedures, one answer, within the bracket
+/// (4 × 0.005) and the gravity step's resolution (0.1 / 2⁸). Both must lie within the
+/// issue's 10 % of Taylor's 5.5 (coarse mesh, 5 cells per H: measured 5.46).
+#[test]
+fn strength_reduction_and_gravity_increase_agree_for_undrained_clay() {
+    let g = SlopeGeometry::UNDRAINED;
+    let srf = StrengthReduction {
+        trial: QuasiStaticSettings { load_steps: 10, max_cutbacks: 4, ..Default::default() },
+        bracket: (1.0, 2.0),
+        tolerance: 0.005,
+    };
+    let model = slope_model(&g, clay(), 0.4, 10.0, 5, AntiLocking::BBar);
+    let fos = srf.factor_of_safety(&model, |_| {}).unwrap();
+    let n_srf = 4.0 * fos.value();
+
+    // Gravity increase to γH/c_u = 8 in steps of 0.1, halved up to 8 times.
+    let model = slope_model(&g, clay(), 0.8, 10.0, 5, AntiLocking::BBar);
+    let mut qs = QuasiStatic::new(model, QuasiStaticSettings { load_steps: 80, ..Default::default() });
+    while !qs.is_finished() {
+        if qs.step().is_err() {
+            break;
+        }
+    }
+    let n_gravity = 8.0 * qs.load_factor();
+    assert!(qs.load_factor() < 1.0, "the slope carried γH/c_u = 8");
+    assert!((n_srf - n_gravity).abs() <= 4.0 * 0.005 + 0.1 / 256.0, "strength reduction {n_srf}, gravity increase {n_gravity}");
+    for n in [n_srf, n_gravity] {
+        assert!((n / 5.5 - 1.0).abs() <= 0.10, "γH/c_u at collapse {n}");
+    }
+}
+
+/// A bracket that does not bracket is reported, naming the end that is wrong.
+#[test]
+fn a_bracket_that_does_not_bracket_is_reported() {
+    let model = slope_model(&SlopeGeometry::UNDRAINED, clay(), 0.4, 10.0, 5, AntiLocking::BBar);
+    let srf = |bracket| StrengthReduction { trial: QuasiStaticSettings { load_steps: 5, max_cutbacks: 2, ..Default::default() }, bracket, tolerance: 0.05 };
+    assert!(matches!(srf((1.0, 1.2)).factor_of_safety(&model, |_| {}), Err(StrengthReductionError::HoldsAtUpper(f)) if f == 1.2));
+    assert!(matches!(srf((1.6, 2.0)).factor_of_safety(&model, |_| {}), Err(StrengthReductionError::FailsAtLower(f)) if f == 1.6));
+    assert!(matches!(srf((2.0, 1.0)).factor_of_safety(&model, |_| {}), Err(StrengthReductionError::InvalidSettings { .. })));
+}
