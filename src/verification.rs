@@ -620,3 +620,83 @@ pub fn slope_model(
         .and_then(|m| m.with_anti_locking(anti_locking))
         .expect("valid slope model")
 }
+
+/// The V1 column in two layers, the upper half `contrast` times softer than the lower (a
+/// hard case: a stiffness contrast across one cell face), small strain, ν = 0. The stress
+/// is still the weight above, σ_yy = −ρg(H − Y); the displacement integrates σ/E layer by
+/// layer.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LayeredColumn {
+    pub column: Column,
+    pub contrast: f64,
+}
+
+impl LayeredColumn {
+    /// u(Y) = ∫₀^Y σ_yy/E(Y') dY', E = E₀ below H/2 and E₀/contrast above.
+    pub fn displacement(&self, y0: f64) -> f64 {
+        let c = &self.column;
+        let half = 0.5 * c.height;
+        let integral = |a: f64, b: f64| c.height * (b - a) - 0.5 * (b * b - a * a);
+        let rg = c.density * c.gravity;
+        let lower = -rg / c.young * integral(0.0, y0.min(half));
+        let upper = if y0 > half { -rg * self.contrast / c.young * integral(half, y0) } else { 0.0 };
+        lower + upper
+    }
+
+    /// One cell wide, `cells_high` (even) cells over the height, 2×2 points per cell, the
+    /// layer interface on a cell face.
+    pub fn model(&self, cells_high: usize, basis: crate::grid::BasisKind) -> crate::implicit::Model<2> {
+        use crate::constitutive::Elastic;
+        use crate::implicit::{Kinematics, Model};
+        use crate::points::Shape;
+        use nalgebra::Vector2;
+        assert!(cells_high % 2 == 0, "the interface must lie on a cell face");
+        let c = &self.column;
+        let width = c.height / cells_high as f64;
+        let ColumnParts { grid, max, constraints, gravity, law } = column_parts::<2>(c, width, cells_high);
+        let soft = Elastic::new(c.young / self.contrast, 0.0).expect("valid soft layer");
+        let mut points = PointStore::new();
+        let half = 0.5 * c.height;
+        points.fill(&grid, &Shape::Box { min: Vector2::zeros(), max: Vector2::new(max[0], half) }, 2, c.density, 0).expect("lower layer fits");
+        points.fill(&grid, &Shape::Box { min: Vector2::new(0.0, half), max }, 2, c.density, 1).expect("upper layer fits");
+        Model::new(grid, basis, Kinematics::SmallStrain, points, vec![law, std::sync::Arc::new(soft)], constraints, gravity)
+            .expect("valid layered column")
+    }
+}
+
+/// A hard case: plane-strain compression of a softening von Mises specimen (1 × 2, quarter
+/// model: rollers on the left and the base), the top pushed down by `shortening` with the
+/// load factor. σ_y = 100 softening at H = −500 (E = 1e4, ν = 0.3) to 30; a 0.25 × 0.25
+/// weaker corner (σ_y = 90) at the origin seeds the shear band. Linear basis, B-bar,
+/// `cells_across` cells over the width; the grid reaches `margin` widths beyond the right
+/// side, where the specimen bulges.
+pub fn softening_specimen(cells_across: usize, margin: f64, shortening: f64) -> crate::model::Model<2> {
+    use crate::constitutive::{ConstitutiveLaw, Elastic, VonMises};
+    use crate::grid::{BasisKind, Grid};
+    use crate::model::{AntiLocking, Kinematics, Model, PlaneConstraint};
+    use crate::points::Shape;
+    use nalgebra::Vector2;
+    let n = cells_across;
+    let h = 1.0 / n as f64;
+    let extra = (margin * n as f64).ceil() as usize;
+    let grid = Grid::new(Vector2::zeros(), Vector2::new(h, h), [n + extra, 2 * n + 1]).expect("valid specimen grid");
+    let elastic = Elastic::new(1e4, 0.3).expect("valid elasticity");
+    let law = |yield_stress: f64| -> std::sync::Arc<dyn ConstitutiveLaw> {
+        std::sync::Arc::new(
+            VonMises::new(elastic, yield_stress, -500.0).and_then(|l| l.with_residual_yield_stress(0.3 * yield_stress)).expect("valid softening law"),
+        )
+    };
+    let w = 0.25;
+    let mut points = PointStore::new();
+    let outline = [(w, 0.0), (1.0, 0.0), (1.0, 2.0), (0.0, 2.0), (0.0, w), (w, w)].map(|(x, y)| Vector2::new(x, y));
+    points.fill(&grid, &Shape::Polygon(outline.to_vec()), 2, 1.0, 0).expect("specimen fits the grid");
+    points.fill(&grid, &Shape::Box { min: Vector2::zeros(), max: Vector2::new(w, w) }, 2, 1.0, 1).expect("weak corner fits");
+    let constraints = vec![
+        PlaneConstraint::new(1, 2 * n, [false, true, false]).displaced([0.0, -shortening, 0.0]),
+        PlaneConstraint::new(1, 0, [false, true, false]),
+        PlaneConstraint::new(0, 0, [true, false, false]),
+    ];
+    Model::new(grid, BasisKind::Linear, Kinematics::SmallStrain, points, vec![law(100.0), law(90.0)], constraints, Vector2::zeros())
+        .and_then(|m| m.with_anti_locking(AntiLocking::BBar))
+        .expect("valid specimen")
+}

@@ -51,3 +51,21 @@ fn a_bracket_that_does_not_bracket_is_reported() {
     assert!(matches!(srf((1.6, 2.0)).factor_of_safety(&model, |_| {}), Err(StrengthReductionError::FailsAtLower(f)) if f == 1.6));
     assert!(matches!(srf((2.0, 1.0)).factor_of_safety(&model, |_| {}), Err(StrengthReductionError::InvalidSettings { .. })));
 }
+
+/// The linear solver follows the tangent: Cholesky for a symmetric, non-softening law
+/// (von Mises, H = 0); LU for non-associated Mohr–Coulomb (non-symmetric) and for a
+/// softening von Mises (symmetric but indefinite past the peak, where Cholesky stops at
+/// its first negative pivot).
+#[test]
+fn the_linear_solver_follows_symmetry_and_softening() {
+    use loam::constitutive::MohrCoulomb;
+    use loam::solve::LinearSolverKind;
+    let kind = |law: Arc<dyn ConstitutiveLaw>| {
+        let model = slope_model(&SlopeGeometry::UNDRAINED, law, 0.4, 10.0, 5, AntiLocking::BBar);
+        QuasiStatic::new(model, QuasiStaticSettings::default()).linear_solver_kind()
+    };
+    let elastic = Elastic::new(1e5, 0.3).unwrap();
+    assert_eq!(kind(clay()), LinearSolverKind::Cholesky);
+    assert_eq!(kind(Arc::new(MohrCoulomb::from_degrees(elastic, 10.0, 20.0, 0.0).unwrap())), LinearSolverKind::Lu);
+    assert_eq!(kind(Arc::new(VonMises::new(elastic, 17.3, -100.0).unwrap())), LinearSolverKind::Lu);
+}

@@ -6,6 +6,7 @@
 
 mod dynamics;
 mod footing;
+mod hard_cases;
 mod slope;
 mod steps;
 mod svg;
@@ -340,6 +341,7 @@ fn verify(quick: bool, out: &Path) -> Result<()> {
     dynamics::verify(quick, &mut report)?;
     footing::verify(quick, &mut report)?;
     slope::verify(quick, &mut report)?;
+    hard_cases::verify(quick, &mut report)?;
     let Report { mut md, rows, .. } = report;
     writeln!(md, "## Bounds\n\n| case | quantity | value | bound | pass |\n|---|---|---:|---:|---|")?;
     let mut csv = String::from("case,quantity,value,bound,pass\n");

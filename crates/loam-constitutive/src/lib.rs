@@ -85,6 +85,11 @@ pub trait ConstitutiveLaw: Send + Sync + std::fmt::Debug {
     fn symmetric_tangent(&self) -> bool {
         true
     }
+    /// true when the tangent can turn indefinite (softening): symmetric or not, Cholesky
+    /// then fails where LU goes on, so the solver choice needs to know.
+    fn indefinite_tangent(&self) -> bool {
+        false
+    }
     fn update(
         &self,
         eps_trial: &Matrix3<f64>,

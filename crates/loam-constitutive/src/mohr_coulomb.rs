@@ -1055,6 +1055,10 @@ impl ConstitutiveLaw for MohrCoulomb {
         self.dilation == self.friction && !self.softens()
     }
 
+    fn indefinite_tangent(&self) -> bool {
+        self.softens()
+    }
+
     fn update(
         &self,
         eps_trial: &Matrix3<f64>,

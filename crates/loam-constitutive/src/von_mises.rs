@@ -188,6 +188,11 @@ impl ConstitutiveLaw for VonMises {
         Some(self.elastic)
     }
 
+    /// Softening (H < 0) makes the algorithmic tangent negative in the flow direction.
+    fn indefinite_tangent(&self) -> bool {
+        self.hardening < 0.0
+    }
+
     /// σ_y, H and the residual σ_y over F: the undrained strength c_u = σ_y/√3 over F.
     fn with_strength_reduced(&self, factor: f64) -> Option<Result<std::sync::Arc<dyn ConstitutiveLaw>, ConstitutiveError>> {
         Some(

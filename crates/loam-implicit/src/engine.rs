@@ -37,16 +37,17 @@ pub(crate) struct Engine<const D: usize> {
 }
 
 impl<const D: usize> Engine<D> {
-    /// The linear solver is the one asked for, or chosen from the tangent's symmetry:
-    /// Cholesky when every material's tangent is symmetric, LU otherwise (never a silent
-    /// symmetrisation).
+    /// The linear solver is the one asked for, or chosen from the tangent: Cholesky when
+    /// every material's tangent is symmetric and none softens, LU otherwise (never a
+    /// silent symmetrisation; a softening tangent is indefinite and Cholesky would stop
+    /// at the first negative pivot).
     pub fn new(model: Model<D>, newton: NewtonSettings, linear_solver: Option<LinearSolverKind>) -> Self {
-        let kind = linear_solver.unwrap_or(if model.symmetric_tangent() {
+        let kind = linear_solver.unwrap_or(if model.symmetric_tangent() && !model.indefinite_tangent() {
             LinearSolverKind::Cholesky
         } else {
             LinearSolverKind::Lu
         });
-        tracing::info!(solver = %kind, "linear solver chosen from the tangent's symmetry");
+        tracing::info!(solver = %kind, "linear solver chosen from the tangent's symmetry and definiteness");
         Self {
             conn: Connectivity::new(model.basis),
             model,

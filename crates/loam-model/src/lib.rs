@@ -298,6 +298,12 @@ impl<const D: usize> Model<D> {
         self.materials.iter().all(|m| m.symmetric_tangent())
     }
 
+    /// Whether some material softens, so the tangent can turn indefinite and only LU
+    /// factorises it.
+    pub fn indefinite_tangent(&self) -> bool {
+        self.materials.iter().any(|m| m.indefinite_tangent())
+    }
+
     /// Mark the constrained dofs (`active node · D + component`) of the active nodes.
     pub fn constrained_dofs(&self, active: &ActiveNodes, out: &mut Vec<bool>) {
         out.clear();
