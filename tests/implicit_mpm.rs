@@ -133,7 +133,7 @@ fn an_unrecoverable_step_is_reported_not_accepted() {
 /// iterations (the tangent's condition number grows by the contrast, far from double
 /// precision's limit), the stress is the weight above to the same first-order point error
 /// as the uniform column (GIMP: e_σ = 1/(4n) = 7.8e-3 at 32 cells; bound 1e-2 as there),
-/// and the top settlement matches the layered closed form to 0.1 %.
+/// and the top settlement matches the layered closed form to 0.1 % (measured 7.3e-4).
 #[test]
 fn a_million_fold_stiffness_contrast_converges() {
     use loam::verification::LayeredColumn;
