@@ -600,8 +600,26 @@ pub fn slope_model(
     cells_per_h: usize,
     anti_locking: crate::model::AntiLocking,
 ) -> crate::model::Model<2> {
-    use crate::grid::{BasisKind, Grid};
-    use crate::model::{Kinematics, Model, PlaneConstraint};
+    use crate::grid::BasisKind;
+    use crate::model::Kinematics;
+    slope_model_with(geometry, law, density, gravity, cells_per_h, BasisKind::Linear, Kinematics::SmallStrain)
+        .with_anti_locking(anti_locking)
+        .expect("valid slope model")
+}
+
+/// [`slope_model`] with any basis and kinematics and no anti-locking: the large-
+/// deformation run-out (GIMP, finite strain).
+pub fn slope_model_with(
+    geometry: &SlopeGeometry,
+    law: std::sync::Arc<dyn crate::constitutive::ConstitutiveLaw>,
+    density: f64,
+    gravity: f64,
+    cells_per_h: usize,
+    basis: crate::grid::BasisKind,
+    kinematics: crate::model::Kinematics,
+) -> crate::model::Model<2> {
+    use crate::grid::Grid;
+    use crate::model::{Model, PlaneConstraint};
     use crate::points::Shape;
     use nalgebra::Vector2;
     let g = geometry;
@@ -616,9 +634,7 @@ pub fn slope_model(
         PlaneConstraint::new(0, nx, [true, false, false]),
         PlaneConstraint::new(1, 0, [true, true, false]),
     ];
-    Model::new(grid, BasisKind::Linear, Kinematics::SmallStrain, points, vec![law], constraints, Vector2::new(0.0, -gravity))
-        .and_then(|m| m.with_anti_locking(anti_locking))
-        .expect("valid slope model")
+    Model::new(grid, basis, kinematics, points, vec![law], constraints, Vector2::new(0.0, -gravity)).expect("valid slope model")
 }
 
 /// The V1 column in two layers, the upper half `contrast` times softer than the lower (a

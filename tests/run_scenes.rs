@@ -112,3 +112,13 @@ fn slope_scene_finds_the_factor_of_safety() {
     assert_eq!(rows.len(), fos.trials.len());
     assert_eq!(summary.steps, 10);
 }
+
+/// Every slope example is a valid scene (the run-outs and the frictional slope run in
+/// `cargo xtask verify`, V4).
+#[test]
+fn slope_examples_are_valid_scenes() {
+    for name in ["slope_griffiths_lane", "slope_runout_implicit", "slope_runout_explicit"] {
+        let scene = LoadedScene::read(Path::new(&format!("examples/{name}.ron"))).unwrap_or_else(|e| panic!("{name}: {e}"));
+        scene.build::<2>().unwrap_or_else(|e| panic!("{name}: {e}"));
+    }
+}
