@@ -716,3 +716,53 @@ pub fn softening_specimen(cells_across: usize, margin: f64, shortening: f64) -> 
         .and_then(|m| m.with_anti_locking(AntiLocking::BBar))
         .expect("valid specimen")
 }
+
+/// A hard case for small cuts: a 4 h × 4 h elastic block (E = 1e3, ν = 0.3, unit density)
+/// on a fixed base under gravity 10, shifted along x so that its right face lies
+/// `overlap` of a cell into the next cell (h = 1, 10 × 6 cells), small strain. With GIMP
+/// the rightmost point domains reach that cell by `overlap` h, and its far nodes get
+/// weights ~ overlap² and stiffness ~ overlap².
+pub fn translated_block(overlap: f64, basis: crate::grid::BasisKind, ghost_penalty: Option<f64>) -> crate::model::Model<2> {
+    use crate::constitutive::Elastic;
+    use crate::grid::Grid;
+    use crate::model::{Kinematics, Model, PlaneConstraint};
+    use crate::points::Shape;
+    use nalgebra::Vector2;
+    let grid = Grid::new(Vector2::zeros(), Vector2::new(1.0, 1.0), [10, 6]).expect("valid grid");
+    // Points at the sub-cell centres of the block's own cells, not of the grid's.
+    let shift = 2.0 + overlap;
+    let block_cells = Grid::new(Vector2::new(shift, 0.0), Vector2::new(1.0, 1.0), [4, 4]).expect("valid block cells");
+    let mut points = PointStore::new();
+    points
+        .fill(&block_cells, &Shape::Box { min: Vector2::new(shift, 0.0), max: Vector2::new(shift + 4.0, 4.0) }, 2, 1.0, 0)
+        .expect("block fits");
+    let law = std::sync::Arc::new(Elastic::new(1e3, 0.3).expect("valid elasticity"));
+    let model = Model::new(grid, basis, Kinematics::SmallStrain, points, vec![law], vec![PlaneConstraint::new(1, 0, [true, true, false])], Vector2::new(0.0, -10.0))
+        .expect("valid block");
+    match ghost_penalty {
+        Some(gamma) => model.with_ghost_penalty(gamma).expect("valid ghost penalty"),
+        None => model,
+    }
+}
+
+/// The 2-norm condition number of a symmetric tangent restricted to its free dofs, by a
+/// dense eigen-decomposition: for the small models of the hard-case studies only.
+pub fn condition_number(pattern: &crate::solve::BlockPattern, values: &[f64], constrained: &[bool]) -> f64 {
+    let n = pattern.num_dofs();
+    let free: Vec<usize> = (0..n).filter(|&i| !constrained[i]).collect();
+    let mut index = vec![usize::MAX; n];
+    for (k, &i) in free.iter().enumerate() {
+        index[i] = k;
+    }
+    let mut k = nalgebra::DMatrix::<f64>::zeros(free.len(), free.len());
+    for c in 0..n {
+        for idx in pattern.col_ptr()[c]..pattern.col_ptr()[c + 1] {
+            let r = pattern.row_idx()[idx];
+            if index[r] != usize::MAX && index[c] != usize::MAX {
+                k[(index[r], index[c])] += values[idx];
+            }
+        }
+    }
+    let eigenvalues = k.symmetric_eigen().eigenvalues;
+    eigenvalues.iter().fold(0.0f64, |m, v| m.max(v.abs())) / eigenvalues.iter().fold(f64::INFINITY, |m, v| m.min(v.abs()))
+}

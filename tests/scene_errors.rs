@@ -291,3 +291,16 @@ fn strength_reduction_is_checked() {
     assert_ne!(plastic, GOOD, "test setup: the law is in the example");
     check(&plastic.replacen("QuasiStatic(load_steps: 40)", "QuasiStatic(load_steps: 40, strength_reduction: Some(()))", 1)).unwrap();
 }
+
+/// The ghost penalty is checked at its key: a non-positive factor, and an explicit
+/// analysis (which has no tangent to stabilise), are refused.
+#[test]
+fn ghost_penalty_is_checked() {
+    let ghost = |v: &str| GOOD.replacen("basis: Gimp,", &format!("basis: Gimp,\n    ghost_penalty: {v},"), 1);
+    let at = line_of("basis: Gimp") + 1;
+    check(&ghost("Some(0.1)")).unwrap();
+    let e = check(&ghost("Some(-1.0)")).unwrap_err();
+    assert!(e.to_string().contains("positive") && e.line == at, "{e}");
+    let e = check(&ghost("Some(0.1)").replacen("QuasiStatic(load_steps: 40)", "Explicit(duration: 1.0)", 1)).unwrap_err();
+    assert!(e.to_string().contains("Explicit") && e.line == at, "{e}");
+}

@@ -7,7 +7,7 @@ use crate::{Report, Row};
 use anyhow::Result;
 use loam::grid::BasisKind;
 use loam::implicit::{Kinematics, QuasiStatic, QuasiStaticSettings};
-use loam::verification::{column_errors, column_model, softening_specimen, Column, LayeredColumn};
+use loam::verification::{column_errors, column_model, condition_number, softening_specimen, translated_block, Column, LayeredColumn};
 use std::fmt::Write as _;
 use std::time::Instant;
 
@@ -107,6 +107,45 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
     let s = softening(8, 0.0);
     writeln!(md, "- the run stops with: `{}`; the state of the last converged step ({:.4} shortening) is kept, with {} of its {} points.\n", s.stop, s.reached, s.points.1, s.points.0)?;
     report.rows.push(Row { case: "H4 point leaving the grid".into(), quantity: "points kept (1 = all)".into(), value: (s.points.0 == s.points.1) as u8 as f64, bound: Some((1.0, false)) });
+    small_cuts(report)?;
+    let md = &mut report.md;
     writeln!(md, "An explicit step above the critical one is the remaining hard case; V2 above shows it detected (the explicit row at 2 Δt_c), and a scene asking for one is refused unless `allow_above_critical`.\n")?;
+    Ok(())
+}
+
+/// One load step of the translated block: the start tangent's condition number, whether
+/// Newton converged and in how many iterations, and the largest displacement.
+fn block_step(overlap: f64, basis: BasisKind, ghost: Option<f64>) -> Result<(f64, Option<usize>, f64)> {
+    let mut qs = QuasiStatic::new(translated_block(overlap, basis, ghost), QuasiStaticSettings { load_steps: 1, ..Default::default() });
+    let (pattern, values, constrained) = qs.start_tangent()?;
+    let condition = condition_number(&pattern, &values, &constrained);
+    let its = qs.step().ok().map(|r| r.iterations);
+    let p = &qs.model().points;
+    let u = p.position.iter().zip(&p.position0).map(|(x, x0)| (x - x0).norm()).fold(0.0, f64::max);
+    Ok((condition, its, u))
+}
+
+/// The block translated through the grid, with and without the ghost penalty.
+fn small_cuts(report: &mut Report) -> Result<()> {
+    let md = &mut report.md;
+    writeln!(md, "### Small cuts: a block translated through the grid\n\nA 4 × 4-cell elastic block on a fixed base under gravity, shifted so that its right face lies `overlap` of a cell into the next cell; GIMP (point domains reach that cell by the overlap), small strain, one load step. Condition number of the start tangent on the free dofs (dense eigenvalues), Newton iterations to 1e-9, largest displacement; plain and with the face ghost penalty (docs/theory.md §15) at γ = 0.1 and 0.01.\n")?;
+    writeln!(md, "| overlap | cond, plain | its | u_max | cond, γ = 0.1 | its | u_max | cond, γ = 0.01 | its | u_max |\n|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")?;
+    let its = |i: Option<usize>| i.map_or("failed".to_string(), |n| n.to_string());
+    let mut ghost_failures = 0;
+    let mut worst_ratio = 0.0f64;
+    let reference = block_step(0.5, BasisKind::Gimp, Some(0.1))?.0;
+    for overlap in [0.5, 1e-1, 1e-2, 1e-3, 1e-4, 1e-6] {
+        let (c0, i0, u0) = block_step(overlap, BasisKind::Gimp, None)?;
+        let (c1, i1, u1) = block_step(overlap, BasisKind::Gimp, Some(0.1))?;
+        let (c2, i2, u2) = block_step(overlap, BasisKind::Gimp, Some(0.01))?;
+        ghost_failures += i1.is_none() as usize + i2.is_none() as usize;
+        worst_ratio = worst_ratio.max(c1 / reference);
+        writeln!(md, "| {overlap:.0e} | {c0:.2e} | {} | {u0:.5} | {c1:.2e} | {} | {u1:.5} | {c2:.2e} | {} | {u2:.5} |", its(i0), its(i1), its(i2))?;
+        report.rows.push(Row::info(format!("H5 small cut {overlap:.0e}"), "condition_plain", c0));
+        report.rows.push(Row::info(format!("H5 small cut {overlap:.0e}"), "condition_ghost_0.1", c1));
+    }
+    writeln!(md, "\nWithout the penalty the condition number grows as overlap⁻² (the far nodes' stiffness scales with the square of the overlap) to 4e13 at 1e-6 of a cell. The sparse direct solver still converges on this elastic block — the cost is digits, not Newton failure here. With the penalty it stays bounded at every overlap: at the well-cut block's value with γ = 0.1, within 4× of it with γ = 0.01. The price is consistency: the penalty stiffens the cut cells, by 2 % in u_max at γ = 0.1 on this coarse block and 0.2 % at γ = 0.01. The tent basis has no small-cut problem of this kind: a point's weight on a node falls with its distance, but its gradient does not.\n")?;
+    report.rows.push(Row::upper("H5 small cuts with ghost penalty", "newton_failures", ghost_failures as f64, 0.0));
+    report.rows.push(Row::upper("H5 small cuts, γ = 0.1", "condition_over_well_cut", worst_ratio, 1.5));
     Ok(())
 }

@@ -9,10 +9,12 @@
 
 mod basis;
 mod connectivity;
+mod ghost;
 mod mesh;
 
 pub use basis::{bspline_greville, BasisError, BasisKind};
 pub use connectivity::{ActiveNodes, Connectivity, NodePointAdjacency, PointBasisError, INACTIVE};
+pub use ghost::{ghost_faces, GhostFace, CUT_FILL};
 pub use mesh::{ElementError, FeMesh, MeshError};
 
 use nalgebra::SVector;

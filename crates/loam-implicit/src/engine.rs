@@ -7,7 +7,7 @@
 use crate::step::{Inertia, PointCouplings, StepSystem, TrialState};
 use crate::step::PointUpdateError;
 use crate::StepError;
-use loam_grid::Connectivity;
+use loam_grid::{ghost_faces, Connectivity, GhostFace, INACTIVE};
 use loam_model::{AntiLocking, Model};
 use loam_points::stretched_half_length;
 use loam_solve::{
@@ -32,6 +32,10 @@ pub(crate) struct Engine<const D: usize> {
     pub du: Vec<f64>,
     /// B-bar: the cell-averaged support gradients, `stride` per point (empty without it).
     pub bbar: Vec<SVector<f64, D>>,
+    /// Ghost-penalty faces over active nodes, scaled by γ M (empty without the penalty),
+    /// and the node couplings they add to the pattern.
+    pub ghost: Vec<GhostFace>,
+    ghost_couplings: Vec<Vec<u32>>,
     pub trial: TrialState<D>,
     pub newton: NewtonSolver,
 }
@@ -60,6 +64,8 @@ impl<const D: usize> Engine<D> {
             reactions: Vec::new(),
             du: Vec::new(),
             bbar: Vec::new(),
+            ghost: Vec::new(),
+            ghost_couplings: Vec::new(),
             trial: TrialState::default(),
             newton: NewtonSolver::new(newton, SparseDirectSolver::new(kind)),
         }
@@ -79,7 +85,18 @@ impl<const D: usize> Engine<D> {
                 .map_err(|source| StepError::PointOutsideGrid { step, source })?,
             Some(mesh) => self.conn.compute_mesh(mesh).map_err(|source| StepError::Element { step, source })?,
         }
-        self.pattern.update(&PointCouplings(&self.conn));
+        if let Some(gamma) = self.model.ghost_penalty {
+            self.ghost = scaled_ghost_faces(&self.model, &self.conn, gamma);
+            let n = self.conn.active_nodes().len();
+            self.ghost_couplings.iter_mut().for_each(Vec::clear);
+            self.ghost_couplings.resize(n, Vec::new());
+            for face in &self.ghost {
+                for &a in &face.nodes {
+                    self.ghost_couplings[a as usize].extend_from_slice(&face.nodes);
+                }
+            }
+        }
+        self.pattern.update_with(&PointCouplings(&self.conn), &self.ghost_couplings);
         self.model.constrained_dofs(self.conn.active_nodes(), &mut self.constrained);
         if self.model.anti_locking == AntiLocking::BBar {
             cell_averaged_gradients(&self.model, &self.conn, &mut self.bbar);
@@ -141,6 +158,7 @@ impl<const D: usize> Engine<D> {
             trial: &mut self.trial,
             inertia,
             bbar: (self.model.anti_locking == AntiLocking::BBar).then_some(self.bbar.as_slice()),
+            ghost: &self.ghost,
         };
         (system, &mut self.du, &mut self.newton)
     }
@@ -302,4 +320,25 @@ pub(crate) fn advance<const D: usize, A: CutBack<D>>(
         }
     }
     Ok(done)
+}
+
+/// The ghost faces of the committed configuration (docs/theory.md §15): cell fill from the
+/// points' volumes, faces of cut cells whose nodes are all active, renumbered to active
+/// nodes and scaled by γ times the largest P-wave modulus of the materials.
+fn scaled_ghost_faces<const D: usize>(model: &Model<D>, conn: &Connectivity<D>, gamma: f64) -> Vec<GhostFace> {
+    let grid = &model.grid;
+    let cells = grid.cells();
+    let mut fill = vec![0.0; cells.iter().product()];
+    for (x, v) in model.points.position.iter().zip(&model.points.volume) {
+        let ijk = grid.cell_coords(x);
+        fill[(0..D).rev().fold(0, |idx, a| idx * cells[a] + ijk[a])] += v / grid.cell_volume();
+    }
+    let to_active = &conn.active_nodes().grid_to_active;
+    let modulus = model.materials.iter().map(|m| m.p_wave_modulus()).fold(0.0, f64::max);
+    let mut faces = ghost_faces(grid, &fill, |g| to_active[g] != INACTIVE);
+    for face in &mut faces {
+        face.nodes.iter_mut().for_each(|g| *g = to_active[*g as usize]);
+        face.matrix.iter_mut().for_each(|v| *v *= gamma * modulus);
+    }
+    faces
 }

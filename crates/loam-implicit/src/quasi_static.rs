@@ -225,6 +225,29 @@ impl<const D: usize> QuasiStatic<D> {
         })
     }
 
+    /// The tangent the next load step starts from (zero increment: the committed state),
+    /// with its pattern and the constrained-dof flags (rows and columns eliminated but for
+    /// the diagonal). For inspecting conditioning; commits nothing.
+    pub fn start_tangent(&mut self) -> Result<(loam_solve::BlockPattern, Vec<f64>, Vec<bool>), StepError> {
+        let step = self.step + 1;
+        self.engine.connect(step)?;
+        let lambda = (step as f64 / self.settings.load_steps as f64).min(1.0);
+        self.engine.external_forces(lambda);
+        self.engine.du.clear();
+        let (mut system, du, _) = self.engine.system(None);
+        let mut r = vec![0.0; du.len()];
+        loam_solve::NewtonProblem::evaluate(&mut system, du, &mut r).map_err(|e| StepError::NotConverged {
+            step,
+            load_factor: lambda,
+            cutbacks: 0,
+            reason: e.to_string(),
+            residuals: vec![],
+        })?;
+        loam_solve::NewtonProblem::assemble(&mut system);
+        let e = &self.engine;
+        Ok((e.pattern.clone(), e.values.clone(), e.constrained.clone()))
+    }
+
     /// Advance one load step, cutting back as needed.
     pub fn step(&mut self) -> Result<StepReport, StepError> {
         if self.is_finished() {

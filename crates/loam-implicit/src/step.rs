@@ -9,7 +9,7 @@
 
 use loam_model::{internal_force, Kinematics, Model};
 use loam_constitutive::{finite_strain_update, small_strain_update, ConstitutiveError, Tensor4};
-use loam_grid::Connectivity;
+use loam_grid::{Connectivity, GhostFace};
 pub(crate) use loam_model::PointCouplings;
 use loam_solve::{gather_nodal, BlockPattern, NewtonProblem};
 use nalgebra::{Matrix3, SMatrix, SVector};
@@ -100,6 +100,24 @@ pub(crate) struct StepSystem<'a, const D: usize> {
     /// B-bar: the volume-averaged gradient b̄ of each point's support slot over its cell
     /// (element), `stride` per point (THEORY: docs/theory.md §13); `None` without it.
     pub bbar: Option<&'a [SVector<f64, D>]>,
+    /// Ghost-penalty faces over active nodes, their matrices already scaled by γ M
+    /// (docs/theory.md §15); empty without the penalty.
+    pub ghost: &'a [GhostFace],
+}
+
+/// r += G Δu for every ghost face, component by component, faces in a fixed order.
+fn add_ghost_force<const D: usize>(ghost: &[GhostFace], du: &[f64], r: &mut [f64]) {
+    for face in ghost {
+        let n = face.nodes.len();
+        for (a, &na) in face.nodes.iter().enumerate() {
+            for (b, &nb) in face.nodes.iter().enumerate() {
+                let g = face.matrix[a * n + b];
+                for i in 0..D {
+                    r[na as usize * D + i] += g * du[nb as usize * D + i];
+                }
+            }
+        }
+    }
 }
 
 /// Embed the in-plane displacement-increment gradient in 3×3 (plane strain: zero out of plane).
@@ -284,6 +302,7 @@ impl<const D: usize> NewtonProblem for StepSystem<'_, D> {
                 out[i] += f[i];
             }
         });
+        add_ghost_force::<D>(self.ghost, du, r);
         // r = M x + f_int − f_ext; the reference is the external and inertial force on
         // free dofs plus the support reactions (= f_int) on constrained ones (THEORY.md §7):
         // a free vibration has no external force, and must not be judged against zero.
@@ -366,6 +385,18 @@ impl<const D: usize> NewtonProblem for StepSystem<'_, D> {
                 }
             }
         });
+        let mut block = [0.0; 9];
+        for face in self.ghost {
+            let n = face.nodes.len();
+            for (a, &na) in face.nodes.iter().enumerate() {
+                for (b, &nb) in face.nodes.iter().enumerate() {
+                    for i in 0..D {
+                        block[i * D + i] = face.matrix[a * n + b];
+                    }
+                    self.pattern.add_block(self.values, self.constrained, na as usize, nb as usize, &block[..D * D]);
+                }
+            }
+        }
     }
 
     fn matrix(&self) -> (&BlockPattern, &[f64]) {
@@ -448,6 +479,7 @@ mod tests {
                 trial: &mut trial,
                 inertia: None,
                 bbar: (anti_locking == AntiLocking::BBar).then_some(bbar.as_slice()),
+                ghost: &[],
             };
             // A finite increment (up to 2 % of a cell) so that ΔF ≠ I.
             let du: Vec<f64> = noise(n, 7).iter().map(|x| 0.02 * x).collect();

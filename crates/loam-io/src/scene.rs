@@ -38,6 +38,10 @@ pub struct Scene {
     /// basis or the FEM reference).
     #[serde(default)]
     pub anti_locking: AntiLockingSpec,
+    /// Face ghost penalty γ on cut cells (implicit MPM; docs/theory.md §15): `None`
+    /// (default) or `Some(γ)`, γ > 0, 0.01–1 useful.
+    #[serde(default)]
+    pub ghost_penalty: Option<f64>,
     /// Initial stress: `None` (default: unstressed, gravity applied with the load factor)
     /// or `Geostatic(k0: ..)` (level or layered ground; gravity acts in full from the start).
     #[serde(default)]
@@ -684,7 +688,15 @@ impl LoadedScene {
                 AntiLockingSpec::BBar => AntiLocking::BBar,
             })
             .map_err(|e| self.error(&[Seg::Key("anti_locking")], e.to_string()))?;
-        let mut model = model;
+        let mut model = match s.ghost_penalty {
+            None => model,
+            Some(gamma) => {
+                if matches!(s.analysis, AnalysisSpec::Explicit { .. }) {
+                    return Err(self.error(&[Seg::Key("ghost_penalty")], "the ghost penalty stabilises the implicit tangent; an Explicit analysis has none (remove the key)"));
+                }
+                model.with_ghost_penalty(gamma).map_err(|e| self.error(&[Seg::Key("ghost_penalty")], e.to_string()))?
+            }
+        };
         if let InitialStressSpec::Geostatic { k0 } = s.initial_stress {
             model.geostatic_stress(k0).map_err(|e| self.error(&[Seg::Key("initial_stress")], e.to_string()))?;
         }

@@ -100,6 +100,8 @@ pub enum ModelError {
     Gravity { axis: usize, value: f64 },
     #[error("strength reduction: {0}")]
     StrengthReduction(String),
+    #[error("ghost penalty: {0}")]
+    GhostPenalty(String),
 }
 
 /// A complete MPM model. Build it, then hand it to an analysis.
@@ -124,6 +126,9 @@ pub struct Model<const D: usize> {
     /// [`Model::geostatic_stress`]); only point forces and prescribed displacements follow
     /// the load factor.
     pub gravity_preloaded: bool,
+    /// Ghost-penalty factor γ (implicit MPM): the faces of cut cells are penalised by γ
+    /// times the largest P-wave modulus (`loam_grid::ghost_faces`); `None` adds nothing.
+    pub ghost_penalty: Option<f64>,
 }
 
 impl<const D: usize> Model<D> {
@@ -160,7 +165,7 @@ impl<const D: usize> Model<D> {
         let stride = materials.iter().map(|m| m.history_len()).max().unwrap_or(0);
         let material = points.material.clone();
         points.init_history(stride, |p, h| materials[material[p] as usize].init_history(h));
-        Ok(Self { grid, basis, kinematics, points, materials, constraints, gravity, point_forces: Vec::new(), mesh: None, anti_locking: AntiLocking::None, gravity_preloaded: false })
+        Ok(Self { grid, basis, kinematics, points, materials, constraints, gravity, point_forces: Vec::new(), mesh: None, anti_locking: AntiLocking::None, gravity_preloaded: false, ghost_penalty: None })
     }
 
     /// The updated Lagrangian FEM reference on the same grid planes, laws and loads: the
@@ -223,6 +228,20 @@ impl<const D: usize> Model<D> {
             return Err(ModelError::StrengthReduction("no material has a strength to reduce (all are elastic)".into()));
         }
         Ok(Self { materials, ..self.clone() })
+    }
+
+    /// Stabilise nearly empty cells by the face ghost penalty with factor γ > 0 (docs/theory.md
+    /// §15; 0.01–1 is the useful range). The background-grid MPM only: a body-fitted FEM
+    /// mesh has no cut cells.
+    pub fn with_ghost_penalty(mut self, gamma: f64) -> Result<Self, ModelError> {
+        if !(gamma.is_finite() && gamma > 0.0) {
+            return Err(ModelError::GhostPenalty(format!("the factor is {gamma}; it must be a positive number")));
+        }
+        if self.mesh.is_some() {
+            return Err(ModelError::GhostPenalty("a body-fitted FEM mesh has no cut cells to stabilise".into()));
+        }
+        self.ghost_penalty = Some(gamma);
+        Ok(self)
     }
 
     /// Use the given anti-locking treatment; B-bar needs small strain and the linear basis

@@ -78,6 +78,13 @@ impl BlockPattern {
     /// the generation advanced), false when it is the same as before and nothing was
     /// rebuilt.
     pub fn update<C: Couplings>(&mut self, couplings: &C) -> bool {
+        self.update_with(couplings, &[])
+    }
+
+    /// As [`update`](Self::update), with couplings beyond the elements': `extra[node]` lists
+    /// nodes tied to `node` by something else (the faces of a ghost penalty); an empty
+    /// slice adds none.
+    pub fn update_with<C: Couplings>(&mut self, couplings: &C, extra: &[Vec<u32>]) -> bool {
         let n = couplings.num_nodes();
         let lists: Vec<Vec<u32>> = (0..n)
             .into_par_iter()
@@ -86,6 +93,7 @@ impl BlockPattern {
                     .elements_of(j)
                     .iter()
                     .flat_map(|&(e, _)| couplings.nodes_of(e as usize).iter().copied())
+                    .chain(extra.get(j).into_iter().flatten().copied())
                     .collect();
                 v.sort_unstable();
                 v.dedup();
@@ -172,6 +180,26 @@ impl BlockPattern {
                 }
             }
         });
+    }
+
+    /// Add the d×d `block` (row-major) coupling node `i` (rows) to node `j` (columns) into
+    /// `values`, eliminating constrained dofs as [`assemble`](Self::assemble) does. The pair
+    /// must be in the pattern. Sequential: callers adding many blocks do so in a fixed order.
+    pub fn add_block(&self, values: &mut [f64], constrained: &[bool], i: usize, j: usize, block: &[f64]) {
+        let d = self.dofs_per_node;
+        let nb = self.neighbours(j);
+        let q = nb.binary_search(&(i as u32)).expect("node pair in the pattern");
+        let col_len = nb.len() * d;
+        let start = self.col_ptr[j * d];
+        for k in 0..d {
+            for r in 0..d {
+                let fixed = constrained[j * d + k] || constrained[i * d + r];
+                if fixed && !(i == j && r == k) {
+                    continue;
+                }
+                values[start + k * col_len + q * d + r] += block[r * d + k];
+            }
+        }
     }
 
     /// `y = A x` for a matrix with this pattern.
@@ -280,6 +308,27 @@ pub(crate) mod tests {
             }
         });
         (p, v)
+    }
+
+    /// Extra couplings enter the pattern, and `add_block` adds into exactly the coupled
+    /// pair (checked through A x), skipping constrained rows and columns off the diagonal.
+    #[test]
+    fn extra_couplings_and_added_blocks() {
+        let chain = Chain::new(2); // nodes 0–1–2; 0 and 2 share no element
+        let mut p = BlockPattern::new(1);
+        p.update_with(&chain, &[vec![2], vec![], vec![0]]);
+        assert_eq!(p.neighbours(0), &[0, 1, 2]);
+        let mut values = vec![0.0; p.nnz()];
+        p.add_block(&mut values, &[false; 3], 0, 2, &[3.0]);
+        p.add_block(&mut values, &[false; 3], 2, 0, &[3.0]);
+        let mut y = vec![0.0; 3];
+        p.mul_vec(&values, &[1.0, 10.0, 100.0], &mut y);
+        assert_eq!(y, vec![300.0, 0.0, 3.0]);
+        let mut values = vec![0.0; p.nnz()];
+        p.add_block(&mut values, &[true, false, false], 0, 2, &[3.0]);
+        p.add_block(&mut values, &[true, false, false], 0, 0, &[5.0]);
+        p.mul_vec(&values, &[1.0, 10.0, 100.0], &mut y);
+        assert_eq!(y, vec![5.0, 0.0, 0.0]);
     }
 
     #[test]
