@@ -100,7 +100,7 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
     let mut qs = QuasiStatic::new(column_model::<2>(&c, c.height / 16.0, 16, 2, BasisKind::Gimp, Kinematics::FiniteStrain), settings);
     let r = qs.step()?;
     let e = column_errors(&qs.model().points, &c, 1, |y| c.hencky_displacement(y));
-    writeln!(md, "- {} cut-backs, {} sub-steps, {} Newton iterations in all; load factor {:.3} reached; e_σ = {:.3e} (3.7e-3 with 40 load steps). run_log.csv records the cut-backs and sub-steps of every step.\n", r.cutbacks, r.substeps, r.iterations, r.load_factor, e.stress)?;
+    writeln!(md, "- {} failed attempts (cut-backs), {} converged sub-steps with {} Newton iterations (the sub-step halves on a failure and doubles after two successes); load factor {:.3} reached; e_σ = {:.3e} (3.7e-3 with 40 load steps). run_log.csv records the cut-backs and sub-steps of every step.\n", r.cutbacks, r.substeps, r.iterations, r.load_factor, e.stress)?;
     report.rows.push(Row::info("H3 one-step V1c, 3 iterations max", "cutbacks", r.cutbacks as f64));
 
     writeln!(md, "### Points leaving the grid\n\nThe softening specimen (8 cells across) on a grid that ends at its right side, where it bulges:\n")?;

@@ -51,7 +51,7 @@ pub struct DynamicSettings {
     pub bossak_alpha: f64,
     pub mass: MassMatrix,
     pub newton: NewtonSettings,
-    /// How many times one time step may be halved before the run stops.
+    /// How many halvings a sub-step may reach before a failure stops the run.
     pub max_cutbacks: usize,
     /// Force a linear solver; `None` chooses Cholesky for symmetric tangents, LU otherwise.
     pub linear_solver: Option<LinearSolverKind>,

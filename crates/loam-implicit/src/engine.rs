@@ -279,9 +279,11 @@ pub(crate) struct Advanced {
     pub dofs: usize,
 }
 
-/// Advance `a` to `target` in step `step`: try the whole increment, halve it after every
-/// failed attempt, and stop with `NotConverged` after `max_cutbacks` halvings. `scale` sets
-/// the round-off allowance on reaching the target (1 for load factors, Δt for time).
+/// Advance `a` to `target` in step `step`: try the whole increment; halve it after a failed
+/// attempt, and double it again after two converged sub-steps in a row, so that one hard
+/// stretch does not hold the rest of the step at the smallest size. Stop with
+/// `NotConverged` when an attempt fails at `max_cutbacks` halvings. `scale` sets the
+/// round-off allowance on reaching the target (1 for load factors, Δt for time).
 pub(crate) fn advance<const D: usize, A: CutBack<D>>(
     a: &mut A,
     step: usize,
@@ -289,9 +291,11 @@ pub(crate) fn advance<const D: usize, A: CutBack<D>>(
     scale: f64,
     max_cutbacks: usize,
 ) -> Result<Advanced, StepError> {
-    let mut increment = target - a.position();
+    let full = target - a.position();
+    let (mut depth, mut streak) = (0usize, 0usize);
     let mut done = Advanced { substeps: 0, cutbacks: 0, iterations: 0, residuals: Vec::new(), active_nodes: 0, dofs: 0 };
     while a.position() < target - 1e-12 * target.abs().max(scale) {
+        let increment = full * 0.5f64.powi(depth as i32);
         let engine = a.engine();
         engine.connect(step)?;
         done.active_nodes = engine.conn.active_nodes().len();
@@ -301,12 +305,18 @@ pub(crate) fn advance<const D: usize, A: CutBack<D>>(
                 done.substeps += 1;
                 done.iterations += report.iterations();
                 done.residuals = report.residuals;
+                streak += 1;
+                if depth > 0 && streak >= 2 {
+                    depth -= 1;
+                    streak = 0;
+                }
             }
             Err(e) => {
                 done.cutbacks += 1;
+                streak = 0;
                 let (load_factor, reason) = a.failure(increment, target, &e);
                 tracing::warn!(step, position = a.position(), increment, error = %e, "Newton failed; cutting the step back");
-                if done.cutbacks > max_cutbacks {
+                if depth >= max_cutbacks {
                     return Err(StepError::NotConverged {
                         step,
                         load_factor,
@@ -315,7 +325,7 @@ pub(crate) fn advance<const D: usize, A: CutBack<D>>(
                         residuals: e.report().residuals.clone(),
                     });
                 }
-                increment /= 2.0;
+                depth += 1;
             }
         }
     }

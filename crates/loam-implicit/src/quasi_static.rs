@@ -2,9 +2,10 @@
 //! cut-back, commit of the converged state (DESIGN.md "Data flow of one implicit step").
 //!
 //! A load step that Newton cannot solve is retried from the last committed state with half
-//! the load increment, as many times as `max_cutbacks` allows; then the run stops with an
-//! error naming the step, the load factor and the residual history. An unconverged state is
-//! never committed.
+//! the load increment, down to `max_cutbacks` halvings; after two converged sub-steps in a
+//! row the sub-step doubles again, up to the step's own increment. An attempt that fails at
+//! the smallest size stops the run with an error naming the step, the load factor and the
+//! residual history. An unconverged state is never committed.
 
 use loam_model::Model;
 use crate::engine::{advance, CutBack, Engine};
@@ -19,7 +20,8 @@ pub struct QuasiStaticSettings {
     /// Number of equal load steps from zero to full load.
     pub load_steps: usize,
     pub newton: NewtonSettings,
-    /// How many times one load step may be halved before the run stops.
+    /// How many halvings a sub-step may reach before a failure stops the run (the smallest
+    /// sub-step is the load step over 2^max_cutbacks).
     pub max_cutbacks: usize,
     /// Force a linear solver; `None` chooses Cholesky for symmetric tangents, LU otherwise.
     pub linear_solver: Option<LinearSolverKind>,
