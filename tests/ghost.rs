@@ -35,3 +35,33 @@ fn ghost_penalty_bounds_the_condition_number() {
         assert!(its <= 2, "overlap {overlap}: {its} iterations");
     }
 }
+
+/// The penalised run gives bitwise the same numbers with 1 and 2 threads: the faces are
+/// built, applied to the residual and added to the tangent in a fixed order.
+#[test]
+fn ghost_penalty_is_deterministic_across_threads() {
+    let run = |threads| {
+        rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap().install(|| {
+            let mut qs = QuasiStatic::new(translated_block(1e-3, BasisKind::Gimp, Some(0.1)), QuasiStaticSettings { load_steps: 2, ..Default::default() });
+            while !qs.is_finished() {
+                qs.step().unwrap();
+            }
+            let p = &qs.model().points;
+            (p.position.clone(), p.stress.clone())
+        })
+    };
+    assert!(run(1) == run(2), "results differ between 1 and 2 threads");
+}
+
+/// The penalty is refused where it would be inconsistent (B-spline nodal values are
+/// control values next to the grid faces) and where there is no tangent (explicit).
+#[test]
+fn ghost_penalty_is_refused_where_it_does_not_apply() {
+    let e = translated_block(0.1, BasisKind::QuadraticBSpline, None).with_ghost_penalty(0.1).unwrap_err();
+    assert!(e.to_string().contains("QuadraticBSpline"), "{e}");
+    let model = translated_block(0.1, BasisKind::Gimp, None);
+    let e = model.clone().with_ghost_penalty(0.0).unwrap_err();
+    assert!(e.to_string().contains("positive"), "{e}");
+    let e = loam::explicit::Explicit::new(model.with_ghost_penalty(0.1).unwrap(), loam::explicit::ExplicitSettings::new(1.0)).err().expect("refused");
+    assert!(e.to_string().contains("ghost penalty"), "{e}");
+}

@@ -32,6 +32,8 @@ pub enum ExplicitError {
          (use the implicit quasi-static or dynamic analysis for the FEM reference)"
     )]
     FemModel,
+    #[error("the model asks for a ghost penalty, which stabilises the implicit tangent; explicit analysis has none (remove it)")]
+    GhostPenalty,
     #[error("constraint {index} prescribes a non-zero displacement; only quasi-static implicit analysis applies displacements (with the load factor)")]
     DisplacedConstraint { index: usize },
     #[error("the analysis is already finished ({0} steps)")]

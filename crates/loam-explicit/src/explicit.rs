@@ -102,6 +102,9 @@ impl<const D: usize> Explicit<D> {
         if model.mesh.is_some() {
             return Err(ExplicitError::FemModel);
         }
+        if model.ghost_penalty.is_some() {
+            return Err(ExplicitError::GhostPenalty);
+        }
         if let Some(index) = model.constraints.iter().position(|c| c.is_displaced()) {
             return Err(ExplicitError::DisplacedConstraint { index });
         }

@@ -204,6 +204,10 @@ fn bspline_knot(j: usize, n: usize) -> f64 {
 /// cells: the control value that reproduces a linear field. It is the node itself except
 /// next to a face (0.75 and n − 0.75), so nodal values are control values there.
 pub fn bspline_greville(i: usize, n: usize) -> f64 {
+    if n < 2 {
+        // A single-cell axis uses the tent: the nodes are the control points.
+        return i as f64;
+    }
     0.5 * (bspline_knot(i + 1, n) + bspline_knot(i + 2, n))
 }
 

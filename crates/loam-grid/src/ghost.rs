@@ -7,8 +7,10 @@
 //!   G(u, v) = h ∫_F [[∂_n u]] · [[∂_n v]] dF,
 //!
 //! the jump of the normal derivative across the face of the grid's bilinear (trilinear)
-//! interpolant of the nodal values, whatever basis the points use. It vanishes for fields
-//! that are linear across the face, so it is weakly consistent, and it ties a nearly empty
+//! interpolant of the nodal values. For the tent and GIMP the nodal values reproduce
+//! linear fields, so G vanishes on them: it is weakly consistent. (Not for quadratic
+//! B-splines, whose nodal values next to a grid face are control values off the nodes;
+//! `Model::with_ghost_penalty` refuses that basis.) It ties a nearly empty
 //! node to its neighbours through the stiffness of the cells next to it. The caller scales
 //! it by γ times a modulus (`Model::with_ghost_penalty`).
 
@@ -18,11 +20,18 @@ use crate::Grid;
 /// penalty matrix over them, row-major (applied to each displacement component alike).
 #[derive(Debug, Clone, PartialEq)]
 pub struct GhostFace {
+    /// The two cells (numbered with axis 0 fastest) sharing the face.
+    pub cells: [usize; 2],
     pub nodes: Vec<u32>,
     pub matrix: Vec<f64>,
 }
 
-/// A cell is cut when the material volume in it is below this fraction of the cell.
+/// A cell is cut when the material volume in it is below this fraction of the cell; an
+/// empty cell whose nodes are all active (reached by point domains) counts as cut too.
+/// The fill counts each point's volume in the cell of its centre, so once points crowd
+/// unevenly under large deformation some interior faces are penalised as well; the
+/// penalty is weakly consistent, so that costs accuracy at the level of its γ, not
+/// correctness.
 pub const CUT_FILL: f64 = 0.95;
 
 /// The ghost faces of `grid`: faces between two cells whose nodes are all active (so
@@ -61,7 +70,9 @@ pub fn ghost_faces<const D: usize>(grid: &Grid<D>, cell_fill: &[f64], is_active:
             if (fl <= 0.0 && fu <= 0.0) || (fl >= CUT_FILL && fu >= CUT_FILL) || !supported(lower) || !supported(upper) {
                 continue;
             }
-            faces.push(face_matrix(grid, lower, axis));
+            let mut face = face_matrix(grid, lower, axis);
+            face.cells = [cell_index(lower), cell_index(upper)];
+            faces.push(face);
         }
     }
     faces
@@ -130,7 +141,7 @@ fn face_matrix<const D: usize>(grid: &Grid<D>, lower: [usize; D], axis: usize) -
             }
         }
     }
-    GhostFace { nodes, matrix }
+    GhostFace { cells: [0, 0], nodes, matrix }
 }
 
 #[cfg(test)]
@@ -186,6 +197,7 @@ mod tests {
         let faces = ghost_faces(&grid, &[1.0, 1.0, 0.01], |_| true);
         assert_eq!(faces.len(), 1);
         assert_eq!(faces[0].nodes, vec![1, 2, 3, 5, 6, 7]);
+        assert_eq!(faces[0].cells, [1, 2]);
         // All full: none. The sliver's far nodes inactive: none.
         assert!(ghost_faces(&grid, &[1.0, 1.0, 1.0], |_| true).is_empty());
         assert!(ghost_faces(&grid, &[1.0, 1.0, 0.01], |n| n != 3 && n != 7).is_empty());

@@ -87,14 +87,7 @@ impl<const D: usize> Engine<D> {
         }
         if let Some(gamma) = self.model.ghost_penalty {
             self.ghost = scaled_ghost_faces(&self.model, &self.conn, gamma);
-            let n = self.conn.active_nodes().len();
-            self.ghost_couplings.iter_mut().for_each(Vec::clear);
-            self.ghost_couplings.resize(n, Vec::new());
-            for face in &self.ghost {
-                for &a in &face.nodes {
-                    self.ghost_couplings[a as usize].extend_from_slice(&face.nodes);
-                }
-            }
+            ghost_couplings(&self.ghost, self.conn.active_nodes().len(), &mut self.ghost_couplings);
         }
         self.pattern.update_with(&PointCouplings(&self.conn), &self.ghost_couplings);
         self.model.constrained_dofs(self.conn.active_nodes(), &mut self.constrained);
@@ -333,22 +326,44 @@ pub(crate) fn advance<const D: usize, A: CutBack<D>>(
 }
 
 /// The ghost faces of the committed configuration (docs/theory.md §15): cell fill from the
-/// points' volumes, faces of cut cells whose nodes are all active, renumbered to active
-/// nodes and scaled by γ times the largest P-wave modulus of the materials.
-fn scaled_ghost_faces<const D: usize>(model: &Model<D>, conn: &Connectivity<D>, gamma: f64) -> Vec<GhostFace> {
+/// volumes of the points whose centres lie in each cell, faces of cut cells whose nodes
+/// are all active, renumbered to active nodes and scaled by γ times the largest P-wave
+/// modulus of the points in the face's two cells (so a soft layer is not stiffened by a
+/// stiff one elsewhere).
+pub(crate) fn scaled_ghost_faces<const D: usize>(model: &Model<D>, conn: &Connectivity<D>, gamma: f64) -> Vec<GhostFace> {
     let grid = &model.grid;
     let cells = grid.cells();
-    let mut fill = vec![0.0; cells.iter().product()];
-    for (x, v) in model.points.position.iter().zip(&model.points.volume) {
+    let n_cells: usize = cells.iter().product();
+    let (mut fill, mut modulus) = (vec![0.0; n_cells], vec![0.0f64; n_cells]);
+    let cell_of = |x| {
         let ijk = grid.cell_coords(x);
-        fill[(0..D).rev().fold(0, |idx, a| idx * cells[a] + ijk[a])] += v / grid.cell_volume();
+        (0..D).rev().fold(0, |idx, a| idx * cells[a] + ijk[a])
+    };
+    let moduli: Vec<f64> = model.materials.iter().map(|m| m.p_wave_modulus()).collect();
+    let pts = &model.points;
+    for ((x, v), &m) in pts.position.iter().zip(&pts.volume).zip(&pts.material) {
+        let c = cell_of(x);
+        fill[c] += v / grid.cell_volume();
+        modulus[c] = modulus[c].max(moduli[m as usize]);
     }
     let to_active = &conn.active_nodes().grid_to_active;
-    let modulus = model.materials.iter().map(|m| m.p_wave_modulus()).fold(0.0, f64::max);
     let mut faces = ghost_faces(grid, &fill, |g| to_active[g] != INACTIVE);
     for face in &mut faces {
+        let m = modulus[face.cells[0]].max(modulus[face.cells[1]]);
         face.nodes.iter_mut().for_each(|g| *g = to_active[*g as usize]);
-        face.matrix.iter_mut().for_each(|v| *v *= gamma * modulus);
+        face.matrix.iter_mut().for_each(|v| *v *= gamma * m);
     }
     faces
+}
+
+/// The node couplings the ghost faces add to the sparsity pattern: every node of a face
+/// with every other (lists are reused; `update_with` sorts and dedups them).
+pub(crate) fn ghost_couplings(faces: &[GhostFace], active_nodes: usize, couplings: &mut Vec<Vec<u32>>) {
+    couplings.iter_mut().for_each(Vec::clear);
+    couplings.resize(active_nodes, Vec::new());
+    for face in faces {
+        for &a in &face.nodes {
+            couplings[a as usize].extend_from_slice(&face.nodes);
+        }
+    }
 }

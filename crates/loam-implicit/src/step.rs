@@ -414,18 +414,25 @@ mod tests {
     use nalgebra::Vector2;
     use std::sync::Arc;
 
-    /// A 2×2-cell block on a 5×5 grid, GIMP, pre-loaded by gravity to a stressed state.
-    fn stressed_block_with(kinematics: Kinematics, basis: BasisKind, anti_locking: AntiLocking) -> Model<2> {
+    /// A 2×2-cell block on a 5×5 grid, pre-loaded by gravity to a stressed state. With a
+    /// ghost penalty the block is shifted 0.3 cells along x, so that it cuts cells.
+    fn stressed_block_with(kinematics: Kinematics, basis: BasisKind, anti_locking: AntiLocking, ghost: Option<f64>) -> Model<2> {
         let grid = Grid::new(Vector2::zeros(), Vector2::new(1.0, 1.0), [5, 5]).unwrap();
         let mut points = PointStore::new();
         let shape = Shape::Box { min: Vector2::new(1.0, 0.0), max: Vector2::new(3.0, 2.0) };
         points.fill(&grid, &shape, 2, 1000.0, 0).unwrap();
+        if ghost.is_some() {
+            points.position.iter_mut().for_each(|x| x[0] += 0.3);
+        }
         let law = Elastic::new(1e5, 0.3).unwrap();
         let fixed = PlaneConstraint::new(1, 0, [true, true, false]);
-        let model = Model::new(grid, basis, kinematics, points, vec![Arc::new(law)], vec![fixed], Vector2::new(3.0, -10.0))
+        let mut model = Model::new(grid, basis, kinematics, points, vec![Arc::new(law)], vec![fixed], Vector2::new(3.0, -10.0))
             .unwrap()
             .with_anti_locking(anti_locking)
             .unwrap();
+        if let Some(gamma) = ghost {
+            model = model.with_ghost_penalty(gamma).unwrap();
+        }
         let mut qs = QuasiStatic::new(model, QuasiStaticSettings { load_steps: 2, ..Default::default() });
         qs.step().unwrap();
         qs.step().unwrap();
@@ -450,16 +457,21 @@ mod tests {
     #[test]
     fn assembled_tangent_is_the_derivative_of_the_residual() {
         let cases = [
-            (Kinematics::FiniteStrain, BasisKind::Gimp, AntiLocking::None),
-            (Kinematics::SmallStrain, BasisKind::Gimp, AntiLocking::None),
-            (Kinematics::SmallStrain, BasisKind::Linear, AntiLocking::BBar),
+            (Kinematics::FiniteStrain, BasisKind::Gimp, AntiLocking::None, None),
+            (Kinematics::SmallStrain, BasisKind::Gimp, AntiLocking::None, None),
+            (Kinematics::SmallStrain, BasisKind::Linear, AntiLocking::BBar, None),
+            (Kinematics::FiniteStrain, BasisKind::Gimp, AntiLocking::None, Some(1.0)),
         ];
-        for (kinematics, basis, anti_locking) in cases {
-            let model = stressed_block_with(kinematics, basis, anti_locking);
+        for (kinematics, basis, anti_locking, ghost) in cases {
+            let model = stressed_block_with(kinematics, basis, anti_locking, ghost);
             let mut conn = Connectivity::new(model.basis);
             conn.compute(&model.grid, &model.points.position, &model.points.half_length).unwrap();
+            let faces = ghost.map_or(Vec::new(), |gamma| crate::engine::scaled_ghost_faces(&model, &conn, gamma));
+            assert_eq!(faces.is_empty(), ghost.is_none(), "the shifted block must cut cells");
+            let mut couplings = Vec::new();
+            crate::engine::ghost_couplings(&faces, conn.active_nodes().len(), &mut couplings);
             let mut pattern = BlockPattern::new(2);
-            pattern.update(&PointCouplings(&conn));
+            pattern.update_with(&PointCouplings(&conn), &couplings);
             let n = conn.active_nodes().len() * 2;
             let constrained = vec![false; n];
             let f_ext = vec![0.0; n];
@@ -479,7 +491,7 @@ mod tests {
                 trial: &mut trial,
                 inertia: None,
                 bbar: (anti_locking == AntiLocking::BBar).then_some(bbar.as_slice()),
-                ghost: &[],
+                ghost: &faces,
             };
             // A finite increment (up to 2 % of a cell) so that ΔF ≠ I.
             let du: Vec<f64> = noise(n, 7).iter().map(|x| 0.02 * x).collect();

@@ -3,7 +3,8 @@
 //! divided for the slope to fail under its own weight. Each trial rebuilds the model with
 //! the reduced strength (`Model::with_strength_reduced`) and applies gravity in
 //! quasi-static load steps from zero; a trial whose load cannot be carried — a step that
-//! does not converge after all its cut-backs — has failed. Bisection between a stable and a
+//! does not converge after all its cut-backs, or that runs away (points leaving the grid,
+//! an FEM mesh too distorted) — has failed. Bisection between a stable and a
 //! failed factor brackets F to the asked tolerance. The failure criterion is Griffiths &
 //! Lane's (non-convergence of the equilibrium iterations), with Newton and cut-back in
 //! place of their viscoplastic iterations.
@@ -106,6 +107,11 @@ impl StrengthReduction {
         let (mut stable, mut failed) = (lo, hi);
         while failed - stable > self.tolerance {
             let mid = 0.5 * (stable + failed);
+            // A tolerance below the floating-point spacing of the factors would loop for
+            // ever: stop when the bracket cannot be split.
+            if mid <= stable || mid >= failed {
+                break;
+            }
             if run(mid)? {
                 stable = mid;
             } else {
@@ -128,6 +134,12 @@ impl StrengthReduction {
                 }
                 Err(StepError::NotConverged { cutbacks: c, .. }) => {
                     cutbacks += c;
+                    stable = false;
+                    break;
+                }
+                // A trial that runs away (points out of the grid, a mesh too distorted)
+                // has failed too: near collapse the motion is large.
+                Err(StepError::PointOutsideGrid { .. } | StepError::Element { .. }) => {
                     stable = false;
                     break;
                 }

@@ -231,14 +231,21 @@ impl<const D: usize> Model<D> {
     }
 
     /// Stabilise nearly empty cells by the face ghost penalty with factor γ > 0 (docs/theory.md
-    /// §15; 0.01–1 is the useful range). The background-grid MPM only: a body-fitted FEM
-    /// mesh has no cut cells.
+    /// §15; 0.01–1 is the useful range). The background-grid MPM with the Linear or Gimp
+    /// basis only: a body-fitted FEM mesh has no cut cells, and B-spline nodal values are
+    /// not point values next to the grid faces. Implicit analyses only (`Explicit` refuses
+    /// it: it has no tangent to stabilise).
     pub fn with_ghost_penalty(mut self, gamma: f64) -> Result<Self, ModelError> {
         if !(gamma.is_finite() && gamma > 0.0) {
             return Err(ModelError::GhostPenalty(format!("the factor is {gamma}; it must be a positive number")));
         }
         if self.mesh.is_some() {
             return Err(ModelError::GhostPenalty("a body-fitted FEM mesh has no cut cells to stabilise".into()));
+        }
+        if self.basis == BasisKind::QuadraticBSpline {
+            return Err(ModelError::GhostPenalty(
+                "the penalty acts on the grid's bilinear interpolant of the nodal values, which are control values off the nodes for QuadraticBSpline next to a grid face; use Linear or Gimp".into(),
+            ));
         }
         self.ghost_penalty = Some(gamma);
         Ok(self)
