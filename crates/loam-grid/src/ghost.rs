@@ -40,42 +40,32 @@ pub const CUT_FILL: f64 = 0.95;
 /// fastest, like nodes).
 pub fn ghost_faces<const D: usize>(grid: &Grid<D>, cell_fill: &[f64], is_active: impl Fn(usize) -> bool) -> Vec<GhostFace> {
     let cells = grid.cells();
-    let n_cells: usize = cells.iter().product();
-    assert_eq!(cell_fill.len(), n_cells, "one fill fraction per cell");
-    let cell_nodes = |ijk: [usize; D]| -> Vec<u32> {
-        (0..1usize << D)
-            .map(|corner| {
-                let node: [usize; D] = std::array::from_fn(|a| ijk[a] + ((corner >> a) & 1));
-                grid.node_index(node) as u32
-            })
-            .collect()
-    };
-    let supported = |ijk: [usize; D]| cell_nodes(ijk).iter().all(|&n| is_active(n as usize));
-    let cell_index = |ijk: [usize; D]| (0..D).rev().fold(0, |idx, a| idx * cells[a] + ijk[a]);
+    assert_eq!(cell_fill.len(), grid.num_cells(), "one fill fraction per cell");
+    let supported = |ijk: [usize; D]| cell_nodes(grid, ijk).all(|n| is_active(n as usize));
     let mut faces = Vec::new();
-    for c in 0..n_cells {
-        let mut rest = c;
-        let lower: [usize; D] = std::array::from_fn(|a| {
-            let i = rest % cells[a];
-            rest /= cells[a];
-            i
-        });
+    for c in 0..grid.num_cells() {
+        let lower = grid.cell_ijk(c);
         for axis in 0..D {
             if lower[axis] + 1 >= cells[axis] {
                 continue;
             }
             let mut upper = lower;
             upper[axis] += 1;
-            let (fl, fu) = (cell_fill[cell_index(lower)], cell_fill[cell_index(upper)]);
+            let (fl, fu) = (cell_fill[c], cell_fill[grid.cell_index(upper)]);
             if (fl <= 0.0 && fu <= 0.0) || (fl >= CUT_FILL && fu >= CUT_FILL) || !supported(lower) || !supported(upper) {
                 continue;
             }
             let mut face = face_matrix(grid, lower, axis);
-            face.cells = [cell_index(lower), cell_index(upper)];
+            face.cells = [c, grid.cell_index(upper)];
             faces.push(face);
         }
     }
     faces
+}
+
+/// The 2^D corner nodes of the cell at `ijk`.
+fn cell_nodes<const D: usize>(grid: &Grid<D>, ijk: [usize; D]) -> impl Iterator<Item = u32> + '_ {
+    (0..1usize << D).map(move |corner| grid.node_index(std::array::from_fn(|a| ijk[a] + ((corner >> a) & 1))) as u32)
 }
 
 /// The penalty matrix of the face between the cell at `lower` and its neighbour along
@@ -85,13 +75,7 @@ fn face_matrix<const D: usize>(grid: &Grid<D>, lower: [usize; D], axis: usize) -
     let h = grid.cell_size();
     let mut upper = lower;
     upper[axis] += 1;
-    let mut nodes: Vec<u32> = Vec::with_capacity(3 << (D - 1));
-    for cell in [lower, upper] {
-        for corner in 0..1usize << D {
-            let node: [usize; D] = std::array::from_fn(|a| cell[a] + ((corner >> a) & 1));
-            nodes.push(grid.node_index(node) as u32);
-        }
-    }
+    let mut nodes: Vec<u32> = cell_nodes(grid, lower).chain(cell_nodes(grid, upper)).collect();
     nodes.sort_unstable();
     nodes.dedup();
     let n = nodes.len();

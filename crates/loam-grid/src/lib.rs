@@ -102,6 +102,26 @@ impl<const D: usize> Grid<D> {
         self.cell_size.iter().product()
     }
 
+    pub fn num_cells(&self) -> usize {
+        self.cells.iter().product()
+    }
+
+    /// Linear index of the cell with integer coordinates `ijk` (axis 0 fastest, like nodes).
+    #[inline]
+    pub fn cell_index(&self, ijk: [usize; D]) -> usize {
+        (0..D).rev().fold(0, |idx, a| idx * self.cells[a] + ijk[a])
+    }
+
+    /// Integer coordinates of cell `idx` (the inverse of [`cell_index`](Self::cell_index)).
+    #[inline]
+    pub fn cell_ijk(&self, mut idx: usize) -> [usize; D] {
+        std::array::from_fn(|a| {
+            let i = idx % self.cells[a];
+            idx /= self.cells[a];
+            i
+        })
+    }
+
     /// Linear node index of the node with integer coordinates `ijk`.
     #[inline]
     pub fn node_index(&self, ijk: [usize; D]) -> usize {

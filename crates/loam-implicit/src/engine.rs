@@ -332,17 +332,11 @@ pub(crate) fn advance<const D: usize, A: CutBack<D>>(
 /// stiff one elsewhere).
 pub(crate) fn scaled_ghost_faces<const D: usize>(model: &Model<D>, conn: &Connectivity<D>, gamma: f64) -> Vec<GhostFace> {
     let grid = &model.grid;
-    let cells = grid.cells();
-    let n_cells: usize = cells.iter().product();
-    let (mut fill, mut modulus) = (vec![0.0; n_cells], vec![0.0f64; n_cells]);
-    let cell_of = |x| {
-        let ijk = grid.cell_coords(x);
-        (0..D).rev().fold(0, |idx, a| idx * cells[a] + ijk[a])
-    };
+    let (mut fill, mut modulus) = (vec![0.0; grid.num_cells()], vec![0.0f64; grid.num_cells()]);
     let moduli: Vec<f64> = model.materials.iter().map(|m| m.p_wave_modulus()).collect();
     let pts = &model.points;
     for ((x, v), &m) in pts.position.iter().zip(&pts.volume).zip(&pts.material) {
-        let c = cell_of(x);
+        let c = grid.cell_index(grid.cell_coords(x));
         fill[c] += v / grid.cell_volume();
         modulus[c] = modulus[c].max(moduli[m as usize]);
     }

@@ -274,9 +274,7 @@ impl<const D: usize> Model<D> {
         if let Some(mesh) = &self.mesh {
             return p / mesh.gauss_per_element();
         }
-        let ijk = self.grid.cell_coords(&self.points.position[p]);
-        let cells = self.grid.cells();
-        (0..D).rev().fold(0, |idx, a| idx * cells[a] + ijk[a])
+        self.grid.cell_index(self.grid.cell_coords(&self.points.position[p]))
     }
 
     /// Whether node `node` (grid node index in MPM, mesh node index in FEM) lies on the plane
