@@ -140,8 +140,7 @@ fn block_step(overlap: f64, basis: BasisKind, ghost: Option<f64>) -> Result<(f64
     let (pattern, values, constrained) = qs.start_tangent()?;
     let condition = condition_number(&pattern, &values, &constrained);
     let its = qs.step().ok().map(|r| r.iterations);
-    let p = &qs.model().points;
-    let u = p.position.iter().zip(&p.position0).map(|(x, x0)| (x - x0).norm()).fold(0.0, f64::max);
+    let u = qs.model().points.max_displacement();
     Ok((condition, its, u))
 }
 

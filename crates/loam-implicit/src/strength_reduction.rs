@@ -146,8 +146,7 @@ impl StrengthReduction {
                 Err(source) => return Err(StrengthReductionError::Trial { factor, source }),
             }
         }
-        let p = &qs.model().points;
-        let max_displacement = p.position.iter().zip(&p.position0).map(|(x, x0)| (x - x0).norm()).fold(0.0, f64::max);
+        let max_displacement = qs.model().points.max_displacement();
         Ok(StrengthTrial { factor, stable, load_factor: qs.load_factor(), iterations, cutbacks, max_displacement, wall_time: start.elapsed() })
     }
 }

@@ -195,6 +195,11 @@ impl<const D: usize> PointStore<D> {
         self.mass.iter().zip(&self.velocity).map(|(m, v)| v * *m).sum()
     }
 
+    /// The largest distance a point has moved from its initial position.
+    pub fn max_displacement(&self) -> f64 {
+        self.position.iter().zip(&self.position0).map(|(x, x0)| (x - x0).norm()).fold(0.0, f64::max)
+    }
+
     /// Kinetic energy ½ Σ m_p |v_p|².
     pub fn kinetic_energy(&self) -> f64 {
         0.5 * self.mass.iter().zip(&self.velocity).map(|(m, v)| m * v.norm_squared()).sum::<f64>()
