@@ -3,21 +3,13 @@
 //! for Newton, points leaving the grid. Figures, not bounds, except that the contrast case
 //! must converge.
 
-use crate::{Report, Row};
+use crate::{basis_name, Report, Row};
 use anyhow::Result;
 use loam::grid::BasisKind;
 use loam::implicit::{Kinematics, QuasiStatic, QuasiStaticSettings, StepError};
 use loam::verification::{column_errors, column_model, condition_number, softening_specimen, translated_block, Column, LayeredColumn};
 use std::fmt::Write as _;
 use std::time::Instant;
-
-fn basis_name(basis: BasisKind) -> &'static str {
-    match basis {
-        BasisKind::Linear => "linear",
-        BasisKind::Gimp => "GIMP",
-        BasisKind::QuadraticBSpline => "B-spline",
-    }
-}
 
 /// The softening specimen pushed to 4 % shortening in 80 steps: peak and last load, how
 /// far it got and why it stopped.

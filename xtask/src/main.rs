@@ -114,9 +114,7 @@ enum Method {
 impl Method {
     fn name(self) -> &'static str {
         match self {
-            Method::Mpm(BasisKind::Gimp) => "GIMP",
-            Method::Mpm(BasisKind::Linear) => "linear",
-            Method::Mpm(BasisKind::QuadraticBSpline) => "B-spline",
+            Method::Mpm(basis) => basis_name(basis),
             Method::Fem => "UL-FEM",
         }
     }
@@ -126,6 +124,15 @@ impl Method {
             Method::Mpm(basis) => column_model::<D>(&case.column, width, cells, 2, basis, case.kinematics),
             Method::Fem => column_fem_model::<D>(&case.column, width, cells, 2, case.kinematics),
         }
+    }
+}
+
+/// How the reports name a basis.
+pub(crate) fn basis_name(basis: BasisKind) -> &'static str {
+    match basis {
+        BasisKind::Gimp => "GIMP",
+        BasisKind::Linear => "linear",
+        BasisKind::QuadraticBSpline => "B-spline",
     }
 }
 
