@@ -331,19 +331,7 @@ impl<const D: usize> Dynamic<D> {
         let done = advance(self, step, target, dt, self.settings.max_cutbacks)?;
         self.time = target;
         self.step = step;
-        Ok(StepReport {
-            step,
-            load_factor: 1.0,
-            time: self.time,
-            substeps: done.substeps,
-            cutbacks: done.cutbacks,
-            iterations: done.iterations,
-            residuals: done.residuals,
-            active_nodes: done.active_nodes,
-            dofs: done.dofs,
-            reactions: self.engine.reactions.clone(),
-            wall_time: start.elapsed(),
-        })
+        Ok(done.into_report(step, 1.0, self.time, self.engine.reactions.clone(), start))
     }
 }
 

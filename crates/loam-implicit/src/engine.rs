@@ -6,7 +6,8 @@
 
 use crate::step::{Inertia, PointCouplings, StepSystem, TrialState};
 use crate::step::PointUpdateError;
-use crate::StepError;
+use crate::{StepError, StepReport};
+use std::time::Instant;
 use loam_grid::{ghost_faces, Connectivity, GhostFace, INACTIVE};
 use loam_model::{AntiLocking, Model};
 use loam_points::stretched_half_length;
@@ -270,6 +271,25 @@ pub(crate) struct Advanced {
     pub residuals: Vec<f64>,
     pub active_nodes: usize,
     pub dofs: usize,
+}
+
+impl Advanced {
+    /// The report of step `step`, which reached `load_factor` and `time`, started at `start`.
+    pub fn into_report(self, step: usize, load_factor: f64, time: f64, reactions: Vec<[f64; 3]>, start: Instant) -> StepReport {
+        StepReport {
+            step,
+            load_factor,
+            time,
+            substeps: self.substeps,
+            cutbacks: self.cutbacks,
+            iterations: self.iterations,
+            residuals: self.residuals,
+            active_nodes: self.active_nodes,
+            dofs: self.dofs,
+            reactions,
+            wall_time: start.elapsed(),
+        }
+    }
 }
 
 /// Advance `a` to `target` in step `step`: try the whole increment; halve it after a failed

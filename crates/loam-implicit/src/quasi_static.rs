@@ -260,19 +260,7 @@ impl<const D: usize> QuasiStatic<D> {
         let target = step as f64 / self.settings.load_steps as f64;
         let done = advance(self, step, target, 1.0, self.settings.max_cutbacks)?;
         self.step = step;
-        Ok(StepReport {
-            step,
-            load_factor: self.load_factor,
-            time: self.load_factor,
-            substeps: done.substeps,
-            cutbacks: done.cutbacks,
-            iterations: done.iterations,
-            residuals: done.residuals,
-            active_nodes: done.active_nodes,
-            dofs: done.dofs,
-            reactions: self.engine.reactions.clone(),
-            wall_time: start.elapsed(),
-        })
+        Ok(done.into_report(step, self.load_factor, self.load_factor, self.engine.reactions.clone(), start))
     }
 
     /// Run every remaining step, calling `on_step` after each.
