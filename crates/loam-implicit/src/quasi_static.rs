@@ -189,17 +189,8 @@ impl<const D: usize> QuasiStatic<D> {
         self.engine.invalidate();
         self.engine.connect(self.step + 1)?;
         let connectivity = t.elapsed();
-        let step = self.step + 1;
-        let lambda = (step as f64 / self.settings.load_steps as f64).min(1.0);
-        let not_converged = |reason: String| StepError::NotConverged {
-            step,
-            load_factor: lambda,
-            cutbacks: 0,
-            reason,
-            residuals: vec![],
-        };
-        self.engine.external_forces(lambda);
-        self.engine.du.clear();
+        let (step, lambda) = self.prepare_next_step();
+        let not_converged = |reason: String| inspection_error(step, lambda, reason);
         let (mut system, du, newton) = self.engine.system(None);
         let kind = newton.linear_solver().kind();
         let n = du.len();
@@ -231,23 +222,25 @@ impl<const D: usize> QuasiStatic<D> {
     /// with its pattern and the constrained-dof flags (rows and columns eliminated but for
     /// the diagonal). For inspecting conditioning; commits nothing.
     pub fn start_tangent(&mut self) -> Result<(loam_solve::BlockPattern, Vec<f64>, Vec<bool>), StepError> {
-        let step = self.step + 1;
-        self.engine.connect(step)?;
-        let lambda = (step as f64 / self.settings.load_steps as f64).min(1.0);
-        self.engine.external_forces(lambda);
-        self.engine.du.clear();
+        self.engine.connect(self.step + 1)?;
+        let (step, lambda) = self.prepare_next_step();
         let (mut system, du, _) = self.engine.system(None);
         let mut r = vec![0.0; du.len()];
-        loam_solve::NewtonProblem::evaluate(&mut system, du, &mut r).map_err(|e| StepError::NotConverged {
-            step,
-            load_factor: lambda,
-            cutbacks: 0,
-            reason: e.to_string(),
-            residuals: vec![],
-        })?;
+        loam_solve::NewtonProblem::evaluate(&mut system, du, &mut r).map_err(|e| inspection_error(step, lambda, e.to_string()))?;
         loam_solve::NewtonProblem::assemble(&mut system);
         let e = &self.engine;
         Ok((e.pattern.clone(), e.values.clone(), e.constrained.clone()))
+    }
+
+    /// Set up the next load step at zero increment (the committed state) with its external
+    /// forces, as `profile_iteration` and `start_tangent` inspect it; its number and load
+    /// factor.
+    fn prepare_next_step(&mut self) -> (usize, f64) {
+        let step = self.step + 1;
+        let lambda = (step as f64 / self.settings.load_steps as f64).min(1.0);
+        self.engine.external_forces(lambda);
+        self.engine.du.clear();
+        (step, lambda)
     }
 
     /// Advance one load step, cutting back as needed.
@@ -295,6 +288,12 @@ impl<const D: usize> CutBack<D> for QuasiStatic<D> {
     fn failure(&self, increment: f64, target: f64, error: &NewtonError<PointUpdateError>) -> (f64, String) {
         ((self.load_factor + increment).min(target), error.to_string())
     }
+}
+
+/// A failure while inspecting the next step's start (`profile_iteration`, `start_tangent`),
+/// reported like a step that did not converge, with nothing cut back or committed.
+fn inspection_error(step: usize, load_factor: f64, reason: String) -> StepError {
+    StepError::NotConverged { step, load_factor, cutbacks: 0, reason, residuals: vec![] }
 }
 
 /// Wall time of the phases of one Newton iteration (see `QuasiStatic::profile_iteration`).
