@@ -55,9 +55,7 @@ pub fn ghost_faces<const D: usize>(grid: &Grid<D>, cell_fill: &[f64], is_active:
             if (fl <= 0.0 && fu <= 0.0) || (fl >= CUT_FILL && fu >= CUT_FILL) || !supported(lower) || !supported(upper) {
                 continue;
             }
-            let mut face = face_matrix(grid, lower, axis);
-            face.cells = [c, grid.cell_index(upper)];
-            faces.push(face);
+            faces.push(face_matrix(grid, lower, axis));
         }
     }
     faces
@@ -125,7 +123,7 @@ fn face_matrix<const D: usize>(grid: &Grid<D>, lower: [usize; D], axis: usize) -
             }
         }
     }
-    GhostFace { cells: [0, 0], nodes, matrix }
+    GhostFace { cells: [grid.cell_index(lower), grid.cell_index(upper)], nodes, matrix }
 }
 
 #[cfg(test)]
