@@ -145,3 +145,41 @@ fn a_million_fold_stiffness_contrast_converges() {
     assert!(e.stress < 1e-2, "e_sigma = {}", e.stress);
     assert!(e.top_displacement < 1e-3, "e_u = {} (u = {})", e.top_displacement, e.top_displacement_value);
 }
+
+/// A geometrically linear elastic run is linear in the load: ten load steps give the
+/// displacements and stresses of one step (to round-off, 1e-10 relative), with every
+/// point's volume as it started. The updated run moves its points and differs (by about
+/// the strain, ~1e-3 relative here), which shows the test can tell the two apart.
+#[test]
+fn geometrically_linear_run_is_linear_in_the_load() {
+    let c = Column::V1A;
+    let run = |steps: usize, linear: bool| {
+        let mut m = column_model::<2>(&c, c.height / 16.0, 16, 2, BasisKind::Gimp, Kinematics::SmallStrain);
+        if linear {
+            m = m.with_geometrically_linear().unwrap();
+        }
+        let mut qs = QuasiStatic::new(m, QuasiStaticSettings { load_steps: steps, ..Default::default() });
+        while !qs.is_finished() {
+            qs.step().unwrap();
+        }
+        qs.into_model()
+    };
+    let difference = |a: &loam::implicit::Model<2>, b: &loam::implicit::Model<2>| {
+        let (pa, pb) = (&a.points, &b.points);
+        let (mut du, mut u, mut ds, mut s) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+        for p in 0..pa.len() {
+            let (ua, ub) = (pa.position[p] - pa.position0[p], pb.position[p] - pb.position0[p]);
+            du = du.max((ua - ub).norm());
+            u = u.max(ua.norm());
+            ds = ds.max((pa.stress[p] - pb.stress[p]).norm());
+            s = s.max(pa.stress[p].norm());
+        }
+        (du / u, ds / s)
+    };
+    let (one, ten) = (run(1, true), run(10, true));
+    let (eu, es) = difference(&one, &ten);
+    assert!(eu < 1e-10 && es < 1e-10, "displacement {eu:e}, stress {es:e}");
+    assert!(ten.points.volume.iter().zip(&ten.points.volume0).all(|(v, v0)| v == v0));
+    let (eu, _) = difference(&run(1, false), &run(10, false));
+    assert!(eu > 1e-6, "the updated run should differ from one step: {eu:e}");
+}

@@ -264,6 +264,40 @@ fn bbar_needs_small_strain_and_the_linear_basis() {
     check(&small.replacen("basis: Gimp,", "basis: Linear,", 1)).unwrap();
 }
 
+/// The assumed strain takes a stabilization in (0, 1], and like B-bar needs small strain
+/// and the linear basis; each refusal names the key.
+#[test]
+fn assumed_strain_is_checked() {
+    let small = |beta: &str| {
+        GOOD.replacen("kinematics: FiniteStrain,", &format!("kinematics: SmallStrain,\n    anti_locking: AssumedStrain(stabilization: {beta}),"), 1)
+            .replacen("basis: Gimp,", "basis: Linear,", 1)
+    };
+    let at = line_of("kinematics: FiniteStrain") + 1;
+    check(&small("0.1")).unwrap();
+    check(&small("1.0")).unwrap();
+    for bad in ["0.0", "-0.1", "1.5"] {
+        let e = check(&small(bad)).unwrap_err();
+        assert!(e.to_string().contains("0 < β ≤ 1") && e.line == at, "{bad}: {e}");
+    }
+    let e = check(&small("0.1").replacen("basis: Linear,", "basis: Gimp,", 1)).unwrap_err();
+    assert!(e.to_string().contains("Linear basis") && e.line == at, "{e}");
+    let e = check(&GOOD.replacen("basis: Gimp,", "basis: Gimp,\n    anti_locking: AssumedStrain(stabilization: 0.1),", 1)).unwrap_err();
+    assert!(e.to_string().contains("small-strain"), "{e}");
+}
+
+/// A geometrically linear scene needs small strain and an implicit analysis; each refusal
+/// names the key.
+#[test]
+fn geometrically_linear_is_checked() {
+    let key = |kinematics: &str| GOOD.replacen("kinematics: FiniteStrain,", &format!("kinematics: {kinematics},\n    geometrically_linear: true,"), 1);
+    let at = line_of("kinematics: FiniteStrain") + 1;
+    check(&key("SmallStrain")).unwrap();
+    let e = check(&key("FiniteStrain")).unwrap_err();
+    assert!(e.to_string().contains("SmallStrain") && e.line == at, "{e}");
+    let e = check(&key("SmallStrain").replacen("QuasiStatic(load_steps: 40)", "Explicit(duration: 1.0)", 1)).unwrap_err();
+    assert!(e.to_string().contains("explicit") && e.line == at, "{e}");
+}
+
 /// A geostatic start is checked against the laws: an elastic column takes any K0 > 0, a
 /// non-positive K0 is refused at its key.
 #[test]

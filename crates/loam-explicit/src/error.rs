@@ -34,6 +34,8 @@ pub enum ExplicitError {
     FemModel,
     #[error("the model asks for a ghost penalty, which stabilises the implicit tangent; explicit analysis has none (remove it)")]
     GhostPenalty,
+    #[error("the model is geometrically linear (points held at their places); explicit analysis moves its points by their velocities")]
+    GeometricallyLinear,
     #[error("constraint {index} prescribes a non-zero displacement; only quasi-static implicit analysis applies displacements (with the load factor)")]
     DisplacedConstraint { index: usize },
     #[error("the analysis is already finished ({0} steps)")]

@@ -105,6 +105,9 @@ impl<const D: usize> Explicit<D> {
         if model.ghost_penalty.is_some() {
             return Err(ExplicitError::GhostPenalty);
         }
+        if model.geometrically_linear {
+            return Err(ExplicitError::GeometricallyLinear);
+        }
         if let Some(index) = model.constraints.iter().position(|c| c.is_displaced()) {
             return Err(ExplicitError::DisplacedConstraint { index });
         }

@@ -4,7 +4,7 @@
 //! implicit step", steps 1, 4). Quasi-static load stepping and Newmark dynamics differ only
 //! in what they add to the Newton system and in how they advance time or load.
 
-use crate::step::{Inertia, PointCouplings, StepSystem, TrialState};
+use crate::step::{CellAverage, Inertia, PointCouplings, StepSystem, TrialState};
 use crate::step::PointUpdateError;
 use crate::{StepError, StepReport};
 use std::time::Instant;
@@ -31,7 +31,8 @@ pub(crate) struct Engine<const D: usize> {
     /// components, at the last committed state.
     pub reactions: Vec<[f64; 3]>,
     pub du: Vec<f64>,
-    /// B-bar: the cell-averaged support gradients, `stride` per point (empty without it).
+    /// B-bar or assumed strain: the cell-averaged support gradients, `stride` per point
+    /// (empty without them).
     pub bbar: Vec<SVector<f64, D>>,
     /// Ghost-penalty faces over active nodes, scaled by γ M (empty without the penalty),
     /// and the node couplings they add to the pattern.
@@ -82,7 +83,7 @@ impl<const D: usize> Engine<D> {
         match &self.model.mesh {
             None => self
                 .conn
-                .compute(&self.model.grid, &pts.position, &pts.half_length)
+                .compute(&self.model.grid, self.model.configuration(), &pts.half_length)
                 .map_err(|source| StepError::PointOutsideGrid { step, source })?,
             Some(mesh) => self.conn.compute_mesh(mesh).map_err(|source| StepError::Element { step, source })?,
         }
@@ -92,7 +93,7 @@ impl<const D: usize> Engine<D> {
         }
         self.pattern.update_with(&PointCouplings(&self.conn), &self.ghost_couplings);
         self.model.constrained_dofs(self.conn.active_nodes(), &mut self.constrained);
-        if self.model.anti_locking == AntiLocking::BBar {
+        if self.model.anti_locking != AntiLocking::None {
             cell_averaged_gradients(&self.model, &self.conn, &mut self.bbar);
         }
         self.conn_current = true;
@@ -151,7 +152,7 @@ impl<const D: usize> Engine<D> {
             reaction: &mut self.reaction,
             trial: &mut self.trial,
             inertia,
-            bbar: (self.model.anti_locking == AntiLocking::BBar).then_some(self.bbar.as_slice()),
+            cell_average: cell_average(&self.model, &self.bbar),
             ghost: &self.ghost,
         };
         (system, &mut self.du, &mut self.newton)
@@ -179,6 +180,9 @@ impl<const D: usize> Engine<D> {
         let conn = &self.conn;
         let du = &self.du;
         let trial = &self.trial;
+        // Geometrically linear: the configuration (and with it the connectivity, the
+        // pattern and the cell averages) stays that of the start.
+        let moves = !self.model.geometrically_linear;
         let pts = &mut self.model.points;
         let hs = pts.history_stride();
         (
@@ -191,17 +195,21 @@ impl<const D: usize> Engine<D> {
             .into_par_iter()
             .enumerate()
             .for_each(|(p, (x, f, v, l, l0))| {
+                // Positions carry the displacement in either case (what the output reports);
+                // a geometrically linear model computes on `Model::configuration`.
                 for (&node, &n) in conn.support_nodes(p).iter().zip(conn.support_values(p)) {
                     for i in 0..D {
                         x[i] += n * du[node as usize * D + i];
                     }
                 }
                 let df = trial.delta_f[p];
-                *v *= df.determinant();
                 *f = df * *f;
-                *l = stretched_half_length(l0, f);
+                if moves {
+                    *v *= df.determinant();
+                    *l = stretched_half_length(l0, f);
+                }
             });
-        if let Some(mesh) = &mut self.model.mesh {
+        if let (Some(mesh), true) = (&mut self.model.mesh, moves) {
             // Every mesh node belongs to an element, so all are active.
             let g2a = &conn.active_nodes().grid_to_active;
             mesh.displace(|n| SVector::from_fn(|i, _| du[g2a[n] as usize * D + i]));
@@ -212,8 +220,13 @@ impl<const D: usize> Engine<D> {
             let n = pts.history.len();
             pts.history.copy_from_slice(&trial.history[..n]);
         }
-        self.conn_current = false;
+        self.conn_current = !moves;
     }
+}
+
+/// The cell averages of the model's anti-locking treatment over the gradients `bbar`.
+pub(crate) fn cell_average<'a, const D: usize>(model: &Model<D>, bbar: &'a [SVector<f64, D>]) -> Option<CellAverage<'a, D>> {
+    model.anti_locking.deviatoric_weight().map(|deviatoric_weight| CellAverage { gradients: bbar, deviatoric_weight })
 }
 
 /// B-bar's b̄ of every point's support slot: Σ_q v_q ∂N_a(x_q) / Σ_q v_q over the points q
@@ -355,7 +368,7 @@ pub(crate) fn scaled_ghost_faces<const D: usize>(model: &Model<D>, conn: &Connec
     let (mut fill, mut modulus) = (vec![0.0; grid.num_cells()], vec![0.0f64; grid.num_cells()]);
     let moduli: Vec<f64> = model.materials.iter().map(|m| m.p_wave_modulus()).collect();
     let pts = &model.points;
-    for ((x, v), &m) in pts.position.iter().zip(&pts.volume).zip(&pts.material) {
+    for ((x, v), &m) in model.configuration().iter().zip(&pts.volume).zip(&pts.material) {
         let c = grid.cell_index(grid.cell_coords(x));
         fill[c] += v / grid.cell_volume();
         modulus[c] = modulus[c].max(moduli[m as usize]);

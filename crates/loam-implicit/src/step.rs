@@ -97,12 +97,39 @@ pub(crate) struct StepSystem<'a, const D: usize> {
     pub trial: &'a mut TrialState<D>,
     /// Inertia of a dynamic step; `None` in quasi-static analysis.
     pub inertia: Option<Inertia<'a>>,
-    /// B-bar: the volume-averaged gradient b̄ of each point's support slot over its cell
-    /// (element), `stride` per point (THEORY: docs/theory.md §13); `None` without it.
-    pub bbar: Option<&'a [SVector<f64, D>]>,
+    /// B-bar or assumed strain: the cell averages of the support gradients; `None`
+    /// without anti-locking.
+    pub cell_average: Option<CellAverage<'a, D>>,
     /// Ghost-penalty faces over active nodes, their matrices already scaled by γ M
     /// (docs/theory.md §15); empty without the penalty.
     pub ghost: &'a [GhostFace],
+}
+
+/// The cell averages of B-bar and assumed strain (docs/theory.md §13).
+#[derive(Clone, Copy)]
+pub(crate) struct CellAverage<'a, const D: usize> {
+    /// The volume-averaged gradient b̄ of each point's support slot over its cell
+    /// (element), `stride` per point.
+    pub gradients: &'a [SVector<f64, D>],
+    /// β: the weight of each point's own deviatoric strain (1 for B-bar).
+    pub deviatoric_weight: f64,
+}
+
+impl<'a, const D: usize> CellAverage<'a, D> {
+    /// The gradient c = β ∂N + (1 − β) b̄ of support slot `k` (point p, node a:
+    /// k = p·stride + a) with the plain gradient `grad`. The point's strain operator is
+    /// E_a,i = e_i ⊗ c_a + ⅓ (b̄_a − c_a)_i I: the cell's average strain plus β times the
+    /// point's deviatoric deviation from it, with the cell's dilatation.
+    #[inline]
+    pub fn strain_gradient(&self, k: usize, grad: &SVector<f64, D>) -> SVector<f64, D> {
+        let beta = self.deviatoric_weight;
+        if beta == 1.0 { *grad } else { grad * beta + self.gradients[k] * (1.0 - beta) }
+    }
+
+    #[inline]
+    pub fn average(&self, k: usize) -> &'a SVector<f64, D> {
+        &self.gradients[k]
+    }
 }
 
 /// r += G Δu for every ghost face, component by component, faces in a fixed order.
@@ -160,7 +187,7 @@ impl<const D: usize> StepSystem<'_, D> {
         let hs = pts.history_stride();
         let stride = conn.stride();
         let kin = model.kinematics;
-        let bbar = self.bbar;
+        let average = self.cell_average;
         let t = &mut *self.trial;
         let hist_chunks = t.history.par_chunks_mut(hs.max(1));
         let first_error = (
@@ -177,10 +204,18 @@ impl<const D: usize> StepSystem<'_, D> {
             .filter_map(|(p, ((df, stress, elastic, volume, tangent, grad_x), (h_out, vol_terms)))| {
                 let nodes = conn.support_nodes(p);
                 let grads = conn.support_gradients(p);
+                // Small strain with cell averaging: the strain gradients c_a go to grad_x
+                // now, and the increment gradient is Σ Δu_a ⊗ c_a.
+                if let (Some(avg), Kinematics::SmallStrain) = (average, kin) {
+                    for (a, c) in grad_x[..nodes.len()].iter_mut().enumerate() {
+                        *c = avg.strain_gradient(p * stride + a, &grads[a]);
+                    }
+                }
+                let strain_grads: &[SVector<f64, D>] = if average.is_some() && kin == Kinematics::SmallStrain { &grad_x[..nodes.len()] } else { grads };
                 let mut g = SMatrix::<f64, D, D>::zeros();
                 for (a, &node) in nodes.iter().enumerate() {
                     let u = SVector::<f64, D>::from_fn(|i, _| du[node as usize * D + i]);
-                    g += u * grads[a].transpose();
+                    g += u * strain_grads[a].transpose();
                 }
                 let law = &*model.materials[pts.material[p] as usize];
                 let h_n = pts.history(p);
@@ -208,13 +243,12 @@ impl<const D: usize> StepSystem<'_, D> {
                     }
                     Kinematics::SmallStrain => {
                         let mut g3 = embed(&g);
-                        if let Some(bbar) = bbar {
+                        if let Some(avg) = average {
                             // ε̄ = ε + (θ̄ − θ)/3 I with θ̄ = Σ_a u_a · b̄_a (Hughes 1980).
-                            let bb = &bbar[p * stride..p * stride + nodes.len()];
                             let theta_bar: f64 = nodes
                                 .iter()
-                                .zip(bb)
-                                .map(|(&node, b)| (0..D).map(|i| du[node as usize * D + i] * b[i]).sum::<f64>())
+                                .enumerate()
+                                .map(|(a, &node)| (0..D).map(|i| du[node as usize * D + i] * avg.average(p * stride + a)[i]).sum::<f64>())
                                 .sum();
                             let theta = g.trace();
                             g3 += Matrix3::identity() * ((theta_bar - theta) / 3.0);
@@ -223,13 +257,15 @@ impl<const D: usize> StepSystem<'_, D> {
                             Ok(u) => u,
                             Err(source) => return Some(PointUpdateError { point: p, source }),
                         };
-                        grad_x[..nodes.len()].copy_from_slice(grads);
+                        if average.is_none() {
+                            grad_x[..nodes.len()].copy_from_slice(grads);
+                        }
                         *df = Matrix3::identity() + g3;
                         *stress = upd.stress;
                         *elastic = upd.elastic_strain;
                         *volume = pts.volume[p];
                         *tangent = in_plane::<D>(&upd.tangent, *volume);
-                        if bbar.is_some() {
+                        if average.is_some() {
                             let a = &upd.tangent;
                             let v = *volume;
                             let id = Matrix3::from_fn(|k, l| v * (0..3).map(|m| a[(4 * m, 3 * k + l)]).sum::<f64>());
@@ -294,10 +330,10 @@ impl<const D: usize> NewtonProblem for StepSystem<'_, D> {
         let trial = &*self.trial;
         let conn = self.conn;
         let stride = conn.stride();
-        let bbar = self.bbar;
+        let average = self.cell_average;
         gather_nodal(&PointCouplings(conn), D, r, |p, a, out| {
             let k = p * stride + a;
-            let f = internal_force(trial.volume[p], &trial.stress[p], &trial.grad_x[k], bbar.map(|b| &b[k]));
+            let f = internal_force(trial.volume[p], &trial.stress[p], &trial.grad_x[k], average.map(|c| c.average(k)));
             for i in 0..D {
                 out[i] += f[i];
             }
@@ -343,7 +379,7 @@ impl<const D: usize> NewtonProblem for StepSystem<'_, D> {
         // Inertia adds c m_p N_a N_b (consistent) or c m_p N_a on the diagonal block
         // (lumped: the row sum) to every component.
         let inertia = self.inertia.as_ref().map(|i| (i.factor, i.consistent));
-        let bbar = self.bbar;
+        let average = self.cell_average;
         self.pattern.assemble(&PointCouplings(conn), self.constrained, self.values, |p, a, b, out| {
             if let Some((c, consistent)) = inertia {
                 let n = conn.support_values(p);
@@ -354,13 +390,13 @@ impl<const D: usize> NewtonProblem for StepSystem<'_, D> {
             }
             let ga = &trial.grad_x[p * stride + a];
             let gb = &trial.grad_x[p * stride + b];
-            if let Some(bbar) = bbar {
-                // E_a,i = e_i ⊗ ∂N_a + ⅓ d_a,i I with d = b̄ − ∂N: the cross and
-                // volumetric terms of E_a,i : D : E_b,k beside the plain one below.
+            if let Some(avg) = average {
+                // E_a,i = e_i ⊗ c_a + ⅓ d_a,i I with d = b̄ − c (c in grad_x): the cross
+                // and volumetric terms of E_a,i : D : E_b,k beside the plain one below.
                 let (id, di) = &trial.volumetric[p];
                 let idi = id.trace();
-                let da = bbar[p * stride + a] - ga;
-                let db = bbar[p * stride + b] - gb;
+                let da = avg.average(p * stride + a) - ga;
+                let db = avg.average(p * stride + b) - gb;
                 for i in 0..D {
                     for k in 0..D {
                         let mut s = idi * da[i] * db[k] / 9.0;
@@ -408,7 +444,7 @@ impl<const D: usize> NewtonProblem for StepSystem<'_, D> {
 mod tests {
     use super::*;
     use crate::{AntiLocking, PlaneConstraint, QuasiStatic, QuasiStaticSettings};
-    use loam_constitutive::Elastic;
+    use loam_constitutive::{ConstitutiveLaw, Elastic, MohrCoulomb, VonMises};
     use loam_grid::{BasisKind, Grid};
     use loam_points::{PointStore, Shape};
     use nalgebra::Vector2;
@@ -416,7 +452,7 @@ mod tests {
 
     /// A 2×2-cell block on a 5×5 grid, pre-loaded by gravity to a stressed state. With a
     /// ghost penalty the block is shifted 0.3 cells along x, so that it cuts cells.
-    fn stressed_block_with(kinematics: Kinematics, basis: BasisKind, anti_locking: AntiLocking, ghost: Option<f64>) -> Model<2> {
+    fn stressed_block_with(kinematics: Kinematics, basis: BasisKind, anti_locking: AntiLocking, ghost: Option<f64>, law: Arc<dyn ConstitutiveLaw>) -> Model<2> {
         let grid = Grid::new(Vector2::zeros(), Vector2::new(1.0, 1.0), [5, 5]).unwrap();
         let mut points = PointStore::new();
         let shape = Shape::Box { min: Vector2::new(1.0, 0.0), max: Vector2::new(3.0, 2.0) };
@@ -424,9 +460,8 @@ mod tests {
         if ghost.is_some() {
             points.position.iter_mut().for_each(|x| x[0] += 0.3);
         }
-        let law = Elastic::new(1e5, 0.3).unwrap();
         let fixed = PlaneConstraint::new(1, 0, [true, true, false]);
-        let mut model = Model::new(grid, basis, kinematics, points, vec![Arc::new(law)], vec![fixed], Vector2::new(3.0, -10.0))
+        let mut model = Model::new(grid, basis, kinematics, points, vec![law], vec![fixed], Vector2::new(3.0, -10.0))
             .unwrap()
             .with_anti_locking(anti_locking)
             .unwrap();
@@ -454,16 +489,30 @@ mod tests {
     /// a finite increment: the tangent is the exact linearisation, which is what makes
     /// Newton quadratic. Relative tolerance 1e-6: central differences with step 1e-7 on a
     /// residual of magnitude ~1e3 carry truncation ~1e-10 and rounding ~1e-9 relative.
+    /// The plastic cases (von Mises σ_y = 2.4e4, associated Mohr–Coulomb c = 8e3, φ = 30°,
+    /// strong enough to carry the gravity preload) take a simple shear of 0.2 and nodal
+    /// noise of up to 20 % of a cell, so that points return to the yield surface in it,
+    /// and check that some do.
     #[test]
     fn assembled_tangent_is_the_derivative_of_the_residual() {
+        let elastic = Elastic::new(1e5, 0.3).unwrap();
+        let linear: Arc<dyn ConstitutiveLaw> = Arc::new(elastic);
+        let von_mises: Arc<dyn ConstitutiveLaw> = Arc::new(VonMises::new(elastic, 2.4e4, 0.0).unwrap());
+        let mohr_coulomb: Arc<dyn ConstitutiveLaw> = Arc::new(MohrCoulomb::from_degrees(elastic, 8e3, 30.0, 30.0).unwrap());
+        let assumed = AntiLocking::AssumedStrain { stabilization: 0.2 };
         let cases = [
-            (Kinematics::FiniteStrain, BasisKind::Gimp, AntiLocking::None, None),
-            (Kinematics::SmallStrain, BasisKind::Gimp, AntiLocking::None, None),
-            (Kinematics::SmallStrain, BasisKind::Linear, AntiLocking::BBar, None),
-            (Kinematics::FiniteStrain, BasisKind::Gimp, AntiLocking::None, Some(1.0)),
+            (Kinematics::FiniteStrain, BasisKind::Gimp, AntiLocking::None, None, &linear),
+            (Kinematics::SmallStrain, BasisKind::Gimp, AntiLocking::None, None, &linear),
+            (Kinematics::SmallStrain, BasisKind::Linear, AntiLocking::BBar, None, &linear),
+            (Kinematics::SmallStrain, BasisKind::Linear, assumed, None, &linear),
+            (Kinematics::SmallStrain, BasisKind::Linear, AntiLocking::BBar, None, &von_mises),
+            (Kinematics::SmallStrain, BasisKind::Linear, assumed, None, &von_mises),
+            (Kinematics::SmallStrain, BasisKind::Linear, assumed, None, &mohr_coulomb),
+            (Kinematics::FiniteStrain, BasisKind::Gimp, AntiLocking::None, Some(1.0), &linear),
         ];
-        for (kinematics, basis, anti_locking, ghost) in cases {
-            let model = stressed_block_with(kinematics, basis, anti_locking, ghost);
+        for (kinematics, basis, anti_locking, ghost, law) in cases {
+            let plastic = !Arc::ptr_eq(law, &linear);
+            let model = stressed_block_with(kinematics, basis, anti_locking, ghost, law.clone());
             let mut conn = Connectivity::new(model.basis);
             conn.compute(&model.grid, &model.points.position, &model.points.half_length).unwrap();
             let faces = ghost.map_or(Vec::new(), |gamma| crate::engine::scaled_ghost_faces(&model, &conn, gamma));
@@ -490,11 +539,26 @@ mod tests {
                 reaction: &mut Vec::new(),
                 trial: &mut trial,
                 inertia: None,
-                bbar: (anti_locking == AntiLocking::BBar).then_some(bbar.as_slice()),
+                cell_average: crate::engine::cell_average(&model, &bbar),
                 ghost: &faces,
             };
-            // A finite increment (up to 2 % of a cell) so that ΔF ≠ I.
-            let du: Vec<f64> = noise(n, 7).iter().map(|x| 0.02 * x).collect();
+            // A finite increment (up to 2 % of a cell, 20 % for the plastic laws) so that ΔF ≠ I.
+            let amplitude = if plastic { 0.2 } else { 0.02 };
+            let mut du: Vec<f64> = noise(n, 7).iter().map(|x| amplitude * x).collect();
+            if plastic {
+                // Plus a simple shear of 0.2, which survives the cell averages.
+                for (a, &g) in conn.active_nodes().active_to_grid.iter().enumerate() {
+                    du[a * 2] += 0.2 * model.grid.node_position(g as usize)[1];
+                }
+            }
+            if plastic {
+                // At Δu = 0 every point is elastic (the committed state is admissible).
+                sys.evaluate(&vec![0.0; n], &mut vec![0.0; n]).unwrap();
+                let elastic_tangents = sys.trial.tangent.clone();
+                sys.evaluate(&du, &mut vec![0.0; n]).unwrap();
+                let returned = elastic_tangents.iter().zip(&sys.trial.tangent).filter(|(e, t)| (*e - *t).norm() > 1e-6 * e.norm()).count();
+                assert!(returned > 0, "{anti_locking:?}: no point returned to the yield surface");
+            }
             let v = noise(n, 11);
             let eps = 1e-7;
             let (mut rp, mut rm, mut r) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
@@ -508,8 +572,9 @@ mod tests {
             pattern.mul_vec(sys.values, &v, &mut kv);
             let diff: f64 = kv.iter().zip(rp.iter().zip(&rm)).map(|(k, (p, m))| (k - (p - m) / (2.0 * eps)).powi(2)).sum::<f64>().sqrt();
             let scale: f64 = kv.iter().map(|k| k * k).sum::<f64>().sqrt();
-            assert!(diff <= 1e-6 * scale, "{kinematics:?} {anti_locking:?}: |Kv - FD| / |Kv| = {:e}", diff / scale);
-            // Hyperelastic (Hencky) and linear elastic tangents are symmetric as a whole.
+            assert!(diff <= 1e-6 * scale, "{kinematics:?} {anti_locking:?} plastic {plastic}: |Kv - FD| / |Kv| = {:e}", diff / scale);
+            // Hyperelastic (Hencky), linear elastic and associated tangents are symmetric
+            // as a whole.
             let asym = pattern.asymmetry(sys.values);
             assert!(asym < 1e-10, "{kinematics:?}: asymmetry {asym:e}");
         }

@@ -34,10 +34,13 @@ pub struct Scene {
     /// The material point method (default), or the updated Lagrangian FEM reference.
     #[serde(default)]
     pub method: MethodSpec,
-    /// Volumetric-locking treatment: `None` (default) or `BBar` (small strain; linear
-    /// basis or the FEM reference).
+    /// Volumetric-locking treatment: `None` (default), `BBar` or
+    /// `AssumedStrain(stabilization: β)` (small strain; linear basis or the FEM reference).
     #[serde(default)]
     pub anti_locking: AntiLockingSpec,
+    /// Small strain on the initial configuration: points keep their places (default false).
+    #[serde(default)]
+    pub geometrically_linear: bool,
     /// Face ghost penalty γ on cut cells (implicit MPM; docs/theory.md §15): `None`
     /// (default) or `Some(γ)`, γ > 0, 0.01–1 useful.
     #[serde(default)]
@@ -84,12 +87,15 @@ pub enum InitialStressSpec {
 }
 
 /// Volumetric-locking treatment.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Default)]
 pub enum AntiLockingSpec {
     #[default]
     None,
     /// B-bar: each point's dilatation averaged over its cell (element).
     BBar,
+    /// Assumed strain: the cell's average strain plus β times each point's deviatoric
+    /// deviation from it (0 < β ≤ 1).
+    AssumedStrain { stabilization: f64 },
 }
 
 /// How the bodies are discretised.
@@ -686,8 +692,18 @@ impl LoadedScene {
             .with_anti_locking(match s.anti_locking {
                 AntiLockingSpec::None => AntiLocking::None,
                 AntiLockingSpec::BBar => AntiLocking::BBar,
+                AntiLockingSpec::AssumedStrain { stabilization } => AntiLocking::AssumedStrain { stabilization },
             })
             .map_err(|e| self.error(&[Seg::Key("anti_locking")], e.to_string()))?;
+        let model = match s.geometrically_linear {
+            false => model,
+            true => {
+                if matches!(s.analysis, AnalysisSpec::Explicit { .. }) {
+                    return Err(self.error(&[Seg::Key("geometrically_linear")], "explicit analysis moves its points by their velocities; set geometrically_linear: false or use an implicit analysis"));
+                }
+                model.with_geometrically_linear().map_err(|e| self.error(&[Seg::Key("geometrically_linear")], e.to_string()))?
+            }
+        };
         let mut model = match s.ghost_penalty {
             None => model,
             Some(gamma) => {

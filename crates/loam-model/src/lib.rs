@@ -24,16 +24,46 @@ pub enum Kinematics {
 }
 
 /// Treatment of volumetric locking (near-incompressible elastic or plastic flow).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+/// Both treatments are small strain, with the linear basis or the FEM mesh, where all
+/// points of a cell share its nodes so that the cell averages add no couplings.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub enum AntiLocking {
     /// The plain formulation: every point's own strain (full integration).
     #[default]
     None,
     /// B-bar (Hughes 1980): each point's dilatation is replaced by the volume average over
     /// the points of its cell (its element in the FEM reference), the deviatoric strain
-    /// kept. Small strain; linear basis or the FEM mesh, where all points of a cell share
-    /// its nodes so the average adds no couplings.
+    /// kept. Enough for incompressible (von Mises, Tresca) flow; dilatant (frictional,
+    /// associated) flow still locks, because it ties the cell's dilatation to each point's
+    /// own shear.
     BBar,
+    /// Assumed strain: every component of a point's strain is the volume average over its
+    /// cell (one-point quadrature, which leaves dilatant flow one constraint per cell),
+    /// plus `stabilization` (0 < β ≤ 1) times the point's own deviatoric deviation from that
+    /// average, which holds the cell's hourglass modes with β² of their stiffness
+    /// (docs/theory.md §13; β = 1 is B-bar). A variational strain operator: residual and
+    /// tangent stay consistent.
+    AssumedStrain { stabilization: f64 },
+}
+
+impl AntiLocking {
+    /// The weight β of each point's own deviatoric strain beside its cell's average, or
+    /// `None` without cell averaging.
+    pub fn deviatoric_weight(&self) -> Option<f64> {
+        match *self {
+            AntiLocking::None => None,
+            AntiLocking::BBar => Some(1.0),
+            AntiLocking::AssumedStrain { stabilization } => Some(stabilization),
+        }
+    }
+
+    pub fn name(&self) -> &'static str {
+        match self {
+            AntiLocking::None => "none",
+            AntiLocking::BBar => "B-bar",
+            AntiLocking::AssumedStrain { .. } => "assumed strain",
+        }
+    }
 }
 
 /// A constraint on the nodes of a grid plane: the listed displacement components are
@@ -102,6 +132,8 @@ pub enum ModelError {
     StrengthReduction(String),
     #[error("ghost penalty: {0}")]
     GhostPenalty(String),
+    #[error("geometrically linear analysis: {0}")]
+    GeometricallyLinear(String),
 }
 
 /// A complete MPM model. Build it, then hand it to an analysis.
@@ -129,6 +161,10 @@ pub struct Model<const D: usize> {
     /// Ghost-penalty factor γ (implicit MPM): the faces of cut cells are penalised by γ
     /// times the largest P-wave modulus (`loam_grid::ghost_faces`); `None` adds nothing.
     pub ghost_penalty: Option<f64>,
+    /// Small strain on the initial configuration (set with
+    /// [`Model::with_geometrically_linear`]): the mechanics keeps the points' initial
+    /// places and volumes ([`Model::configuration`]).
+    pub geometrically_linear: bool,
 }
 
 impl<const D: usize> Model<D> {
@@ -165,7 +201,7 @@ impl<const D: usize> Model<D> {
         let stride = materials.iter().map(|m| m.history_len()).max().unwrap_or(0);
         let material = points.material.clone();
         points.init_history(stride, |p, h| materials[material[p] as usize].init_history(h));
-        Ok(Self { grid, basis, kinematics, points, materials, constraints, gravity, point_forces: Vec::new(), mesh: None, anti_locking: AntiLocking::None, gravity_preloaded: false, ghost_penalty: None })
+        Ok(Self { grid, basis, kinematics, points, materials, constraints, gravity, point_forces: Vec::new(), mesh: None, anti_locking: AntiLocking::None, gravity_preloaded: false, ghost_penalty: None, geometrically_linear: false })
     }
 
     /// The updated Lagrangian FEM reference on the same grid planes, laws and loads: the
@@ -251,17 +287,43 @@ impl<const D: usize> Model<D> {
         Ok(self)
     }
 
-    /// Use the given anti-locking treatment; B-bar needs small strain and the linear basis
-    /// (or the FEM mesh).
+    /// Write equilibrium on the initial configuration: the connectivity, the point volumes
+    /// and GIMP domains (and FEM mesh nodes) stay those of the start, and the positions
+    /// only accumulate the displacement for output, so the grid and the points
+    /// act as a fixed finite-element mesh with point quadrature. The small-deformation
+    /// setting of limit analysis (bearing capacity, strength reduction; PLAXIS's default,
+    /// without "updated mesh"): moving points under small-strain stresses adds a geometric
+    /// effect the linearised theory does not have (docs/theory.md §3). Small strain only;
+    /// implicit analyses only (`Explicit` moves its points by their velocities).
+    pub fn with_geometrically_linear(mut self) -> Result<Self, ModelError> {
+        if self.kinematics != Kinematics::SmallStrain {
+            return Err(ModelError::GeometricallyLinear(
+                "finite strain follows the deformed configuration; use kinematics SmallStrain".into(),
+            ));
+        }
+        self.geometrically_linear = true;
+        Ok(self)
+    }
+
+    /// Use the given anti-locking treatment; B-bar and assumed strain need small strain and
+    /// the linear basis (or the FEM mesh), assumed strain a stabilization in (0, 1].
     pub fn with_anti_locking(mut self, anti_locking: AntiLocking) -> Result<Self, ModelError> {
-        if anti_locking == AntiLocking::BBar {
+        if let AntiLocking::AssumedStrain { stabilization } = anti_locking {
+            if !(stabilization > 0.0 && stabilization <= 1.0) {
+                return Err(ModelError::AntiLocking(format!(
+                    "assumed-strain stabilization is {stabilization}; valid is 0 < β ≤ 1 (0 leaves hourglass modes free, 1 is B-bar; 0.1 is usual)"
+                )));
+            }
+        }
+        if anti_locking != AntiLocking::None {
+            let name = anti_locking.name();
             if self.kinematics != Kinematics::SmallStrain {
-                return Err(ModelError::AntiLocking("B-bar is a small-strain treatment; use kinematics SmallStrain".into()));
+                return Err(ModelError::AntiLocking(format!("{name} is a small-strain treatment; use kinematics SmallStrain")));
             }
             if self.mesh.is_none() && self.basis != BasisKind::Linear {
-                return Err(ModelError::AntiLocking(
-                    "B-bar averages over the points of a cell, which share their nodes only with the Linear basis".into(),
-                ));
+                return Err(ModelError::AntiLocking(format!(
+                    "{name} averages over the points of a cell, which share their nodes only with the Linear basis"
+                )));
             }
         }
         self.anti_locking = anti_locking;
@@ -274,7 +336,14 @@ impl<const D: usize> Model<D> {
         if let Some(mesh) = &self.mesh {
             return p / mesh.gauss_per_element();
         }
-        self.grid.cell_index(self.grid.cell_coords(&self.points.position[p]))
+        self.grid.cell_index(self.grid.cell_coords(&self.configuration()[p]))
+    }
+
+    /// The point positions the mechanics is written on: the current ones, or the initial
+    /// ones of a geometrically linear model (whose current positions only carry the
+    /// displacement for output).
+    pub fn configuration(&self) -> &[SVector<f64, D>] {
+        if self.geometrically_linear { &self.points.position0 } else { &self.points.position }
     }
 
     /// Whether node `node` (grid node index in MPM, mesh node index in FEM) lies on the plane
