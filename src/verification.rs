@@ -501,9 +501,12 @@ pub fn disks_model(kinematics: crate::implicit::Kinematics) -> crate::model::Mod
         .expect("valid disk model")
 }
 
-/// V3: a rigid smooth strip footing on weightless soil (VERIFICATION.md V3), half model by
+/// V3: a rigid rough strip footing on weightless soil (VERIFICATION.md V3), half model by
 /// symmetry. Footing half-width `b` = 1, domain `width`·b wide and `depth`·b deep,
-/// `cells_per_b` cells per b, 2×2 points per cell, linear basis, small strain; rollers on
+/// `cells_per_b` cells per b, 2×2 points per cell, linear basis, small strain and
+/// geometrically linear (Prandtl's small-deformation setting: moving the points under
+/// small-strain stresses makes the load fall after its peak and jump where points cross
+/// a cell, docs/verification.md V3); rollers on
 /// the symmetry plane x = 0 and the far side, the base fixed; the top nodes 0 ≤ x ≤ b pushed
 /// down by `settlement` at full load and held horizontally (rough). The footing pressure
 /// is −(reaction of constraint 0)_y / b.
@@ -537,6 +540,7 @@ pub fn footing_model(
     ];
     Model::new(grid, BasisKind::Linear, Kinematics::SmallStrain, points, vec![law], constraints, Vector2::zeros())
         .and_then(|m| m.with_anti_locking(anti_locking))
+        .and_then(|m| m.with_geometrically_linear())
         .expect("valid footing model")
 }
 
