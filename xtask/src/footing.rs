@@ -49,8 +49,9 @@ fn run(law: &Arc<dyn ConstitutiveLaw>, cells: usize, anti_locking: AntiLocking) 
                 out.last = -r.reactions[0][1] / C;
                 out.peak = out.peak.max(out.last);
                 out.cutbacks += r.cutbacks;
-                if r.iterations / r.substeps.max(1) > out.max_iterations {
-                    out.max_iterations = r.iterations / r.substeps.max(1);
+                let per_substep = r.iterations / r.substeps.max(1);
+                if per_substep > out.max_iterations {
+                    out.max_iterations = per_substep;
                     out.worst = r.step;
                     out.residuals = r.residuals;
                 }
@@ -102,7 +103,7 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
             }
             // Every law's bound, the anti-locking bound of issue 5 (ν = 0.49) among them, is
             // checked with the assumed strain where the full sweep reaches 8 cells per b.
-            if let (true, Some((cells, ratio, its))) = (anti_locking == assumed, finest) {
+            if let Some((cells, ratio, its)) = finest.filter(|_| anti_locking == assumed) {
                 if cells == 8 {
                     report.rows.push(Row::upper(format!("V3 {name}, assumed strain, 8/b"), "abs_qu_over_q_ref_minus_1", ratio.abs(), 0.05));
                 }

@@ -215,15 +215,13 @@ impl<const D: usize> Dynamic<D> {
         let conn = &e.conn;
         let pts = &e.model.points;
         let mut f_int = vec![0.0; e.f_ext.len()];
-        let average = crate::engine::cell_average(&e.model, &e.bbar);
+        let average = crate::engine::cell_average(&e.model, &e.cell_gradients);
         let stride = conn.stride();
         gather_nodal(&PointCouplings(conn), D, &mut f_int, |p, a, out| {
             let k = p * stride + a;
             let g = &conn.support_gradients(p)[a];
-            let f = match average {
-                Some(avg) => internal_force(pts.volume[p], &pts.stress[p], &avg.strain_gradient(k, g), Some(avg.average(k))),
-                None => internal_force(pts.volume[p], &pts.stress[p], g, None),
-            };
+            let c = average.map_or(*g, |avg| avg.strain_gradient(k, g));
+            let f = internal_force(pts.volume[p], &pts.stress[p], &c, average.map(|avg| avg.average(k)));
             for i in 0..D {
                 out[i] += f[i];
             }

@@ -9,7 +9,7 @@ use crate::step::PointUpdateError;
 use crate::{StepError, StepReport};
 use std::time::Instant;
 use loam_grid::{ghost_faces, Connectivity, GhostFace, INACTIVE};
-use loam_model::{AntiLocking, Model};
+use loam_model::Model;
 use loam_points::stretched_half_length;
 use loam_solve::{
     gather_nodal, BlockPattern, LinearSolverKind, NewtonError, NewtonReport, NewtonSettings, NewtonSolver,
@@ -33,7 +33,7 @@ pub(crate) struct Engine<const D: usize> {
     pub du: Vec<f64>,
     /// B-bar or assumed strain: the cell-averaged support gradients, `stride` per point
     /// (empty without them).
-    pub bbar: Vec<SVector<f64, D>>,
+    pub cell_gradients: Vec<SVector<f64, D>>,
     /// Ghost-penalty faces over active nodes, scaled by γ M (empty without the penalty),
     /// and the node couplings they add to the pattern.
     pub ghost: Vec<GhostFace>,
@@ -65,7 +65,7 @@ impl<const D: usize> Engine<D> {
             reaction: Vec::new(),
             reactions: Vec::new(),
             du: Vec::new(),
-            bbar: Vec::new(),
+            cell_gradients: Vec::new(),
             ghost: Vec::new(),
             ghost_couplings: Vec::new(),
             trial: TrialState::default(),
@@ -93,8 +93,8 @@ impl<const D: usize> Engine<D> {
         }
         self.pattern.update_with(&PointCouplings(&self.conn), &self.ghost_couplings);
         self.model.constrained_dofs(self.conn.active_nodes(), &mut self.constrained);
-        if self.model.anti_locking != AntiLocking::None {
-            cell_averaged_gradients(&self.model, &self.conn, &mut self.bbar);
+        if self.model.anti_locking.deviatoric_weight().is_some() {
+            cell_averaged_gradients(&self.model, &self.conn, &mut self.cell_gradients);
         }
         self.conn_current = true;
         Ok(())
@@ -152,7 +152,7 @@ impl<const D: usize> Engine<D> {
             reaction: &mut self.reaction,
             trial: &mut self.trial,
             inertia,
-            cell_average: cell_average(&self.model, &self.bbar),
+            cell_average: cell_average(&self.model, &self.cell_gradients),
             ghost: &self.ghost,
         };
         (system, &mut self.du, &mut self.newton)
@@ -224,9 +224,10 @@ impl<const D: usize> Engine<D> {
     }
 }
 
-/// The cell averages of the model's anti-locking treatment over the gradients `bbar`.
-pub(crate) fn cell_average<'a, const D: usize>(model: &Model<D>, bbar: &'a [SVector<f64, D>]) -> Option<CellAverage<'a, D>> {
-    model.anti_locking.deviatoric_weight().map(|deviatoric_weight| CellAverage { gradients: bbar, deviatoric_weight })
+/// The cell averages of the model's anti-locking treatment over the cell-averaged
+/// gradients `cell_gradients`; `None` without anti-locking.
+pub(crate) fn cell_average<'a, const D: usize>(model: &Model<D>, cell_gradients: &'a [SVector<f64, D>]) -> Option<CellAverage<'a, D>> {
+    model.anti_locking.deviatoric_weight().map(|deviatoric_weight| CellAverage { gradients: cell_gradients, deviatoric_weight })
 }
 
 /// B-bar's b̄ of every point's support slot: Σ_q v_q ∂N_a(x_q) / Σ_q v_q over the points q

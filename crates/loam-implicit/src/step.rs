@@ -204,14 +204,18 @@ impl<const D: usize> StepSystem<'_, D> {
             .filter_map(|(p, ((df, stress, elastic, volume, tangent, grad_x), (h_out, vol_terms)))| {
                 let nodes = conn.support_nodes(p);
                 let grads = conn.support_gradients(p);
-                // Small strain with cell averaging: the strain gradients c_a go to grad_x
-                // now, and the increment gradient is Σ Δu_a ⊗ c_a.
-                if let (Some(avg), Kinematics::SmallStrain) = (average, kin) {
-                    for (a, c) in grad_x[..nodes.len()].iter_mut().enumerate() {
-                        *c = avg.strain_gradient(p * stride + a, &grads[a]);
+                // With cell averaging (small strain only, Model::with_anti_locking) the
+                // strain gradients c_a go to grad_x now, and the increment gradient is
+                // Σ Δu_a ⊗ c_a.
+                let strain_grads: &[SVector<f64, D>] = match average {
+                    Some(avg) => {
+                        for (a, c) in grad_x[..nodes.len()].iter_mut().enumerate() {
+                            *c = avg.strain_gradient(p * stride + a, &grads[a]);
+                        }
+                        &grad_x[..nodes.len()]
                     }
-                }
-                let strain_grads: &[SVector<f64, D>] = if average.is_some() && kin == Kinematics::SmallStrain { &grad_x[..nodes.len()] } else { grads };
+                    None => grads,
+                };
                 let mut g = SMatrix::<f64, D, D>::zeros();
                 for (a, &node) in nodes.iter().enumerate() {
                     let u = SVector::<f64, D>::from_fn(|i, _| du[node as usize * D + i]);
@@ -527,8 +531,8 @@ mod tests {
             let mut values = Vec::new();
             let mut trial = TrialState::default();
             trial.resize(model.points.len(), conn.stride(), model.points.history_stride());
-            let mut bbar = Vec::new();
-            crate::engine::cell_averaged_gradients(&model, &conn, &mut bbar);
+            let mut cell_gradients = Vec::new();
+            crate::engine::cell_averaged_gradients(&model, &conn, &mut cell_gradients);
             let mut sys = StepSystem {
                 model: &model,
                 conn: &conn,
@@ -539,7 +543,7 @@ mod tests {
                 reaction: &mut Vec::new(),
                 trial: &mut trial,
                 inertia: None,
-                cell_average: crate::engine::cell_average(&model, &bbar),
+                cell_average: crate::engine::cell_average(&model, &cell_gradients),
                 ghost: &faces,
             };
             // A finite increment (up to 2 % of a cell, 20 % for the plastic laws) so that ΔF ≠ I.
@@ -550,8 +554,6 @@ mod tests {
                 for (a, &g) in conn.active_nodes().active_to_grid.iter().enumerate() {
                     du[a * 2] += 0.2 * model.grid.node_position(g as usize)[1];
                 }
-            }
-            if plastic {
                 // At Δu = 0 every point is elastic (the committed state is admissible).
                 sys.evaluate(&vec![0.0; n], &mut vec![0.0; n]).unwrap();
                 let elastic_tangents = sys.trial.tangent.clone();
