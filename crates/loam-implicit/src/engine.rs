@@ -283,6 +283,9 @@ pub(crate) struct Advanced {
     pub iterations: usize,
     /// Relative residuals of the last sub-step.
     pub residuals: Vec<f64>,
+    /// Most corrections in one converged sub-step, and its residuals.
+    pub most_iterations: usize,
+    pub hardest_residuals: Vec<f64>,
     pub active_nodes: usize,
     pub dofs: usize,
 }
@@ -298,6 +301,8 @@ impl Advanced {
             cutbacks: self.cutbacks,
             iterations: self.iterations,
             residuals: self.residuals,
+            most_iterations: self.most_iterations,
+            hardest_residuals: self.hardest_residuals,
             active_nodes: self.active_nodes,
             dofs: self.dofs,
             reactions,
@@ -320,7 +325,16 @@ pub(crate) fn advance<const D: usize, A: CutBack<D>>(
 ) -> Result<Advanced, StepError> {
     let full = target - a.position();
     let (mut depth, mut streak) = (0usize, 0usize);
-    let mut done = Advanced { substeps: 0, cutbacks: 0, iterations: 0, residuals: Vec::new(), active_nodes: 0, dofs: 0 };
+    let mut done = Advanced {
+        substeps: 0,
+        cutbacks: 0,
+        iterations: 0,
+        residuals: Vec::new(),
+        most_iterations: 0,
+        hardest_residuals: Vec::new(),
+        active_nodes: 0,
+        dofs: 0,
+    };
     while a.position() < target - 1e-12 * target.abs().max(scale) {
         let increment = full * 0.5f64.powi(depth as i32);
         let engine = a.engine();
@@ -331,6 +345,10 @@ pub(crate) fn advance<const D: usize, A: CutBack<D>>(
             Ok(report) => {
                 done.substeps += 1;
                 done.iterations += report.iterations();
+                if report.iterations() > done.most_iterations {
+                    done.most_iterations = report.iterations();
+                    done.hardest_residuals.clone_from(&report.residuals);
+                }
                 done.residuals = report.residuals;
                 streak += 1;
                 if depth > 0 && streak >= 2 {

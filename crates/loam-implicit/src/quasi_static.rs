@@ -57,6 +57,10 @@ pub struct StepReport {
     pub iterations: usize,
     /// Relative residuals of the last sub-step, before the first and after each correction.
     pub residuals: Vec<f64>,
+    /// The most corrections one converged sub-step needed, and that sub-step's relative
+    /// residuals (the first such sub-step on a tie).
+    pub most_iterations: usize,
+    pub hardest_residuals: Vec<f64>,
     pub active_nodes: usize,
     pub dofs: usize,
     /// Per constraint (scene order), the support reaction Σ (f_int − f_ext) over its nodes
