@@ -106,10 +106,11 @@ fn a_failed_step_is_cut_back_and_recovers() {
     let r = qs.step().unwrap();
     assert!(r.cutbacks >= 1 && r.substeps >= 2, "{r:?}");
     assert_eq!(r.load_factor, 1.0);
-    // The hardest sub-step is reported with its own history: within the limit of 3, at
-    // least the mean over the sub-steps, and converged (relative residual ≤ 1e-9).
-    assert_eq!(r.hardest_residuals.len(), r.most_iterations + 1, "{r:?}");
-    assert!(r.most_iterations <= 3 && r.most_iterations * r.substeps >= r.iterations, "{r:?}");
+    // The hardest sub-step is reported with its own history: at least one correction,
+    // within the limit of 3, at least the mean over the sub-steps, and converged
+    // (relative residual ≤ 1e-9).
+    let most = r.most_iterations();
+    assert!((1..=3).contains(&most) && most * r.substeps >= r.iterations, "{r:?}");
     assert!(*r.hardest_residuals.last().unwrap() <= 1e-9, "{r:?}");
     let e = column_errors(&qs.model().points, &c, 1, |y| c.hencky_displacement(y));
     // 16 cells: e_σ 3.7e-3 in the verify sweep; the path differs, so allow 2x.

@@ -57,8 +57,8 @@ fn run(law: &Arc<dyn ConstitutiveLaw>, cells: usize, anti_locking: AntiLocking) 
                 out.cutbacks += r.cutbacks;
                 let to_tolerance = r.hardest_residuals.iter().position(|&x| x <= tolerance).unwrap_or(r.hardest_residuals.len());
                 out.to_tolerance = out.to_tolerance.max(to_tolerance);
-                if r.most_iterations > out.max_iterations {
-                    out.max_iterations = r.most_iterations;
+                if r.most_iterations() > out.max_iterations {
+                    out.max_iterations = r.most_iterations();
                     out.worst = r.step;
                     out.residuals = r.hardest_residuals;
                 }

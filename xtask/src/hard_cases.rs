@@ -54,7 +54,7 @@ fn softening(cells: usize, margin: f64) -> Softening {
                 out.last = -r.reactions[0][1];
                 out.peak = out.peak.max(out.last);
                 out.reached = r.load_factor * SHORTENING;
-                out.max_iterations = out.max_iterations.max(r.most_iterations);
+                out.max_iterations = out.max_iterations.max(r.most_iterations());
                 out.cutbacks += r.cutbacks;
             }
             Err(e) => {

@@ -48,7 +48,7 @@ fn undrained(cells: usize, anti_locking: AntiLocking) -> Result<Collapse> {
     let (mut max_iterations, mut stop, mut carried) = (0, "carried the whole load (no collapse up to γH/c_u = 8)".to_string(), true);
     while !qs.is_finished() {
         match qs.step() {
-            Ok(r) => max_iterations = max_iterations.max(r.most_iterations),
+            Ok(r) => max_iterations = max_iterations.max(r.most_iterations()),
             Err(e) => {
                 stop = e.to_string();
                 carried = false;

@@ -283,8 +283,7 @@ pub(crate) struct Advanced {
     pub iterations: usize,
     /// Relative residuals of the last sub-step.
     pub residuals: Vec<f64>,
-    /// Most corrections in one converged sub-step, and its residuals.
-    pub most_iterations: usize,
+    /// Relative residuals of the converged sub-step with the most corrections.
     pub hardest_residuals: Vec<f64>,
     pub active_nodes: usize,
     pub dofs: usize,
@@ -301,7 +300,6 @@ impl Advanced {
             cutbacks: self.cutbacks,
             iterations: self.iterations,
             residuals: self.residuals,
-            most_iterations: self.most_iterations,
             hardest_residuals: self.hardest_residuals,
             active_nodes: self.active_nodes,
             dofs: self.dofs,
@@ -330,7 +328,6 @@ pub(crate) fn advance<const D: usize, A: CutBack<D>>(
         cutbacks: 0,
         iterations: 0,
         residuals: Vec::new(),
-        most_iterations: 0,
         hardest_residuals: Vec::new(),
         active_nodes: 0,
         dofs: 0,
@@ -345,8 +342,7 @@ pub(crate) fn advance<const D: usize, A: CutBack<D>>(
             Ok(report) => {
                 done.substeps += 1;
                 done.iterations += report.iterations();
-                if report.iterations() > done.most_iterations {
-                    done.most_iterations = report.iterations();
+                if report.residuals.len() > done.hardest_residuals.len() {
                     done.hardest_residuals.clone_from(&report.residuals);
                 }
                 done.residuals = report.residuals;

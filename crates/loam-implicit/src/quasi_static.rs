@@ -57,9 +57,8 @@ pub struct StepReport {
     pub iterations: usize,
     /// Relative residuals of the last sub-step, before the first and after each correction.
     pub residuals: Vec<f64>,
-    /// The most corrections one converged sub-step needed, and that sub-step's relative
-    /// residuals (the first such sub-step on a tie).
-    pub most_iterations: usize,
+    /// Relative residuals of the converged sub-step with the most corrections (the first
+    /// such sub-step on a tie); see [`most_iterations`](Self::most_iterations).
     pub hardest_residuals: Vec<f64>,
     pub active_nodes: usize,
     pub dofs: usize,
@@ -73,6 +72,12 @@ pub struct StepReport {
 impl StepReport {
     pub fn final_residual(&self) -> f64 {
         self.residuals.last().copied().unwrap_or(f64::NAN)
+    }
+
+    /// The most corrections one converged sub-step needed (its residual history holds the
+    /// one before the first correction and one after each).
+    pub fn most_iterations(&self) -> usize {
+        self.hardest_residuals.len().saturating_sub(1)
     }
 }
 
