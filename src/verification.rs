@@ -161,6 +161,25 @@ mod tests {
         }
         assert!((Column::V1A.small_strain_displacement(50.0) + 1.0).abs() < 1e-12);
     }
+
+    /// Prandtl's N_c against VERIFICATION.md V3, which gives it to three decimals as
+    /// bearing-capacity tables do: 8.345, 14.835, 30.140 at φ = 10°, 20°, 30°. Small φ
+    /// approaches 2 + π, the φ = 0 value, without a jump.
+    #[test]
+    fn prandtl_nc_matches_the_tabulated_values() {
+        for (phi, nc) in [(10.0, 8.345), (20.0, 14.835), (30.0, 30.140)] {
+            // the table's last decimal
+            assert!((prandtl_nc(phi) - nc).abs() < 5e-4, "φ = {phi}: {}", prandtl_nc(phi));
+        }
+        assert_eq!(prandtl_nc(0.0), 2.0 + std::f64::consts::PI);
+        // Expanding e^{π tan φ} tan²(π/4 + φ/2) = 1 + (2 + π) φ + (π²/2 + 2π + 2) φ² + O(φ³)
+        // gives N_c = 2 + π + (π²/2 + 2π + 2) φ + O(φ²). At φ = 1e-6 rad the O(φ²) term and
+        // the round-off of (N_q − 1)/tan φ (≈ 1e-16/φ) are both below 1e-8.
+        let pi = std::f64::consts::PI;
+        let phi = 1e-6;
+        let linear = 2.0 + pi + (pi * pi / 2.0 + 2.0 * pi + 2.0) * phi;
+        assert!((prandtl_nc(phi.to_degrees()) - linear).abs() < 1e-8, "{}", prandtl_nc(phi.to_degrees()) - linear);
+    }
 }
 
 /// What the MPM and FEM columns share: grid, body's upper corner, constraints, gravity, law.

@@ -232,6 +232,67 @@ fn von_mises_oedometer_closed_form() {
     assert!(h[0] > 0.0);
 }
 
+/// (a′) Oedometer, Mohr–Coulomb (tension positive): ε_zz = −ε, ε_xx = ε_yy = 0, c = 10,
+/// φ = 30°, ν = 0.2, so that the elastic K0 line (σ_xx/σ_zz = ν/(1 − ν) = 1/4) meets the
+/// surface (it does not for ν = 0.3 at φ = 30°: 3/7 > k = 1/3). Closed form, with
+/// s = sin φ, k = (1 − s)/(1 + s), m = (1 − sin ψ)/(1 + sin ψ), M = λ + 2G:
+/// - elastic: σ_zz = −M ε, σ_xx = −λ ε, up to ε_y = 2c cos φ / ((1 − s) M − (1 + s) λ);
+/// - then the stress stays on the edge σ₁ = σ₂ = σ_xx (both planes with σ₃ = σ_zz, equal
+///   multipliers by symmetry): σ_xx = k σ_zz + 2c cos φ/(1 + s), and ε_xx = 0 with the flow
+///   of both planes gives dσ_zz/dε_zz = E / (1 − 2νk + 2m((1 − ν)k − ν)).
+/// Linear planes, fixed axes and a fixed flow direction make the return exact for any
+/// increment, so the incremental result matches to round-off (1e-10 of c).
+#[test]
+fn mohr_coulomb_oedometer_closed_form() {
+    let (young, nu, c, phi) = (1.0e4, 0.2, 10.0, 30.0f64);
+    for psi in [30.0f64, 10.0, 0.0] {
+        let law = MohrCoulomb::from_degrees(Elastic::new(young, nu).unwrap(), c, phi, psi).unwrap();
+        let (lambda, g) = law.elastic.lame();
+        let m_el = lambda + 2.0 * g;
+        let (s, co) = (phi.to_radians().sin(), phi.to_radians().cos());
+        let k = (1.0 - s) / (1.0 + s);
+        let m = (1.0 - psi.to_radians().sin()) / (1.0 + psi.to_radians().sin());
+        let eps_y = 2.0 * c * co / ((1.0 - s) * m_el - (1.0 + s) * lambda);
+        let m_p = young / (1.0 - 2.0 * nu * k + 2.0 * m * ((1.0 - nu) * k - nu));
+        let n = 150;
+        let de = 5.05 * eps_y / n as f64;
+        let mut ee = Matrix3::zeros();
+        let mut h = vec![0.0; law.history_len()];
+        law.init_history(&mut h);
+        let mut plastic_steps = 0;
+        for step in 1..=n {
+            let mut grad = Matrix3::zeros();
+            grad[(2, 2)] = -de;
+            let mut h_out = vec![0.0; h.len()];
+            let up = small_strain_update(&law, &grad, &ee, &h, &mut h_out).unwrap();
+            let (_, info) = law.update_with_info(&(ee + grad), &h, &mut h_out.clone()).unwrap();
+            ee = up.elastic_strain;
+            h = h_out;
+            let eps = step as f64 * de;
+            let (szz, sxx, syy) = (up.stress[(2, 2)], up.stress[(0, 0)], up.stress[(1, 1)]);
+            let tol = 1e-10 * c;
+            if eps < eps_y {
+                assert_eq!(info.region, R::Elastic, "ψ {psi} step {step}");
+                assert!((szz + m_el * eps).abs() < tol, "ψ {psi} step {step}: {szz}");
+                assert!((sxx + lambda * eps).abs() < tol);
+            } else {
+                plastic_steps += 1;
+                assert_eq!(info.region, R::Edge12, "ψ {psi} step {step}");
+                let szz_ref = -m_el * eps_y - m_p * (eps - eps_y);
+                assert!((szz - szz_ref).abs() < tol, "ψ {psi} step {step}: {szz} vs {szz_ref}");
+                assert!((sxx - (k * szz + 2.0 * c * co / (1.0 + s))).abs() < tol, "ψ {psi} step {step}");
+                assert!((syy - sxx).abs() < tol);
+                // The algorithmic tangent on the edge is the closed-form constrained
+                // modulus (round-off, 1e-9 relative).
+                let d = up.tangent[(idx(2, 2), idx(2, 2))];
+                assert!((d - m_p).abs() < 1e-9 * m_p, "ψ {psi} step {step}: D_zzzz {d} vs {m_p}");
+            }
+        }
+        // 5.05 ε_y in 150 steps (no step ends on ε_y itself): steps 30 to 150 are plastic.
+        assert_eq!(plastic_steps, 121, "ψ {psi}");
+    }
+}
+
 // ---------------------------------------------------------------- Mohr–Coulomb laws
 
 fn mc(c: f64, phi: f64, psi: f64) -> MohrCoulomb {
