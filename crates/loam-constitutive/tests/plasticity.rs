@@ -264,8 +264,8 @@ fn mohr_coulomb_oedometer_closed_form() {
             let mut grad = Matrix3::zeros();
             grad[(2, 2)] = -de;
             let mut h_out = vec![0.0; h.len()];
-            let up = small_strain_update(&law, &grad, &ee, &h, &mut h_out).unwrap();
-            let (_, info) = law.update_with_info(&(ee + grad), &h, &mut h_out.clone()).unwrap();
+            // grad is symmetric, so ε_trial = ε^e_n + grad (what small_strain_update forms).
+            let (up, info) = law.update_with_info(&(ee + grad), &h, &mut h_out).unwrap();
             ee = up.elastic_strain;
             h = h_out;
             let eps = step as f64 * de;
