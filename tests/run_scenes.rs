@@ -53,6 +53,29 @@ fn column_history_balances_work_and_energy() {
     assert!((strain / work - 1.0).abs() < 2e-3, "stored {strain} vs work {work}");
 }
 
+/// The scene's `solver.linear` forces the linear solver, and the run summary names the
+/// solver used: the column's elastic tangent is symmetric and positive definite, so the
+/// automatic choice is Cholesky; asking for LU gets LU. Both factor the same matrix, so the
+/// top point's settlement agrees to round-off (1e-12 m on 3.9 m, far below the Newton
+/// tolerance's effect, which is the same for both).
+#[test]
+fn the_scene_can_force_the_linear_solver() {
+    let path = Path::new("examples/column.ron");
+    let source = std::fs::read_to_string(path).unwrap();
+    let forced = source.replace("solver: (residual_tolerance: 1e-9)", "solver: (residual_tolerance: 1e-9, linear: Some(Lu))");
+    assert_ne!(forced, source, "the column scene names its solver settings");
+    let mut top = Vec::new();
+    for (scene, solver) in [(LoadedScene::read(path).unwrap(), "sparse Cholesky"), (LoadedScene::parse(path, forced).unwrap(), "sparse LU")] {
+        let dir = tempfile::tempdir().unwrap();
+        let summary = run_scene(&scene, dir.path(), &mut |_, _| {}).unwrap();
+        assert_eq!(summary.solver, solver);
+        let (header, rows) = read_csv(&dir.path().join("points_final.csv"));
+        let y = header.iter().position(|h| h == "y").unwrap();
+        top.push(rows.iter().map(|r| r[y]).fold(f64::NEG_INFINITY, f64::max));
+    }
+    assert!((top[0] - top[1]).abs() < 1e-12, "Cholesky {} vs LU {}", top[0], top[1]);
+}
+
 /// The column with the updated Lagrangian FEM reference (examples/column_fem.ron): the top
 /// Gauss point's settlement matches the Hencky closed form at its initial height within
 /// 0.1 % (the FEM displacement error on 32 elements is 2e-4 in tests/ul_fem.rs), and the

@@ -53,9 +53,10 @@ fn a_bracket_that_does_not_bracket_is_reported() {
 }
 
 /// The linear solver follows the tangent: Cholesky for a symmetric, non-softening law
-/// (von Mises, H = 0); LU for non-associated Mohr–Coulomb (non-symmetric) and for a
-/// softening von Mises (symmetric but indefinite past the peak, where Cholesky stops at
-/// its first negative pivot).
+/// (von Mises, H = 0; associated Mohr–Coulomb, whose returns to the plane, the edges and
+/// the apex all have symmetric tangents); LU for non-associated Mohr–Coulomb
+/// (non-symmetric) and for a softening von Mises (symmetric but indefinite past the peak,
+/// where Cholesky stops at its first negative pivot). A solver asked for is used as asked.
 #[test]
 fn the_linear_solver_follows_symmetry_and_softening() {
     use loam::constitutive::MohrCoulomb;
@@ -68,4 +69,8 @@ fn the_linear_solver_follows_symmetry_and_softening() {
     assert_eq!(kind(clay()), LinearSolverKind::Cholesky);
     assert_eq!(kind(Arc::new(MohrCoulomb::from_degrees(elastic, 10.0, 20.0, 0.0).unwrap())), LinearSolverKind::Lu);
     assert_eq!(kind(Arc::new(VonMises::new(elastic, 17.3, -100.0).unwrap())), LinearSolverKind::Lu);
+    assert_eq!(kind(Arc::new(MohrCoulomb::from_degrees(elastic, 10.0, 20.0, 20.0).unwrap())), LinearSolverKind::Cholesky);
+    let forced = slope_model(&SlopeGeometry::UNDRAINED, clay(), 0.4, 10.0, 5, AntiLocking::BBar);
+    let settings = QuasiStaticSettings { linear_solver: Some(LinearSolverKind::Lu), ..Default::default() };
+    assert_eq!(QuasiStatic::new(forced, settings).linear_solver_kind(), LinearSolverKind::Lu);
 }

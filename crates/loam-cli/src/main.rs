@@ -4,6 +4,8 @@ use anyhow::Context;
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use loam_io::{run_scene, LoadedScene};
+use tracing_subscriber::filter::LevelFilter;
+use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -24,15 +26,49 @@ enum Command {
         /// Output folder [default: out/<scene name>].
         #[arg(long)]
         out: Option<PathBuf>,
-        /// No progress bar.
+        /// No progress bar, and only errors in the log.
         #[arg(long, short)]
         quiet: bool,
+        /// More of the solver's log on stderr: warnings (Newton failures cut back) are
+        /// shown by default; -v adds the linear solver chosen and other choices, -vv every
+        /// Newton iteration.
+        #[arg(long, short, action = clap::ArgAction::Count, conflicts_with = "quiet")]
+        verbose: u8,
     },
     /// Validate a scene completely (down to points and constraints) without running it.
     Check {
         /// Scene file (RON).
         scene: PathBuf,
     },
+}
+
+/// One log line on its way to stderr: written whole, with the progress bar cleared
+/// while it is written and drawn again under it.
+struct LogLine {
+    bar: ProgressBar,
+    text: Vec<u8>,
+}
+
+impl Write for LogLine {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.text.extend_from_slice(buf);
+        Ok(buf.len())
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+impl Drop for LogLine {
+    fn drop(&mut self) {
+        let text = std::mem::take(&mut self.text);
+        // A log line that cannot be written is dropped: stderr is gone and the run's
+        // outputs matter more.
+        self.bar.suspend(|| {
+            let _ = std::io::stderr().write_all(&text);
+        });
+    }
 }
 
 fn main() -> ExitCode {
@@ -66,7 +102,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             );
             Ok(())
         }
-        Command::Run { scene, out, quiet } => {
+        Command::Run { scene, out, quiet, verbose } => {
             let loaded = LoadedScene::read(&scene)?;
             let out = out.unwrap_or_else(|| {
                 PathBuf::from("out").join(scene.file_stem().map(|s| s.to_owned()).unwrap_or_default())
@@ -86,6 +122,19 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             bar.set_style(
                 ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:40} {msg}").expect("valid template"),
             );
+            let level = match (quiet, verbose) {
+                (true, _) => LevelFilter::ERROR,
+                (false, 0) => LevelFilter::WARN,
+                (false, 1) => LevelFilter::INFO,
+                _ => LevelFilter::DEBUG,
+            };
+            let log_bar = bar.clone();
+            tracing_subscriber::fmt()
+                .with_max_level(level)
+                .with_target(false)
+                .with_ansi(std::io::stderr().is_terminal())
+                .with_writer(move || LogLine { bar: log_bar.clone(), text: Vec::new() })
+                .init();
             let summary = run_scene(&loaded, &out, &mut |r, end| {
                 bar.set_position((1000.0 * (r.time / end).clamp(0.0, 1.0)) as u64);
                 let newton = if r.final_residual.is_nan() {

@@ -1,0 +1,50 @@
+//! The `loam` program as a user runs it: exit status, the summary on stdout, the log on
+//! stderr, and errors that name the file.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn example(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples").join(name)
+}
+
+fn loam(args: &[&std::ffi::OsStr]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_loam")).args(args).output().expect("the loam binary runs")
+}
+
+/// `-v` logs the linear solver the tangent chose (the column's elastic tangent is
+/// symmetric positive definite: Cholesky), and the end-of-run summary names it too.
+#[test]
+fn verbose_run_logs_the_solver_choice() {
+    let out = tempfile::tempdir().unwrap();
+    let scene = example("column.ron");
+    let o = loam(&["run".as_ref(), scene.as_os_str(), "--out".as_ref(), out.path().as_os_str(), "-v".as_ref()]);
+    let (stdout, stderr) = (String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+    assert!(o.status.success(), "stderr: {stderr}");
+    assert!(stderr.contains("linear solver chosen") && stderr.contains("sparse Cholesky"), "stderr: {stderr}");
+    assert!(stdout.contains("40 steps") && stdout.contains("sparse Cholesky"), "stdout: {stdout}");
+    assert!(out.path().join("run_log.csv").exists());
+}
+
+/// Without `-v` the information-level log stays off; `--quiet` with `-v` is refused by the
+/// argument parser.
+#[test]
+fn default_run_keeps_the_log_to_warnings() {
+    let out = tempfile::tempdir().unwrap();
+    let scene = example("column.ron");
+    let o = loam(&["run".as_ref(), scene.as_os_str(), "--out".as_ref(), out.path().as_os_str(), "--quiet".as_ref()]);
+    assert!(o.status.success());
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("linear solver chosen"));
+    let o = loam(&["run".as_ref(), scene.as_os_str(), "-q".as_ref(), "-v".as_ref()]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("cannot be used with"));
+}
+
+/// A scene that does not exist fails with a non-zero status and an error naming it.
+#[test]
+fn missing_scene_is_an_error_naming_the_file() {
+    let o = loam(&["check".as_ref(), "no_such_scene.ron".as_ref()]);
+    assert!(!o.status.success());
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(stderr.starts_with("error:") && stderr.contains("no_such_scene.ron"), "stderr: {stderr}");
+}
