@@ -905,6 +905,32 @@ fn mc_errors_not_panics() {
 
 // ---------------------------------------------------------------- property tests
 
+/// The relative error of a plastic update's tangent against central differences, or None
+/// where the state is elastic or lies within the FD step of a region or branch boundary (a
+/// kink, where the one-sided derivatives differ and a difference quotient means nothing).
+fn mc_fd_error_away_from_kinks(
+    law: &MohrCoulomb,
+    eps: &Matrix3<f64>,
+    h_n: &[f64],
+    up: &StressUpdate,
+    info: &loam_constitutive::MohrCoulombReturn,
+) -> Option<f64> {
+    if info.region == R::Elastic {
+        return None;
+    }
+    let hstep = 1e-6 * eps.norm();
+    for (_, _, d) in symmetric_unit_directions() {
+        for sgn in [-1.0, 1.0] {
+            let (_, i2) = law.update_with_info(&(eps + d * (sgn * hstep)), h_n, &mut [0.0; 2]).unwrap();
+            if i2.region != info.region || i2.residual_branch != info.residual_branch {
+                return None;
+            }
+        }
+    }
+    let fd = fd_tangent(law, eps, h_n);
+    Some(tangent_error(&up.tangent, &fd, law.elastic.stiffness().norm()))
+}
+
 /// Trial principal stresses spanning every region of the laws above (c = 10, σ_t = 5).
 fn stress_triple() -> impl Strategy<Value = [f64; 3]> {
     prop_oneof![
@@ -951,18 +977,7 @@ proptest! {
             prop_assert!(!info.fallback, "{} {:?}", name, info);
         }
         record_count(format!("{name:14} {:?}{}", info.region, if info.fallback { " (fallback)" } else { "" }));
-        // FD tangent where ±h stays in the same region and branch (away from kinks).
-        let hstep = 1e-6 * eps.norm();
-        let mut same = true;
-        for (_, _, d) in symmetric_unit_directions() {
-            for sgn in [-1.0, 1.0] {
-                let (_, i2) = law.update_with_info(&(eps + d * (sgn * hstep)), &h_n, &mut [0.0; 2]).unwrap();
-                same &= i2.region == info.region && i2.residual_branch == info.residual_branch;
-            }
-        }
-        if same && info.region != R::Elastic {
-            let fd = fd_tangent(&law, &eps, &h_n);
-            let err = tangent_error(&up.tangent, &fd, law.elastic.stiffness().norm());
+        if let Some(err) = mc_fd_error_away_from_kinks(&law, &eps, &h_n, &up, &info) {
             record(format!("MC proptest {:?}", info.region), err);
             prop_assert!(err < FD_TOL, "{} {:?} κn {}: FD {}", name, info, kappa_n, err);
         }
@@ -997,7 +1012,9 @@ proptest! {
     }
 
     /// Random strain paths through the small-strain driver with the history carried over:
-    /// every step is consistent (F_TOL), finite, and κ never decreases.
+    /// every step is consistent (F_TOL), finite, κ never decreases, and each plastic step's
+    /// tangent, with the history the path has built, matches central differences (FD_TOL)
+    /// wherever ±h stays in the step's region and branch.
     #[test]
     fn mc_random_paths(
         which in 0usize..11,
@@ -1017,6 +1034,12 @@ proptest! {
             // F_TOL on both surfaces.
             prop_assert!(f <= F_TOL * scale && ft.unwrap_or(0.0) <= F_TOL * scale, "{} f {} ft {:?}", name, f, ft);
             prop_assert!(h_out[0] >= h[0]);
+            let eps = ee + (grad + grad.transpose()) * 0.5;
+            let (at, info) = law.update_with_info(&eps, &h, &mut [0.0; 2]).unwrap();
+            if let Some(err) = mc_fd_error_away_from_kinks(&law, &eps, &h, &at, &info) {
+                record(format!("MC path proptest {:?}", info.region), err);
+                prop_assert!(err < FD_TOL, "{} {:?} κn {}: FD {}", name, info, h[0], err);
+            }
             ee = up.elastic_strain;
             h = h_out;
         }
