@@ -91,3 +91,39 @@ fn k0_outside_the_yield_surface_is_refused() {
     let e = model.geostatic_stress(0.2).unwrap_err();
     assert!(matches!(e, ModelError::Geostatic(_)) && e.to_string().contains("outside the yield surface"), "{e}");
 }
+
+/// A sloping surface (y_s = 4 + x/2 over 0 ≤ x ≤ 4, 1:2, on 0.5 m cells): each point gets
+/// the weight of its own grid column above it, so σ_v follows the depth below the local
+/// surface. Bound, from the fill rule: with 2×2 points per cell a sub-column's points sit
+/// h/2 apart, the topmost within h/2 below the surface, so the points above a point (its
+/// own row counted half) stand for its depth to within h/4; a cell column averages its two
+/// sub-columns, whose surfaces differ by tan β · h/2, which adds tan β · h/4. Hence
+/// |σ_v − ρg (y_s(x_p) − y_p)| ≤ ρg h (1 + tan β) / 4, and σ_h = K0 σ_v to rounding.
+#[test]
+fn sloping_ground_gets_the_weight_of_its_own_column() {
+    let (h, rho, tan_beta, k0) = (0.5, 1900.0, 0.5, 0.55);
+    let surface = |x: f64| 4.0 + tan_beta * x;
+    let grid = Grid::new(Vector2::zeros(), Vector2::new(h, h), [8, 13]).unwrap();
+    let mut points = PointStore::new();
+    let slope = Shape::Polygon(vec![Vector2::zeros(), Vector2::new(4.0, 0.0), Vector2::new(4.0, surface(4.0)), Vector2::new(0.0, surface(0.0))]);
+    points.fill(&grid, &slope, 2, rho, 0).unwrap();
+    let constraints = vec![
+        PlaneConstraint::new(0, 0, [true, false, false]),
+        PlaneConstraint::new(0, 8, [true, false, false]),
+        PlaneConstraint::new(1, 0, [true, true, false]),
+    ];
+    let law = Arc::new(Elastic::new(1e5, 0.3).unwrap());
+    let mut model = Model::new(grid, BasisKind::Linear, Kinematics::SmallStrain, points, vec![law], constraints, Vector2::new(0.0, -G)).unwrap();
+    model.geostatic_stress(k0).unwrap();
+    let bound = rho * G * h * (1.0 + tan_beta) / 4.0;
+    let mut worst: f64 = 0.0;
+    for p in 0..model.points.len() {
+        let x = model.points.position[p];
+        let s = model.points.stress[p];
+        let continuum = -rho * G * (surface(x[0]) - x[1]);
+        worst = worst.max((s[(1, 1)] - continuum).abs());
+        assert!((s[(1, 1)] - continuum).abs() <= bound, "point {p} at {x:?}: σ_v {} vs ρg depth {continuum}", s[(1, 1)]);
+        assert!((s[(0, 0)] / (k0 * s[(1, 1)]) - 1.0).abs() < 1e-12 && s[(0, 1)] == 0.0);
+    }
+    println!("sloping K0: largest |σ_v − ρg depth| = {worst:.1} against the bound {bound:.1}");
+}
