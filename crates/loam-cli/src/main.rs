@@ -29,9 +29,9 @@ enum Command {
         /// No progress bar, and only errors in the log.
         #[arg(long, short)]
         quiet: bool,
-        /// More of the solver's log on stderr: warnings (Newton failures cut back) are
-        /// shown by default; -v adds the linear solver chosen and other choices, -vv every
-        /// Newton iteration.
+        /// More of the solver's log on stderr: warnings are shown by default; -v adds the
+        /// linear solver chosen and each cut-back with its cause, -vv every Newton
+        /// iteration.
         #[arg(long, short, action = clap::ArgAction::Count, conflicts_with = "quiet")]
         verbose: u8,
     },

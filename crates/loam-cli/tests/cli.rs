@@ -26,15 +26,24 @@ fn verbose_run_logs_the_solver_choice() {
     assert!(out.path().join("run_log.csv").exists());
 }
 
-/// Without `-v` the information-level log stays off; `--quiet` with `-v` is refused by the
-/// argument parser.
+/// Without flags the log shows warnings only: neither the solver choice (information) nor
+/// Newton's iterations (debug). `-vv` adds the iterations, `--quiet` with `-v` is refused by
+/// the argument parser.
 #[test]
-fn default_run_keeps_the_log_to_warnings() {
-    let out = tempfile::tempdir().unwrap();
+fn log_levels_follow_the_flags() {
     let scene = example("column.ron");
-    let o = loam(&["run".as_ref(), scene.as_os_str(), "--out".as_ref(), out.path().as_os_str(), "--quiet".as_ref()]);
-    assert!(o.status.success());
-    assert!(!String::from_utf8_lossy(&o.stderr).contains("linear solver chosen"));
+    let run = |flags: &[&str]| {
+        let out = tempfile::tempdir().unwrap();
+        let mut args: Vec<&std::ffi::OsStr> = vec!["run".as_ref(), scene.as_os_str(), "--out".as_ref(), out.path().as_os_str()];
+        args.extend(flags.iter().map(std::ffi::OsStr::new));
+        let o = loam(&args);
+        assert!(o.status.success(), "{flags:?}: {}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8_lossy(&o.stderr).into_owned()
+    };
+    let quiet_default = run(&[]);
+    assert!(!quiet_default.contains("linear solver") && !quiet_default.contains("DEBUG"), "stderr: {quiet_default}");
+    let debug = run(&["-vv"]);
+    assert!(debug.contains("linear solver chosen") && debug.contains("DEBUG") && debug.contains("newton"), "stderr: {debug}");
     let o = loam(&["run".as_ref(), scene.as_os_str(), "-q".as_ref(), "-v".as_ref()]);
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("cannot be used with"));

@@ -48,12 +48,21 @@ impl<const D: usize> Engine<D> {
     /// silent symmetrisation; a softening tangent is indefinite and Cholesky would stop
     /// at the first negative pivot).
     pub fn new(model: Model<D>, newton: NewtonSettings, linear_solver: Option<LinearSolverKind>) -> Self {
-        let kind = linear_solver.unwrap_or(if model.symmetric_tangent() && !model.indefinite_tangent() {
-            LinearSolverKind::Cholesky
-        } else {
-            LinearSolverKind::Lu
-        });
-        tracing::info!(solver = %kind, "linear solver chosen from the tangent's symmetry and definiteness");
+        let kind = match linear_solver {
+            Some(kind) => {
+                tracing::info!(solver = %kind, "linear solver as the settings ask");
+                kind
+            }
+            None => {
+                let kind = if model.symmetric_tangent() && !model.indefinite_tangent() {
+                    LinearSolverKind::Cholesky
+                } else {
+                    LinearSolverKind::Lu
+                };
+                tracing::info!(solver = %kind, "linear solver chosen from the tangent's symmetry and definiteness");
+                kind
+            }
+        };
         Self {
             conn: Connectivity::new(model.basis),
             model,
@@ -356,7 +365,10 @@ pub(crate) fn advance<const D: usize, A: CutBack<D>>(
                 done.cutbacks += 1;
                 streak = 0;
                 let (load_factor, reason) = a.failure(increment, target, &e);
-                tracing::warn!(step, position = a.position(), increment, error = %e, "Newton failed; cutting the step back");
+                // A cut-back is the step control doing its job (the run log and the progress
+                // count them; strength reduction fails trials on purpose), so it is
+                // information, not a warning; a run that cannot go on returns an error.
+                tracing::info!(step, position = a.position(), increment, error = %e, "Newton failed; cutting the step back");
                 if depth >= max_cutbacks {
                     return Err(StepError::NotConverged {
                         step,
