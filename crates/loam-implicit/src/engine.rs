@@ -48,21 +48,14 @@ impl<const D: usize> Engine<D> {
     /// silent symmetrisation; a softening tangent is indefinite and Cholesky would stop
     /// at the first negative pivot).
     pub fn new(model: Model<D>, newton: NewtonSettings, linear_solver: Option<LinearSolverKind>) -> Self {
-        let kind = match linear_solver {
-            Some(kind) => {
-                tracing::info!(solver = %kind, "linear solver as the settings ask");
-                kind
+        let (kind, source) = match linear_solver {
+            Some(kind) => (kind, "as the settings ask"),
+            None if model.symmetric_tangent() && !model.indefinite_tangent() => {
+                (LinearSolverKind::Cholesky, "chosen from the tangent's symmetry and definiteness")
             }
-            None => {
-                let kind = if model.symmetric_tangent() && !model.indefinite_tangent() {
-                    LinearSolverKind::Cholesky
-                } else {
-                    LinearSolverKind::Lu
-                };
-                tracing::info!(solver = %kind, "linear solver chosen from the tangent's symmetry and definiteness");
-                kind
-            }
+            None => (LinearSolverKind::Lu, "chosen from the tangent's symmetry and definiteness"),
         };
+        tracing::info!(solver = %kind, "linear solver {source}");
         Self {
             conn: Connectivity::new(model.basis),
             model,
