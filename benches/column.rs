@@ -42,8 +42,16 @@ fn block(n: usize) -> QuasiStatic<2> {
         PlaneConstraint::new(0, 1, [true, false, false]),
         PlaneConstraint::new(0, n + 1, [true, false, false]),
     ];
-    let m = Model::new(grid, BasisKind::Gimp, Kinematics::FiniteStrain, points, vec![Arc::new(law)], constraints, Vector2::new(0.0, -10.0))
-        .unwrap();
+    let m = Model::new(
+        grid,
+        BasisKind::Gimp,
+        Kinematics::FiniteStrain,
+        points,
+        vec![Arc::new(law)],
+        constraints,
+        Vector2::new(0.0, -10.0),
+    )
+    .unwrap();
     QuasiStatic::new(m, QuasiStaticSettings { load_steps: 1, ..Default::default() })
 }
 

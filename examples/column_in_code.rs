@@ -10,12 +10,16 @@ use loam::verification::{column_errors, column_model, Column};
 fn main() {
     let column = Column::V1C;
     let cells = 32;
-    let model = column_model::<2>(&column, column.height / cells as f64, cells, 2, BasisKind::Gimp, Kinematics::FiniteStrain);
+    let model =
+        column_model::<2>(&column, column.height / cells as f64, cells, 2, BasisKind::Gimp, Kinematics::FiniteStrain);
     let mut analysis = QuasiStatic::new(model, QuasiStaticSettings { load_steps: 40, ..Default::default() });
     while !analysis.is_finished() {
         let r = analysis.step().expect("the column converges");
         if r.step % 10 == 0 {
-            println!("step {:3}  load factor {:.3}  Newton iterations {}  residuals {:?}", r.step, r.load_factor, r.iterations, r.residuals);
+            println!(
+                "step {:3}  load factor {:.3}  Newton iterations {}  residuals {:?}",
+                r.step, r.load_factor, r.iterations, r.residuals
+            );
         }
     }
     let e = column_errors(&analysis.model().points, &column, 1, |y| column.hencky_displacement(y));

@@ -12,7 +12,11 @@ pub fn lambert_w0(x: f64) -> f64 {
     if x == 0.0 {
         return 0.0;
     }
-    let mut w = if x < 1.0 { x / (1.0 + x) } else { (1.0 + x).ln() * (1.0 - (1.0 + (1.0 + x).ln()).ln() / (2.0 + (1.0 + x).ln())) };
+    let mut w = if x < 1.0 {
+        x / (1.0 + x)
+    } else {
+        (1.0 + x).ln() * (1.0 - (1.0 + (1.0 + x).ln()).ln() / (2.0 + (1.0 + x).ln()))
+    };
     for _ in 0..50 {
         let ew = w.exp();
         let f = w * ew - x;
@@ -82,8 +86,10 @@ impl Column {
 /// ∫_a^b f by `panels` panels of 8-point Gauss–Legendre.
 fn gauss_legendre(f: impl Fn(f64) -> f64, a: f64, b: f64, panels: usize) -> f64 {
     // 8-point nodes and weights (Abramowitz & Stegun 25.4.30).
-    const X: [f64; 4] = [0.183_434_642_495_649_8, 0.525_532_409_916_329, 0.796_666_477_413_626_7, 0.960_289_856_497_536_3];
-    const W: [f64; 4] = [0.362_683_783_378_362, 0.313_706_645_877_887_3, 0.222_381_034_453_374_5, 0.101_228_536_290_376_3];
+    const X: [f64; 4] =
+        [0.183_434_642_495_649_8, 0.525_532_409_916_329, 0.796_666_477_413_626_7, 0.960_289_856_497_536_3];
+    const W: [f64; 4] =
+        [0.362_683_783_378_362, 0.313_706_645_877_887_3, 0.222_381_034_453_374_5, 0.101_228_536_290_376_3];
     let h = (b - a) / panels as f64;
     let mut sum = 0.0;
     for k in 0..panels {
@@ -331,8 +337,11 @@ impl VibratingBar {
     /// Grid, constraints and law of the bar (see [`VibratingBar::model`]).
     fn parts(
         &self,
-    ) -> (crate::grid::Grid<2>, Vec<crate::implicit::PlaneConstraint>, std::sync::Arc<dyn crate::constitutive::ConstitutiveLaw>)
-    {
+    ) -> (
+        crate::grid::Grid<2>,
+        Vec<crate::implicit::PlaneConstraint>,
+        std::sync::Arc<dyn crate::constitutive::ConstitutiveLaw>,
+    ) {
         use crate::constitutive::Elastic;
         use crate::grid::Grid;
         use crate::implicit::PlaneConstraint;
@@ -554,7 +563,9 @@ pub fn footing_model(
         .fill(&grid, &Shape::Box { min: Vector2::zeros(), max: Vector2::new(width as f64 * b, top) }, 2, 1.0, 0)
         .expect("soil fits the grid");
     let constraints = vec![
-        PlaneConstraint::new(1, ny, [true, true, false]).displaced([0.0, -settlement, 0.0]).within([0.0, top, 0.0], [b, top, 0.0]),
+        PlaneConstraint::new(1, ny, [true, true, false])
+            .displaced([0.0, -settlement, 0.0])
+            .within([0.0, top, 0.0], [b, top, 0.0]),
         PlaneConstraint::new(0, 0, [true, false, false]),
         PlaneConstraint::new(0, nx, [true, false, false]),
         PlaneConstraint::new(1, 0, [true, true, false]),
@@ -659,7 +670,8 @@ pub fn slope_model_with(
         PlaneConstraint::new(0, nx, [true, false, false]),
         PlaneConstraint::new(1, 0, [true, true, false]),
     ];
-    Model::new(grid, basis, kinematics, points, vec![law], constraints, Vector2::new(0.0, -gravity)).expect("valid slope model")
+    Model::new(grid, basis, kinematics, points, vec![law], constraints, Vector2::new(0.0, -gravity))
+        .expect("valid slope model")
 }
 
 /// The V1 column in two layers, the upper half `contrast` times softer than the lower (a
@@ -698,10 +710,22 @@ impl LayeredColumn {
         let soft = Elastic::new(c.young / self.contrast, 0.0).expect("valid soft layer");
         let mut points = PointStore::new();
         let half = 0.5 * c.height;
-        points.fill(&grid, &Shape::Box { min: Vector2::zeros(), max: Vector2::new(max[0], half) }, 2, c.density, 0).expect("lower layer fits");
-        points.fill(&grid, &Shape::Box { min: Vector2::new(0.0, half), max }, 2, c.density, 1).expect("upper layer fits");
-        Model::new(grid, basis, Kinematics::SmallStrain, points, vec![law, std::sync::Arc::new(soft)], constraints, gravity)
-            .expect("valid layered column")
+        points
+            .fill(&grid, &Shape::Box { min: Vector2::zeros(), max: Vector2::new(max[0], half) }, 2, c.density, 0)
+            .expect("lower layer fits");
+        points
+            .fill(&grid, &Shape::Box { min: Vector2::new(0.0, half), max }, 2, c.density, 1)
+            .expect("upper layer fits");
+        Model::new(
+            grid,
+            basis,
+            Kinematics::SmallStrain,
+            points,
+            vec![law, std::sync::Arc::new(soft)],
+            constraints,
+            gravity,
+        )
+        .expect("valid layered column")
     }
 }
 
@@ -724,22 +748,34 @@ pub fn softening_specimen(cells_across: usize, margin: f64, shortening: f64) -> 
     let elastic = Elastic::new(1e4, 0.3).expect("valid elasticity");
     let law = |yield_stress: f64| -> std::sync::Arc<dyn ConstitutiveLaw> {
         std::sync::Arc::new(
-            VonMises::new(elastic, yield_stress, -500.0).and_then(|l| l.with_residual_yield_stress(0.3 * yield_stress)).expect("valid softening law"),
+            VonMises::new(elastic, yield_stress, -500.0)
+                .and_then(|l| l.with_residual_yield_stress(0.3 * yield_stress))
+                .expect("valid softening law"),
         )
     };
     let w = 0.25;
     let mut points = PointStore::new();
     let outline = [(w, 0.0), (1.0, 0.0), (1.0, 2.0), (0.0, 2.0), (0.0, w), (w, w)].map(|(x, y)| Vector2::new(x, y));
     points.fill(&grid, &Shape::Polygon(outline.to_vec()), 2, 1.0, 0).expect("specimen fits the grid");
-    points.fill(&grid, &Shape::Box { min: Vector2::zeros(), max: Vector2::new(w, w) }, 2, 1.0, 1).expect("weak corner fits");
+    points
+        .fill(&grid, &Shape::Box { min: Vector2::zeros(), max: Vector2::new(w, w) }, 2, 1.0, 1)
+        .expect("weak corner fits");
     let constraints = vec![
         PlaneConstraint::new(1, 2 * n, [false, true, false]).displaced([0.0, -shortening, 0.0]),
         PlaneConstraint::new(1, 0, [false, true, false]),
         PlaneConstraint::new(0, 0, [true, false, false]),
     ];
-    Model::new(grid, BasisKind::Linear, Kinematics::SmallStrain, points, vec![law(100.0), law(90.0)], constraints, Vector2::zeros())
-        .and_then(|m| m.with_anti_locking(AntiLocking::BBar))
-        .expect("valid specimen")
+    Model::new(
+        grid,
+        BasisKind::Linear,
+        Kinematics::SmallStrain,
+        points,
+        vec![law(100.0), law(90.0)],
+        constraints,
+        Vector2::zeros(),
+    )
+    .and_then(|m| m.with_anti_locking(AntiLocking::BBar))
+    .expect("valid specimen")
 }
 
 /// A hard case for small cuts: a 4 h × 4 h elastic block (E = 1e3, ν = 0.3, unit density)
@@ -747,7 +783,11 @@ pub fn softening_specimen(cells_across: usize, margin: f64, shortening: f64) -> 
 /// `overlap` of a cell into the next cell (h = 1, 10 × 6 cells), small strain. With GIMP
 /// the rightmost point domains reach that cell by `overlap` h, and its far nodes get
 /// weights ~ overlap² and stiffness ~ overlap².
-pub fn translated_block(overlap: f64, basis: crate::grid::BasisKind, ghost_penalty: Option<f64>) -> crate::model::Model<2> {
+pub fn translated_block(
+    overlap: f64,
+    basis: crate::grid::BasisKind,
+    ghost_penalty: Option<f64>,
+) -> crate::model::Model<2> {
     use crate::constitutive::Elastic;
     use crate::grid::Grid;
     use crate::model::{Kinematics, Model, PlaneConstraint};
@@ -759,11 +799,25 @@ pub fn translated_block(overlap: f64, basis: crate::grid::BasisKind, ghost_penal
     let block_cells = Grid::new(Vector2::new(shift, 0.0), Vector2::new(1.0, 1.0), [4, 4]).expect("valid block cells");
     let mut points = PointStore::new();
     points
-        .fill(&block_cells, &Shape::Box { min: Vector2::new(shift, 0.0), max: Vector2::new(shift + 4.0, 4.0) }, 2, 1.0, 0)
+        .fill(
+            &block_cells,
+            &Shape::Box { min: Vector2::new(shift, 0.0), max: Vector2::new(shift + 4.0, 4.0) },
+            2,
+            1.0,
+            0,
+        )
         .expect("block fits");
     let law = std::sync::Arc::new(Elastic::new(1e3, 0.3).expect("valid elasticity"));
-    let model = Model::new(grid, basis, Kinematics::SmallStrain, points, vec![law], vec![PlaneConstraint::new(1, 0, [true, true, false])], Vector2::new(0.0, -10.0))
-        .expect("valid block");
+    let model = Model::new(
+        grid,
+        basis,
+        Kinematics::SmallStrain,
+        points,
+        vec![law],
+        vec![PlaneConstraint::new(1, 0, [true, true, false])],
+        Vector2::new(0.0, -10.0),
+    )
+    .expect("valid block");
     match ghost_penalty {
         Some(gamma) => model.with_ghost_penalty(gamma).expect("valid ghost penalty"),
         None => model,
@@ -789,5 +843,6 @@ pub fn condition_number(pattern: &crate::solve::BlockPattern, values: &[f64], co
         }
     }
     let eigenvalues = k.symmetric_eigen().eigenvalues;
-    eigenvalues.iter().fold(0.0f64, |m, v| m.max(v.abs())) / eigenvalues.iter().fold(f64::INFINITY, |m, v| m.min(v.abs()))
+    eigenvalues.iter().fold(0.0f64, |m, v| m.max(v.abs()))
+        / eigenvalues.iter().fold(f64::INFINITY, |m, v| m.min(v.abs()))
 }

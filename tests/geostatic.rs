@@ -64,7 +64,9 @@ fn geostatic_state_is_in_equilibrium() {
             let mut qs = QuasiStatic::new(model.clone(), QuasiStaticSettings { load_steps: 1, ..Default::default() });
             qs.step().unwrap();
             model = qs.into_model();
-            let u = (0..model.points.len()).map(|p| (model.points.position[p] - model.points.position0[p]).norm()).fold(0.0, f64::max);
+            let u = (0..model.points.len())
+                .map(|p| (model.points.position[p] - model.points.position0[p]).norm())
+                .fold(0.0, f64::max);
             (u, model)
         };
         let (u_gravity, _) = settle(layered(law.clone(), kinematics));
@@ -105,7 +107,12 @@ fn sloping_ground_gets_the_weight_of_its_own_column() {
     let surface = |x: f64| 4.0 + tan_beta * x;
     let grid = Grid::new(Vector2::zeros(), Vector2::new(h, h), [8, 13]).unwrap();
     let mut points = PointStore::new();
-    let slope = Shape::Polygon(vec![Vector2::zeros(), Vector2::new(4.0, 0.0), Vector2::new(4.0, surface(4.0)), Vector2::new(0.0, surface(0.0))]);
+    let slope = Shape::Polygon(vec![
+        Vector2::zeros(),
+        Vector2::new(4.0, 0.0),
+        Vector2::new(4.0, surface(4.0)),
+        Vector2::new(0.0, surface(0.0)),
+    ]);
     points.fill(&grid, &slope, 2, rho, 0).unwrap();
     let constraints = vec![
         PlaneConstraint::new(0, 0, [true, false, false]),
@@ -113,7 +120,16 @@ fn sloping_ground_gets_the_weight_of_its_own_column() {
         PlaneConstraint::new(1, 0, [true, true, false]),
     ];
     let law = Arc::new(Elastic::new(1e5, 0.3).unwrap());
-    let mut model = Model::new(grid, BasisKind::Linear, Kinematics::SmallStrain, points, vec![law], constraints, Vector2::new(0.0, -G)).unwrap();
+    let mut model = Model::new(
+        grid,
+        BasisKind::Linear,
+        Kinematics::SmallStrain,
+        points,
+        vec![law],
+        constraints,
+        Vector2::new(0.0, -G),
+    )
+    .unwrap();
     model.geostatic_stress(k0).unwrap();
     let bound = rho * G * h * (1.0 + tan_beta) / 4.0;
     let mut worst: f64 = 0.0;
@@ -122,7 +138,11 @@ fn sloping_ground_gets_the_weight_of_its_own_column() {
         let s = model.points.stress[p];
         let continuum = -rho * G * (surface(x[0]) - x[1]);
         worst = worst.max((s[(1, 1)] - continuum).abs());
-        assert!((s[(1, 1)] - continuum).abs() <= bound, "point {p} at {x:?}: σ_v {} vs ρg depth {continuum}", s[(1, 1)]);
+        assert!(
+            (s[(1, 1)] - continuum).abs() <= bound,
+            "point {p} at {x:?}: σ_v {} vs ρg depth {continuum}",
+            s[(1, 1)]
+        );
         assert!((s[(0, 0)] / (k0 * s[(1, 1)]) - 1.0).abs() < 1e-12 && s[(0, 1)] == 0.0);
     }
     println!("sloping K0: largest |σ_v − ρg depth| = {worst:.1} against the bound {bound:.1}");

@@ -6,7 +6,10 @@ use loam::verification::{condition_number, translated_block};
 
 /// Condition number of the block's tangent and the Newton iterations of its load step.
 fn run(overlap: f64, ghost: Option<f64>) -> (f64, usize) {
-    let mut qs = QuasiStatic::new(translated_block(overlap, BasisKind::Gimp, ghost), QuasiStaticSettings { load_steps: 1, ..Default::default() });
+    let mut qs = QuasiStatic::new(
+        translated_block(overlap, BasisKind::Gimp, ghost),
+        QuasiStaticSettings { load_steps: 1, ..Default::default() },
+    );
     let (pattern, values, constrained) = qs.start_tangent().unwrap();
     let r = qs.step().unwrap();
     assert!(r.final_residual() <= 1e-9);
@@ -42,7 +45,10 @@ fn ghost_penalty_bounds_the_condition_number() {
 fn ghost_penalty_is_deterministic_across_threads() {
     let run = |threads| {
         rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap().install(|| {
-            let mut qs = QuasiStatic::new(translated_block(1e-3, BasisKind::Gimp, Some(0.1)), QuasiStaticSettings { load_steps: 2, ..Default::default() });
+            let mut qs = QuasiStatic::new(
+                translated_block(1e-3, BasisKind::Gimp, Some(0.1)),
+                QuasiStaticSettings { load_steps: 2, ..Default::default() },
+            );
             while !qs.is_finished() {
                 qs.step().unwrap();
             }
@@ -62,6 +68,11 @@ fn ghost_penalty_is_refused_where_it_does_not_apply() {
     let model = translated_block(0.1, BasisKind::Gimp, None);
     let e = model.clone().with_ghost_penalty(0.0).unwrap_err();
     assert!(e.to_string().contains("positive"), "{e}");
-    let e = loam::explicit::Explicit::new(model.with_ghost_penalty(0.1).unwrap(), loam::explicit::ExplicitSettings::new(1.0)).err().expect("refused");
+    let e = loam::explicit::Explicit::new(
+        model.with_ghost_penalty(0.1).unwrap(),
+        loam::explicit::ExplicitSettings::new(1.0),
+    )
+    .err()
+    .expect("refused");
     assert!(e.to_string().contains("ghost penalty"), "{e}");
 }

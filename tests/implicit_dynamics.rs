@@ -26,7 +26,8 @@ fn run_bar(dt: f64, settings: impl Fn(DynamicSettings) -> DynamicSettings, basis
         let v = centre_of_mass_velocity(&dynamic.model().points, 0);
         times.push(r.time);
         vcm.push(v);
-        vcm_error = vcm_error.max((v - bar.centre_of_mass_velocity(r.time)).abs() / (2.0 * bar.amplitude / std::f64::consts::PI));
+        vcm_error = vcm_error
+            .max((v - bar.centre_of_mass_velocity(r.time)).abs() / (2.0 * bar.amplitude / std::f64::consts::PI));
     }
     let e1 = energy(dynamic.model());
     BarRun {
@@ -89,6 +90,7 @@ fn consistent_mass_shortens_the_period() {
 fn invalid_settings_are_refused() {
     let bar = VibratingBar::REFERENCE;
     let model = bar.model(2, BasisKind::Linear, Kinematics::FiniteStrain);
-    let err = Dynamic::new(model, DynamicSettings { gamma: 0.3, ..DynamicSettings::trapezoidal(0.1, 1.0) }).err().unwrap();
+    let err =
+        Dynamic::new(model, DynamicSettings { gamma: 0.3, ..DynamicSettings::trapezoidal(0.1, 1.0) }).err().unwrap();
     assert!(err.to_string().contains("gamma"), "{err}");
 }

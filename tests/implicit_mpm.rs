@@ -55,7 +55,14 @@ fn small_strain_column_is_linear_elastic() {
 fn bspline_small_strain_column_is_second_order() {
     let c = Column::V1A;
     let e = |cells: usize| {
-        let m = column_model::<2>(&c, c.height / cells as f64, cells, 2, BasisKind::QuadraticBSpline, Kinematics::SmallStrain);
+        let m = column_model::<2>(
+            &c,
+            c.height / cells as f64,
+            cells,
+            2,
+            BasisKind::QuadraticBSpline,
+            Kinematics::SmallStrain,
+        );
         let mut qs = QuasiStatic::new(m, QuasiStaticSettings { load_steps: 1, ..Default::default() });
         qs.step().unwrap();
         column_errors(&qs.model().points, &c, 1, |y| c.small_strain_displacement(y))
@@ -144,9 +151,17 @@ fn an_unrecoverable_step_is_reported_not_accepted() {
 fn a_million_fold_stiffness_contrast_converges() {
     use loam::verification::LayeredColumn;
     let layered = LayeredColumn { column: Column::V1A, contrast: 1e6 };
-    let mut qs = QuasiStatic::new(layered.model(32, BasisKind::Gimp), QuasiStaticSettings { load_steps: 1, ..Default::default() });
+    let mut qs = QuasiStatic::new(
+        layered.model(32, BasisKind::Gimp),
+        QuasiStaticSettings { load_steps: 1, ..Default::default() },
+    );
     let r = qs.step().unwrap();
-    assert!(r.iterations <= 2 && r.final_residual() <= 1e-9, "{} iterations, residual {}", r.iterations, r.final_residual());
+    assert!(
+        r.iterations <= 2 && r.final_residual() <= 1e-9,
+        "{} iterations, residual {}",
+        r.iterations,
+        r.final_residual()
+    );
     let e = column_errors(&qs.model().points, &layered.column, 1, |y| layered.displacement(y));
     assert!(e.stress < 1e-2, "e_sigma = {}", e.stress);
     assert!(e.top_displacement < 1e-3, "e_u = {} (u = {})", e.top_displacement, e.top_displacement_value);

@@ -31,8 +31,16 @@ fn block(delta: f64, within: Option<([f64; 3], [f64; 3])>) -> Model<2> {
         PlaneConstraint::new(0, 4, [true, false, false]),
     ];
     let law = Elastic::new(1000.0, 0.25).unwrap();
-    Model::new(grid, BasisKind::Linear, Kinematics::SmallStrain, points, vec![Arc::new(law)], constraints, Vector2::zeros())
-        .unwrap()
+    Model::new(
+        grid,
+        BasisKind::Linear,
+        Kinematics::SmallStrain,
+        points,
+        vec![Arc::new(law)],
+        constraints,
+        Vector2::zeros(),
+    )
+    .unwrap()
 }
 
 #[test]
@@ -73,8 +81,14 @@ fn within_limits_the_constrained_nodes() {
         qs.step().unwrap();
     }
     let pts = &qs.model().points;
-    let top_right = (0..pts.len()).filter(|&p| pts.position0[p][0] > 1.5).max_by(|&a, &b| pts.position0[a][1].total_cmp(&pts.position0[b][1])).unwrap();
-    let top_left = (0..pts.len()).filter(|&p| pts.position0[p][0] < 0.5).max_by(|&a, &b| pts.position0[a][1].total_cmp(&pts.position0[b][1])).unwrap();
+    let top_right = (0..pts.len())
+        .filter(|&p| pts.position0[p][0] > 1.5)
+        .max_by(|&a, &b| pts.position0[a][1].total_cmp(&pts.position0[b][1]))
+        .unwrap();
+    let top_left = (0..pts.len())
+        .filter(|&p| pts.position0[p][0] < 0.5)
+        .max_by(|&a, &b| pts.position0[a][1].total_cmp(&pts.position0[b][1]))
+        .unwrap();
     let u_right = pts.position[top_right][1] - pts.position0[top_right][1];
     let u_left = pts.position[top_left][1] - pts.position0[top_left][1];
     assert!(u_left < u_right && u_right.abs() < 0.9 * u_left.abs(), "left {u_left}, right {u_right}");
@@ -105,10 +119,18 @@ fn bbar_leaves_a_uniform_strain_exact() {
         PlaneConstraint::new(0, 4, [true, false, false]),
     ];
     let law = Elastic::new(e, nu).unwrap();
-    let model = Model::new(grid, BasisKind::Linear, Kinematics::SmallStrain, points, vec![Arc::new(law)], constraints, Vector2::zeros())
-        .unwrap()
-        .with_anti_locking(loam::model::AntiLocking::BBar)
-        .unwrap();
+    let model = Model::new(
+        grid,
+        BasisKind::Linear,
+        Kinematics::SmallStrain,
+        points,
+        vec![Arc::new(law)],
+        constraints,
+        Vector2::zeros(),
+    )
+    .unwrap()
+    .with_anti_locking(loam::model::AntiLocking::BBar)
+    .unwrap();
     let mut qs = QuasiStatic::new(model, QuasiStaticSettings { load_steps: 1, ..Default::default() });
     let r = qs.step().unwrap();
     let m = e * (1.0 - nu) / ((1.0 + nu) * (1.0 - 2.0 * nu));
@@ -130,7 +152,10 @@ fn bbar_leaves_a_uniform_strain_exact() {
 #[test]
 fn extrapolated_start_converges_to_the_same_state() {
     let run = |extrapolate: bool| {
-        let mut qs = QuasiStatic::new(block(0.01, None), QuasiStaticSettings { load_steps: 4, extrapolate, ..Default::default() });
+        let mut qs = QuasiStatic::new(
+            block(0.01, None),
+            QuasiStaticSettings { load_steps: 4, extrapolate, ..Default::default() },
+        );
         let first: Vec<f64> = (0..4).map(|_| qs.step().unwrap().residuals[0]).collect();
         (first, qs.into_model())
     };
@@ -142,6 +167,12 @@ fn extrapolated_start_converges_to_the_same_state() {
     }
     println!("initial residuals: zero start {zero_start:?}, extrapolated {extrapolated:?}");
     for k in 1..4 {
-        assert!(zero_start[k] > 0.1 && extrapolated[k] < 1e-12, "step {}: {} vs {}", k + 1, zero_start[k], extrapolated[k]);
+        assert!(
+            zero_start[k] > 0.1 && extrapolated[k] < 1e-12,
+            "step {}: {} vs {}",
+            k + 1,
+            zero_start[k],
+            extrapolated[k]
+        );
     }
 }

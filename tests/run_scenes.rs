@@ -21,7 +21,10 @@ fn vibrating_bar_history() {
     let summary = run_scene(&scene, dir.path(), &mut |_, _| {}).unwrap();
     assert_eq!(summary.steps, 60);
     let (header, rows) = read_csv(&dir.path().join("history.csv"));
-    assert_eq!(header, ["time", "kinetic_energy", "strain_energy", "external_work", "total_energy", "momentum_x", "momentum_y"]);
+    assert_eq!(
+        header,
+        ["time", "kinetic_energy", "strain_energy", "external_work", "total_energy", "momentum_x", "momentum_y"]
+    );
     assert_eq!(rows.len(), 61, "t = 0 and every step");
     let e0 = 0.0625;
     // The sampled sine's kinetic energy is within 0.1 % of the continuum value (midpoint
@@ -62,10 +65,14 @@ fn column_history_balances_work_and_energy() {
 fn the_scene_can_force_the_linear_solver() {
     let path = Path::new("examples/column.ron");
     let source = std::fs::read_to_string(path).unwrap();
-    let forced = source.replace("solver: (residual_tolerance: 1e-9)", "solver: (residual_tolerance: 1e-9, linear: Some(Lu))");
+    let forced =
+        source.replace("solver: (residual_tolerance: 1e-9)", "solver: (residual_tolerance: 1e-9, linear: Some(Lu))");
     assert_ne!(forced, source, "the column scene names its solver settings");
     let mut top = Vec::new();
-    for (scene, solver) in [(LoadedScene::read(path).unwrap(), "sparse Cholesky"), (LoadedScene::parse(path, forced).unwrap(), "sparse LU")] {
+    for (scene, solver) in [
+        (LoadedScene::read(path).unwrap(), "sparse Cholesky"),
+        (LoadedScene::parse(path, forced).unwrap(), "sparse LU"),
+    ] {
         let dir = tempfile::tempdir().unwrap();
         let summary = run_scene(&scene, dir.path(), &mut |_, _| {}).unwrap();
         assert_eq!(summary.solver, solver);
@@ -153,7 +160,8 @@ fn slope_scene_finds_the_factor_of_safety() {
 #[test]
 fn slope_examples_are_valid_scenes() {
     for name in ["slope_griffiths_lane", "slope_runout_implicit", "slope_runout_explicit"] {
-        let scene = LoadedScene::read(Path::new(&format!("examples/{name}.ron"))).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let scene =
+            LoadedScene::read(Path::new(&format!("examples/{name}.ron"))).unwrap_or_else(|e| panic!("{name}: {e}"));
         scene.build::<2>().unwrap_or_else(|e| panic!("{name}: {e}"));
     }
 }

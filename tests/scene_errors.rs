@@ -130,7 +130,12 @@ fn wrong_vector_length_for_the_dimension() {
 
 #[test]
 fn non_positive_cell_size() {
-    refused("cell_size: [0.3125, 0.3125]", "cell_size: [0.3125, -0.3125]", line_of("cell_size"), &["cell size", "positive"]);
+    refused(
+        "cell_size: [0.3125, 0.3125]",
+        "cell_size: [0.3125, -0.3125]",
+        line_of("cell_size"),
+        &["cell size", "positive"],
+    );
 }
 
 #[test]
@@ -158,7 +163,11 @@ fn the_dynamic_examples_are_valid() {
 /// γ < ½ makes Newmark unstable: refused at the analysis line, naming the setting.
 #[test]
 fn newmark_gamma_below_one_half() {
-    let src = BAR.replacen("ImplicitDynamic(time_step: 0.5, duration: 30.0)", "ImplicitDynamic(time_step: 0.5, duration: 30.0, gamma: 0.4)", 1);
+    let src = BAR.replacen(
+        "ImplicitDynamic(time_step: 0.5, duration: 30.0)",
+        "ImplicitDynamic(time_step: 0.5, duration: 30.0, gamma: 0.4)",
+        1,
+    );
     let e = check_text(&src).unwrap_err();
     let line = BAR.lines().position(|l| l.contains("ImplicitDynamic")).unwrap() + 1;
     assert_eq!(e.line, line, "{e}");
@@ -203,7 +212,11 @@ fn initial_velocity_with_the_wrong_length() {
 fn fem_method_limits_are_named() {
     let fem = GOOD.replacen("basis: Gimp,", "method: UpdatedLagrangianFem,", 1);
     check(&fem).unwrap();
-    refused_source(&fem.replacen("points_per_cell: 2", "points_per_cell: 4", 1), line_of("points_per_cell"), &["Gauss order 4"]);
+    refused_source(
+        &fem.replacen("points_per_cell: 2", "points_per_cell: 4", 1),
+        line_of("points_per_cell"),
+        &["Gauss order 4"],
+    );
     let e = check(&fem.replacen(
         "shape: Box(min: [0.0, 0.0], max: [0.3125, 10.0])",
         "shape: Polygon(vertices: [(0.0, 0.0), (0.3125, 0.0), (0.0, 10.0)])",
@@ -211,7 +224,11 @@ fn fem_method_limits_are_named() {
     ))
     .unwrap_err();
     assert!(e.to_string().contains("Box bodies only"), "{e}");
-    refused_source(&fem.replacen("QuasiStatic(load_steps: 40)", "Explicit(duration: 1.0)", 1), line_of("basis: Gimp"), &["implicit analyses"]);
+    refused_source(
+        &fem.replacen("QuasiStatic(load_steps: 40)", "Explicit(duration: 1.0)", 1),
+        line_of("basis: Gimp"),
+        &["implicit analyses"],
+    );
 }
 
 /// Plastic laws in scenes: each parameter out of range is refused at its own place, with
@@ -236,7 +253,11 @@ fn plastic_law_parameters_are_checked() {
     ] {
         refused_source(&scene, line, &[says]);
     }
-    let vm = GOOD.replacen("law: Elastic(young: 1e5, poisson: 0.0)", "law: VonMises(young: 1e5, poisson: 0.0, yield_stress: 17.3)", 1);
+    let vm = GOOD.replacen(
+        "law: Elastic(young: 1e5, poisson: 0.0)",
+        "law: VonMises(young: 1e5, poisson: 0.0, yield_stress: 17.3)",
+        1,
+    );
     check(&vm).unwrap();
     let e = check(&vm.replacen("yield_stress: 17.3", "yield_stress: 0.0", 1)).unwrap_err();
     assert!(e.to_string().contains("yield_stress = 0; it must be positive"), "{e}");
@@ -246,13 +267,24 @@ fn plastic_law_parameters_are_checked() {
 /// analysis applies it.
 #[test]
 fn displacement_constraints_are_checked() {
-    let push = |d: &str| GOOD.replacen("Roller(axis: Y, at: 0.0),", &format!("Roller(axis: Y, at: 0.0),\n        Displacement(axis: Y, at: 10.0, displacement: {d}),"), 1);
+    let push = |d: &str| {
+        GOOD.replacen(
+            "Roller(axis: Y, at: 0.0),",
+            &format!("Roller(axis: Y, at: 0.0),\n        Displacement(axis: Y, at: 10.0, displacement: {d}),"),
+            1,
+        )
+    };
     check(&push("[None, Some(-0.1)]")).unwrap();
     let e = check(&push("[None, None]")).unwrap_err();
     assert!(e.to_string().contains("at least one Some"), "{e}");
     let e = check(&push("[Some(-0.1)]")).unwrap_err();
     assert!(e.to_string().contains("needs 2 entries"), "{e}");
-    let e = check(&push("[None, Some(-0.1)]").replacen("QuasiStatic(load_steps: 40)", "ImplicitDynamic(time_step: 0.1, duration: 1.0)", 1)).unwrap_err();
+    let e = check(&push("[None, Some(-0.1)]").replacen(
+        "QuasiStatic(load_steps: 40)",
+        "ImplicitDynamic(time_step: 0.1, duration: 1.0)",
+        1,
+    ))
+    .unwrap_err();
     assert!(e.to_string().contains("QuasiStatic"), "{e}");
 }
 
@@ -271,8 +303,12 @@ fn bbar_needs_small_strain_and_the_linear_basis() {
 #[test]
 fn assumed_strain_is_checked() {
     let small = |beta: &str| {
-        GOOD.replacen("kinematics: FiniteStrain,", &format!("kinematics: SmallStrain,\n    anti_locking: AssumedStrain(stabilization: {beta}),"), 1)
-            .replacen("basis: Gimp,", "basis: Linear,", 1)
+        GOOD.replacen(
+            "kinematics: FiniteStrain,",
+            &format!("kinematics: SmallStrain,\n    anti_locking: AssumedStrain(stabilization: {beta}),"),
+            1,
+        )
+        .replacen("basis: Gimp,", "basis: Linear,", 1)
     };
     let at = line_of("kinematics: FiniteStrain") + 1;
     check(&small("0.1")).unwrap();
@@ -281,7 +317,9 @@ fn assumed_strain_is_checked() {
         refused_source(&small(bad), at, &["0 < β ≤ 1"]);
     }
     refused_source(&small("0.1").replacen("basis: Linear,", "basis: Gimp,", 1), at, &["Linear basis"]);
-    let e = check(&GOOD.replacen("basis: Gimp,", "basis: Gimp,\n    anti_locking: AssumedStrain(stabilization: 0.1),", 1)).unwrap_err();
+    let e =
+        check(&GOOD.replacen("basis: Gimp,", "basis: Gimp,\n    anti_locking: AssumedStrain(stabilization: 0.1),", 1))
+            .unwrap_err();
     assert!(e.to_string().contains("small-strain"), "{e}");
 }
 
@@ -289,18 +327,29 @@ fn assumed_strain_is_checked() {
 /// names the key.
 #[test]
 fn geometrically_linear_is_checked() {
-    let key = |kinematics: &str| GOOD.replacen("kinematics: FiniteStrain,", &format!("kinematics: {kinematics},\n    geometrically_linear: true,"), 1);
+    let key = |kinematics: &str| {
+        GOOD.replacen(
+            "kinematics: FiniteStrain,",
+            &format!("kinematics: {kinematics},\n    geometrically_linear: true,"),
+            1,
+        )
+    };
     let at = line_of("kinematics: FiniteStrain") + 1;
     check(&key("SmallStrain")).unwrap();
     refused_source(&key("FiniteStrain"), at, &["SmallStrain"]);
-    refused_source(&key("SmallStrain").replacen("QuasiStatic(load_steps: 40)", "Explicit(duration: 1.0)", 1), at, &["explicit"]);
+    refused_source(
+        &key("SmallStrain").replacen("QuasiStatic(load_steps: 40)", "Explicit(duration: 1.0)", 1),
+        at,
+        &["explicit"],
+    );
 }
 
 /// A geostatic start is checked against the laws: an elastic column takes any K0 > 0, a
 /// non-positive K0 is refused at its key.
 #[test]
 fn geostatic_initial_stress_is_checked() {
-    let k0 = |v: &str| GOOD.replacen("basis: Gimp,", &format!("basis: Gimp,\n    initial_stress: Geostatic(k0: {v}),"), 1);
+    let k0 =
+        |v: &str| GOOD.replacen("basis: Gimp,", &format!("basis: Gimp,\n    initial_stress: Geostatic(k0: {v}),"), 1);
     check(&k0("0.5")).unwrap();
     refused_source(&k0("-0.5"), line_of("basis: Gimp") + 1, &["K0 is -0.5"]);
 }
@@ -310,15 +359,30 @@ fn geostatic_initial_stress_is_checked() {
 /// materials (nothing to reduce) are refused before any trial runs.
 #[test]
 fn strength_reduction_is_checked() {
-    let srf = |spec: &str| GOOD.replacen("QuasiStatic(load_steps: 40)", &format!("QuasiStatic(load_steps: 40,\n        strength_reduction: Some({spec}))"), 1);
+    let srf = |spec: &str| {
+        GOOD.replacen(
+            "QuasiStatic(load_steps: 40)",
+            &format!("QuasiStatic(load_steps: 40,\n        strength_reduction: Some({spec}))"),
+            1,
+        )
+    };
     let at = line_of("QuasiStatic(load_steps: 40)") + 1;
     refused_source(&srf("(bracket: (2.0, 1.0))"), at, &["0 < F_holds < F_fails"]);
     refused_source(&srf("(bracket: (1.0, 1.5), tolerance: 0.6)"), at, &["below the bracket's width"]);
     let e = check(&srf("(tolerance: 0.01)")).unwrap_err();
     assert!(e.to_string().contains("every material here is elastic"), "{e}");
-    let plastic = GOOD.replacen("law: Elastic(young: 1e5, poisson: 0.0)", "law: VonMises(young: 1e5, poisson: 0.0, yield_stress: 1e6)", 1);
+    let plastic = GOOD.replacen(
+        "law: Elastic(young: 1e5, poisson: 0.0)",
+        "law: VonMises(young: 1e5, poisson: 0.0, yield_stress: 1e6)",
+        1,
+    );
     assert_ne!(plastic, GOOD, "test setup: the law is in the example");
-    check(&plastic.replacen("QuasiStatic(load_steps: 40)", "QuasiStatic(load_steps: 40, strength_reduction: Some(()))", 1)).unwrap();
+    check(&plastic.replacen(
+        "QuasiStatic(load_steps: 40)",
+        "QuasiStatic(load_steps: 40, strength_reduction: Some(()))",
+        1,
+    ))
+    .unwrap();
 }
 
 /// The ghost penalty is checked at its key: a non-positive factor, and an explicit
@@ -329,5 +393,9 @@ fn ghost_penalty_is_checked() {
     let at = line_of("basis: Gimp") + 1;
     check(&ghost("Some(0.1)")).unwrap();
     refused_source(&ghost("Some(-1.0)"), at, &["positive"]);
-    refused_source(&ghost("Some(0.1)").replacen("QuasiStatic(load_steps: 40)", "Explicit(duration: 1.0)", 1), at, &["Explicit"]);
+    refused_source(
+        &ghost("Some(0.1)").replacen("QuasiStatic(load_steps: 40)", "Explicit(duration: 1.0)", 1),
+        at,
+        &["Explicit"],
+    );
 }

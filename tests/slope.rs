@@ -36,7 +36,10 @@ fn strength_reduction_and_gravity_increase_agree_for_undrained_clay() {
     }
     let n_gravity = 8.0 * qs.load_factor();
     assert!(qs.load_factor() < 1.0, "the slope carried γH/c_u = 8");
-    assert!((n_srf - n_gravity).abs() <= 4.0 * 0.005 + 0.1 / 256.0, "strength reduction {n_srf}, gravity increase {n_gravity}");
+    assert!(
+        (n_srf - n_gravity).abs() <= 4.0 * 0.005 + 0.1 / 256.0,
+        "strength reduction {n_srf}, gravity increase {n_gravity}"
+    );
     for n in [n_srf, n_gravity] {
         assert!((n / 5.5 - 1.0).abs() <= 0.10, "γH/c_u at collapse {n}");
     }
@@ -46,10 +49,21 @@ fn strength_reduction_and_gravity_increase_agree_for_undrained_clay() {
 #[test]
 fn a_bracket_that_does_not_bracket_is_reported() {
     let model = slope_model(&SlopeGeometry::UNDRAINED, clay(), 0.4, 10.0, 5, AntiLocking::BBar);
-    let srf = |bracket| StrengthReduction { trial: QuasiStaticSettings { load_steps: 5, max_cutbacks: 2, ..Default::default() }, bracket, tolerance: 0.05 };
-    assert!(matches!(srf((1.0, 1.2)).factor_of_safety(&model, |_| {}), Err(StrengthReductionError::HoldsAtUpper(f)) if f == 1.2));
-    assert!(matches!(srf((1.6, 2.0)).factor_of_safety(&model, |_| {}), Err(StrengthReductionError::FailsAtLower(f)) if f == 1.6));
-    assert!(matches!(srf((2.0, 1.0)).factor_of_safety(&model, |_| {}), Err(StrengthReductionError::InvalidSettings { .. })));
+    let srf = |bracket| StrengthReduction {
+        trial: QuasiStaticSettings { load_steps: 5, max_cutbacks: 2, ..Default::default() },
+        bracket,
+        tolerance: 0.05,
+    };
+    assert!(
+        matches!(srf((1.0, 1.2)).factor_of_safety(&model, |_| {}), Err(StrengthReductionError::HoldsAtUpper(f)) if f == 1.2)
+    );
+    assert!(
+        matches!(srf((1.6, 2.0)).factor_of_safety(&model, |_| {}), Err(StrengthReductionError::FailsAtLower(f)) if f == 1.6)
+    );
+    assert!(matches!(
+        srf((2.0, 1.0)).factor_of_safety(&model, |_| {}),
+        Err(StrengthReductionError::InvalidSettings { .. })
+    ));
 }
 
 /// The linear solver follows the tangent: Cholesky for a symmetric, non-softening law
@@ -69,7 +83,10 @@ fn the_linear_solver_follows_symmetry_and_softening() {
     assert_eq!(kind(clay()), LinearSolverKind::Cholesky);
     assert_eq!(kind(Arc::new(MohrCoulomb::from_degrees(elastic, 10.0, 20.0, 0.0).unwrap())), LinearSolverKind::Lu);
     assert_eq!(kind(Arc::new(VonMises::new(elastic, 17.3, -100.0).unwrap())), LinearSolverKind::Lu);
-    assert_eq!(kind(Arc::new(MohrCoulomb::from_degrees(elastic, 10.0, 20.0, 20.0).unwrap())), LinearSolverKind::Cholesky);
+    assert_eq!(
+        kind(Arc::new(MohrCoulomb::from_degrees(elastic, 10.0, 20.0, 20.0).unwrap())),
+        LinearSolverKind::Cholesky
+    );
     let forced = slope_model(&SlopeGeometry::UNDRAINED, clay(), 0.4, 10.0, 5, AntiLocking::BBar);
     let settings = QuasiStaticSettings { linear_solver: Some(LinearSolverKind::Lu), ..Default::default() };
     assert_eq!(QuasiStatic::new(forced, settings).linear_solver_kind(), LinearSolverKind::Lu);

@@ -27,7 +27,11 @@ fn small_strain_column_is_nodally_exact() {
         let e = column_errors(&model.points, &col, 1, |y| col.small_strain_displacement(y));
         let top_node = model.mesh.as_ref().unwrap().positions().iter().map(|x| x[1]).fold(f64::MIN, f64::max);
         let expected_stress = 1.0 / (2.0 * 3f64.sqrt() * n as f64);
-        println!("n {n}: top node {top_node:.12} (exact {}), e_σ {:.6e} (expected {expected_stress:.6e})", col.height - 1.0, e.stress);
+        println!(
+            "n {n}: top node {top_node:.12} (exact {}), e_σ {:.6e} (expected {expected_stress:.6e})",
+            col.height - 1.0,
+            e.stress
+        );
         // rounding of a linear solve on ~100 dofs with E = 1e6: 1e-9 of the 1 m displacement
         assert!((top_node - (col.height - 1.0)).abs() < 1e-9, "top node at {top_node}");
         assert!((e.stress / expected_stress - 1.0).abs() < 1e-8, "e_σ {}", e.stress);
@@ -47,7 +51,10 @@ fn finite_strain_column_converges_to_the_hencky_solution() {
         let model = settle(model, 10);
         let e = column_errors(&model.points, &col, 1, |y| col.hencky_displacement(y));
         let sampling = 1.0 / (2.0 * 3f64.sqrt() * n as f64);
-        println!("n {n}: e_σ {:.4e} (sampling {sampling:.4e}), top displacement error {:.3e}", e.stress, e.top_displacement);
+        println!(
+            "n {n}: e_σ {:.4e} (sampling {sampling:.4e}), top displacement error {:.3e}",
+            e.stress, e.top_displacement
+        );
         assert!(e.stress <= 1.05 * sampling, "e_σ {}", e.stress);
         if let Some(prev) = previous {
             assert!(e.top_displacement * 3.0 <= prev, "{} after {prev}", e.top_displacement);

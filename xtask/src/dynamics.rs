@@ -7,8 +7,8 @@ use crate::{Report, Row};
 use anyhow::Result;
 use loam::explicit::{Explicit, ExplicitSettings, LeapfrogEnergy, TimeStep};
 use loam::grid::BasisKind;
-use loam::io::Analysis;
 use loam::implicit::{Dynamic, DynamicSettings, Kinematics};
+use loam::io::Analysis;
 use loam::model::Model;
 use loam::verification::{column_errors, column_model, disks_model, Column, DynamicRecord, VibratingBar};
 use std::fmt::Write as _;
@@ -82,7 +82,12 @@ pub fn bar_implicit(dt: f64, basis: BasisKind) -> DynRun {
 /// V2 with the updated Lagrangian FEM reference at Δt = `dt` (trapezoidal, lumped mass).
 pub fn bar_fem_implicit(dt: f64) -> DynRun {
     let bar = VibratingBar::REFERENCE;
-    run_implicit(bar.fem_model(2, Kinematics::FiniteStrain), DynamicSettings::trapezoidal(dt, 3.0 * bar.period()), |_, _| {}).0
+    run_implicit(
+        bar.fem_model(2, Kinematics::FiniteStrain),
+        DynamicSettings::trapezoidal(dt, 3.0 * bar.period()),
+        |_, _| {},
+    )
+    .0
 }
 
 /// V2 explicit (MUSL, pure FLIP) with the given time step rule, and the largest growth of
@@ -109,10 +114,19 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
         let e = bar.errors(&run.record);
         let reference = bar.period() * bar.trapezoidal_period_factor(dt);
         let err = e.period / reference - 1.0;
-        writeln!(md, "| implicit trapezoidal | {dt} | {} | {:.5} | {reference:.5} | {err:+.2e} | {:.2e} | {:.2e} | {} | {:.3} |", run.steps, e.period, e.vcm_error, e.energy_drift, run.max_iterations, run.wall_s)?;
+        writeln!(
+            md,
+            "| implicit trapezoidal | {dt} | {} | {:.5} | {reference:.5} | {err:+.2e} | {:.2e} | {:.2e} | {} | {:.3} |",
+            run.steps, e.period, e.vcm_error, e.energy_drift, run.max_iterations, run.wall_s
+        )?;
         report.rows.push(Row::upper(format!("V2 implicit dt={dt}"), "period_error_vs_trapezoidal", err.abs(), 5e-3));
         let drift_bound = if dt == 0.5 { Some((1e-2, true)) } else { None };
-        report.rows.push(Row { case: format!("V2 implicit dt={dt}"), quantity: "energy_drift".into(), value: e.energy_drift, bound: drift_bound });
+        report.rows.push(Row {
+            case: format!("V2 implicit dt={dt}"),
+            quantity: "energy_drift".into(),
+            value: e.energy_drift,
+            bound: drift_bound,
+        });
         report.rows.push(Row::info(format!("V2 implicit dt={dt}"), "wall_time_s", run.wall_s));
     }
     for dt in [0.1, 0.5, 1.0] {
@@ -121,8 +135,17 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
         let e = bar.errors(&run.record);
         let reference = bar.lumped_fem_period(dt);
         let err = e.period / reference - 1.0;
-        writeln!(md, "| UL-FEM trapezoidal | {dt} | {} | {:.5} | {reference:.5} ᶠ | {err:+.2e} | {:.2e} | {:.2e} | {} | {:.3} |", run.steps, e.period, e.vcm_error, e.energy_drift, run.max_iterations, run.wall_s)?;
-        report.rows.push(Row::upper(format!("V2 UL-FEM dt={dt}"), "period_error_vs_discrete_trapezoidal", err.abs(), 5e-3));
+        writeln!(
+            md,
+            "| UL-FEM trapezoidal | {dt} | {} | {:.5} | {reference:.5} ᶠ | {err:+.2e} | {:.2e} | {:.2e} | {} | {:.3} |",
+            run.steps, e.period, e.vcm_error, e.energy_drift, run.max_iterations, run.wall_s
+        )?;
+        report.rows.push(Row::upper(
+            format!("V2 UL-FEM dt={dt}"),
+            "period_error_vs_discrete_trapezoidal",
+            err.abs(),
+            5e-3,
+        ));
         report.rows.push(Row::info(format!("V2 UL-FEM dt={dt}"), "energy_drift", e.energy_drift));
         report.rows.push(Row::info(format!("V2 UL-FEM dt={dt}"), "wall_time_s", run.wall_s));
     }
@@ -130,8 +153,22 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
     let (run, _) = bar_explicit(TimeStep::Cfl { safety: 0.9 }, BasisKind::Linear);
     let e = bar.errors(&run.record);
     let err = e.period / bar.period() - 1.0;
-    writeln!(md, "| explicit MUSL | 0.9 Δt_c | {} | {:.5} | {:.5} | {err:+.2e} | {:.2e} | {:.2e} | – | {:.3} |", run.steps, e.period, bar.period(), e.vcm_error, e.energy_drift, run.wall_s)?;
-    report.rows.push(Row { case: "V2 explicit 0.9 dt_c".into(), quantity: "stable (1 = ran to the end)".into(), value: run.failure.is_none() as u8 as f64, bound: Some((1.0, false)) });
+    writeln!(
+        md,
+        "| explicit MUSL | 0.9 Δt_c | {} | {:.5} | {:.5} | {err:+.2e} | {:.2e} | {:.2e} | – | {:.3} |",
+        run.steps,
+        e.period,
+        bar.period(),
+        e.vcm_error,
+        e.energy_drift,
+        run.wall_s
+    )?;
+    report.rows.push(Row {
+        case: "V2 explicit 0.9 dt_c".into(),
+        quantity: "stable (1 = ran to the end)".into(),
+        value: run.failure.is_none() as u8 as f64,
+        bound: Some((1.0, false)),
+    });
     report.rows.push(Row::upper("V2 explicit 0.9 dt_c", "period_error", err.abs(), 1e-2));
     report.rows.push(Row::info("V2 explicit 0.9 dt_c", "energy_drift", e.energy_drift));
     report.rows.push(Row::info("V2 explicit 0.9 dt_c", "wall_time_s", run.wall_s));
@@ -142,11 +179,20 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
     let (run, _) = bar_explicit(TimeStep::Fixed { dt: dt_over, allow_above_critical: true }, BasisKind::Linear);
     let detected = run.failure.is_some();
     writeln!(md, "\nᶠ UL-FEM reference: lumped-mass linear elements (one per cell, 2×2 Gauss points), whose first mode has ω_h = (2c/h) sin(β₁h/2), times the trapezoidal elongation at ω_hΔt.")?;
-    writeln!(md, "\nExplicit above the limit (Δt = {dt_over:.3} = 2 Δt_c, allowed on purpose): {}\n", match &run.failure {
-        Some(f) => format!("blow-up detected after {} steps: {f}", run.steps),
-        None => "NOT detected — ran to the end".into(),
-    })?;
-    report.rows.push(Row { case: "V2 explicit 2 dt_c".into(), quantity: "blow-up detected (1 = yes)".into(), value: detected as u8 as f64, bound: Some((1.0, false)) });
+    writeln!(
+        md,
+        "\nExplicit above the limit (Δt = {dt_over:.3} = 2 Δt_c, allowed on purpose): {}\n",
+        match &run.failure {
+            Some(f) => format!("blow-up detected after {} steps: {f}", run.steps),
+            None => "NOT detected — ran to the end".into(),
+        }
+    )?;
+    report.rows.push(Row {
+        case: "V2 explicit 2 dt_c".into(),
+        quantity: "blow-up detected (1 = yes)".into(),
+        value: detected as u8 as f64,
+        bound: Some((1.0, false)),
+    });
 
     // V5: colliding disks.
     let md = &mut report.md;
@@ -161,17 +207,39 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
     let mut leapfrog = LeapfrogEnergy::new(explicit_settings.scheme, &disks);
     let mut leapfrog_energy = vec![leapfrog.advance(&disks)];
     let explicit = run_explicit(disks, explicit_settings, |_, m| leapfrog_energy.push(leapfrog.advance(m))).0;
-    let implicit = run_implicit(disks_model(Kinematics::FiniteStrain), DynamicSettings::trapezoidal(disks_implicit_dt, 3.0), |_, _| {}).0;
+    let implicit = run_implicit(
+        disks_model(Kinematics::FiniteStrain),
+        DynamicSettings::trapezoidal(disks_implicit_dt, 3.0),
+        |_, _| {},
+    )
+    .0;
     let implicit_energy: Vec<f64> = (0..implicit.record.time.len()).map(|k| implicit.record.energy(k)).collect();
     // The implicit loss falls with Δt (6 % at 0.02, 5.1 % at 0.01, 4.1 % at 0.005 when this
     // was written): the point velocity is updated by the nodal accelerations while the
     // positions follow the projected grid motion, so internal vibrations are filtered a
     // little every step. The bound is checked at Δt = 0.005; Δt = 0.01 is reported.
-    let coarse = run_implicit(disks_model(Kinematics::FiniteStrain), DynamicSettings::trapezoidal(2.0 * disks_implicit_dt, 3.0), |_, _| {}).0;
+    let coarse = run_implicit(
+        disks_model(Kinematics::FiniteStrain),
+        DynamicSettings::trapezoidal(2.0 * disks_implicit_dt, 3.0),
+        |_, _| {},
+    )
+    .0;
     let n = coarse.record.time.len();
     let coarse_loss = (coarse.record.energy(0) - coarse.record.energy(n - 1)) / coarse.record.energy(0);
-    writeln!(md, "| implicit trapezoidal, Δt = {} (not bounded) | {} | {:.4} | {:.4} | {coarse_loss:.2e} | – | {:.3} |", 2.0 * disks_implicit_dt, coarse.steps, coarse.record.energy(0), coarse.record.energy(n - 1), coarse.wall_s)?;
-    report.rows.push(Row::info(format!("V5 implicit dt={}", 2.0 * disks_implicit_dt), "energy_loss_at_t3", coarse_loss));
+    writeln!(
+        md,
+        "| implicit trapezoidal, Δt = {} (not bounded) | {} | {:.4} | {:.4} | {coarse_loss:.2e} | – | {:.3} |",
+        2.0 * disks_implicit_dt,
+        coarse.steps,
+        coarse.record.energy(0),
+        coarse.record.energy(n - 1),
+        coarse.wall_s
+    )?;
+    report.rows.push(Row::info(
+        format!("V5 implicit dt={}", 2.0 * disks_implicit_dt),
+        "energy_loss_at_t3",
+        coarse_loss,
+    ));
     let runs = [
         ("explicit MUSL, Cfl 0.5 (leapfrog energy)", &explicit, leapfrog_energy),
         ("implicit trapezoidal, Δt = 0.005", &implicit, implicit_energy),
@@ -184,17 +252,37 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
         let e0 = energy[0];
         let loss = (e0 - energy[n - 1]) / e0;
         let growth = energy.iter().map(|e| (e - e0) / e0).fold(f64::NEG_INFINITY, f64::max);
-        writeln!(md, "| {name} | {} | {e0:.4} | {:.4} | {loss:.2e} | {growth:.2e} | {:.3} |", run.steps, energy[n - 1], run.wall_s)?;
+        writeln!(
+            md,
+            "| {name} | {} | {e0:.4} | {:.4} | {loss:.2e} | {growth:.2e} | {:.3} |",
+            run.steps,
+            energy[n - 1],
+            run.wall_s
+        )?;
         if let Some(f) = &run.failure {
             writeln!(md, "\n{name} stopped: {f}\n")?;
         }
-        report.rows.push(Row { case: format!("V5 {name}"), quantity: "ran to t=3 (1 = yes)".into(), value: run.failure.is_none() as u8 as f64, bound: Some((1.0, false)) });
+        report.rows.push(Row {
+            case: format!("V5 {name}"),
+            quantity: "ran to t=3 (1 = yes)".into(),
+            value: run.failure.is_none() as u8 as f64,
+            bound: Some((1.0, false)),
+        });
         report.rows.push(Row::upper(format!("V5 {name}"), "energy_loss_at_t3", loss, 0.05));
         // "Never grows": no rise above E₀ beyond 1e-3 E₀ (round-off and the Newton
         // tolerance of the stored energy are far below it).
         report.rows.push(Row::upper(format!("V5 {name}"), "max_energy_growth", growth, 1e-3));
-        plot.series.push(crate::svg::Series::new(format!("{name}: kinetic"), r.time.iter().copied().zip(r.kinetic.iter().copied()).collect()).dashed());
-        plot.series.push(crate::svg::Series::new(format!("{name}: total"), r.time.iter().copied().zip(energy.iter().copied()).collect()));
+        plot.series.push(
+            crate::svg::Series::new(
+                format!("{name}: kinetic"),
+                r.time.iter().copied().zip(r.kinetic.iter().copied()).collect(),
+            )
+            .dashed(),
+        );
+        plot.series.push(crate::svg::Series::new(
+            format!("{name}: total"),
+            r.time.iter().copied().zip(energy.iter().copied()).collect(),
+        ));
     }
     plot.write(&report.out.join("disks_energy.svg"))?;
     writeln!(report.md, "\n![V5 energies](disks_energy.svg)\n")?;
@@ -208,7 +296,9 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
     let duration = 4.0 * period;
     eprintln!("verify: V1a column under sudden gravity, {cells} cells");
     let model = column_model::<2>(&col, col.height / cells as f64, cells, 2, BasisKind::Gimp, Kinematics::FiniteStrain);
-    let top = (0..model.points.len()).max_by(|&a, &b| model.points.position0[a][1].total_cmp(&model.points.position0[b][1])).unwrap();
+    let top = (0..model.points.len())
+        .max_by(|&a, &b| model.points.position0[a][1].total_cmp(&model.points.position0[b][1]))
+        .unwrap();
     let mut mean_stress = vec![0.0; model.points.len()];
     let (mut n_samples, mut max_settlement, mut mean_top) = (0usize, 0.0f64, 0.0);
     let (run, mut last) = run_implicit(model, DynamicSettings::trapezoidal(dt, duration), |_, m| {
@@ -234,7 +324,12 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
     writeln!(md, "| e_σ of the time-averaged stress | mean top settlement / static | max top settlement / static |\n|---:|---:|---:|\n| {:.3e} | {mean_ratio:.4} | {amplification:.4} |\n", errors.stress)?;
     report.rows.push(Row::upper("V1a sudden gravity", "e_sigma_time_averaged", errors.stress, 2e-2));
     report.rows.push(Row::info("V1a sudden gravity", "mean_settlement_ratio", mean_ratio));
-    report.rows.push(Row { case: "V1a sudden gravity".into(), quantity: "|amplification - 2|".into(), value: (amplification - 2.0).abs(), bound: Some((0.05, true)) });
+    report.rows.push(Row {
+        case: "V1a sudden gravity".into(),
+        quantity: "|amplification - 2|".into(),
+        value: (amplification - 2.0).abs(),
+        bound: Some((0.05, true)),
+    });
     if let Some(f) = run.failure {
         anyhow::bail!("the column under sudden gravity stopped: {f}");
     }

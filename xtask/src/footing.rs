@@ -70,16 +70,29 @@ impl FootingRun {
 fn run(law: &Arc<dyn ConstitutiveLaw>, cells: usize, anti_locking: AntiLocking) -> FootingRun {
     let model = footing_model(law.clone(), cells, 10, 5, SETTLEMENT, anti_locking);
     // The extrapolated start (docs/theory.md §6) halves the Newton iterations here.
-    let mut qs = QuasiStatic::new(model, QuasiStaticSettings { load_steps: LOAD_STEPS, extrapolate: true, ..Default::default() });
+    let mut qs = QuasiStatic::new(
+        model,
+        QuasiStaticSettings { load_steps: LOAD_STEPS, extrapolate: true, ..Default::default() },
+    );
     let tolerance = qs.settings().newton.residual_tolerance;
     let t = Instant::now();
-    let mut out = FootingRun { curve: vec![(0.0, 0.0)], max_iterations: 0, to_tolerance: 0, cutbacks: 0, wall_s: 0.0, failure: None, worst: 0, residuals: Vec::new() };
+    let mut out = FootingRun {
+        curve: vec![(0.0, 0.0)],
+        max_iterations: 0,
+        to_tolerance: 0,
+        cutbacks: 0,
+        wall_s: 0.0,
+        failure: None,
+        worst: 0,
+        residuals: Vec::new(),
+    };
     while !qs.is_finished() {
         match qs.step() {
             Ok(r) => {
                 out.curve.push((r.load_factor * SETTLEMENT, -r.reactions[0][1] / C));
                 out.cutbacks += r.cutbacks;
-                let to_tolerance = r.hardest_residuals.iter().position(|&x| x <= tolerance).unwrap_or(r.hardest_residuals.len());
+                let to_tolerance =
+                    r.hardest_residuals.iter().position(|&x| x <= tolerance).unwrap_or(r.hardest_residuals.len());
                 out.to_tolerance = out.to_tolerance.max(to_tolerance);
                 if r.most_iterations() > out.max_iterations {
                     out.max_iterations = r.most_iterations();
@@ -113,20 +126,40 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
     writeln!(md, "| law | treatment | cells per b | q(0.04 b)/c | q_u/c | reference | q_u/q_ref − 1 | largest drop / q_ref | max Newton its per sub-step | max corrections to 1e-9 | cut-backs | wall [s] |\n|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")?;
     let elastic = Elastic::new(YOUNG, POISSON)?;
     // (name, legend label, law, q_ref / c)
-    let mut laws: Vec<(String, String, Arc<dyn ConstitutiveLaw>, f64)> =
-        vec![("von Mises".into(), "von Mises".into(), Arc::new(VonMises::new(elastic, 3f64.sqrt() * C, 0.0)?), prandtl_nc(0.0))];
+    let mut laws: Vec<(String, String, Arc<dyn ConstitutiveLaw>, f64)> = vec![(
+        "von Mises".into(),
+        "von Mises".into(),
+        Arc::new(VonMises::new(elastic, 3f64.sqrt() * C, 0.0)?),
+        prandtl_nc(0.0),
+    )];
     // Issue 5's locking case: nearly incompressible elasticity under the von Mises footing.
     let incompressible = Elastic::new(YOUNG, 0.49)?;
-    laws.push(("von Mises, ν = 0.49".into(), "VM, ν = 0.49".into(), Arc::new(VonMises::new(incompressible, 3f64.sqrt() * C, 0.0)?), prandtl_nc(0.0)));
+    laws.push((
+        "von Mises, ν = 0.49".into(),
+        "VM, ν = 0.49".into(),
+        Arc::new(VonMises::new(incompressible, 3f64.sqrt() * C, 0.0)?),
+        prandtl_nc(0.0),
+    ));
     for phi in [0.0, 10.0, 20.0, 30.0] {
-        laws.push((format!("Mohr–Coulomb φ = ψ = {phi}°"), format!("MC φ = {phi}°"), Arc::new(MohrCoulomb::from_degrees(elastic, C, phi, phi)?), prandtl_nc(phi)));
+        laws.push((
+            format!("Mohr–Coulomb φ = ψ = {phi}°"),
+            format!("MC φ = {phi}°"),
+            Arc::new(MohrCoulomb::from_degrees(elastic, C, phi, phi)?),
+            prandtl_nc(phi),
+        ));
     }
     let (mut residuals, mut verdicts) = (Vec::new(), Vec::new());
     let mut csv = String::from("law,treatment,cells_per_b,settlement_over_b,q_over_c\n");
-    let mut plot = crate::svg::Plot::new("V3 strip footing: load–settlement, assumed strain, finest mesh", "settlement / B", "q / q_ref");
+    let mut plot = crate::svg::Plot::new(
+        "V3 strip footing: load–settlement, assumed strain, finest mesh",
+        "settlement / B",
+        "q / q_ref",
+    );
     for (name, label, law, nc) in &laws {
         let (mut law_drop, mut stopped) = (0.0f64, 0usize);
-        for (anti_locking, meshes) in [(AntiLocking::None, plain_meshes), (AntiLocking::BBar, bbar_meshes), (assumed, assumed_meshes)] {
+        for (anti_locking, meshes) in
+            [(AntiLocking::None, plain_meshes), (AntiLocking::BBar, bbar_meshes), (assumed, assumed_meshes)]
+        {
             let treatment = if anti_locking == AntiLocking::None { "plain" } else { anti_locking.name() };
             let mut ratios = Vec::new();
             let mut finest = None;
@@ -149,8 +182,15 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
                 law_drop = law_drop.max(drop);
                 stopped += r.failure.is_some() as usize;
                 if anti_locking == assumed && cells == *meshes.last().unwrap() {
-                    residuals.push(format!("- {name}, {treatment}, {cells} cells per b, step {}: {}", r.worst, r.residuals.iter().map(|x| format!("{x:.1e}")).collect::<Vec<_>>().join(" → ")));
-                    plot.series.push(crate::svg::Series::new(format!("{label}, {cells}/b"), r.curve.iter().map(|&(s, q)| (s / 2.0, q / nc)).collect()));
+                    residuals.push(format!(
+                        "- {name}, {treatment}, {cells} cells per b, step {}: {}",
+                        r.worst,
+                        r.residuals.iter().map(|x| format!("{x:.1e}")).collect::<Vec<_>>().join(" → ")
+                    ));
+                    plot.series.push(crate::svg::Series::new(
+                        format!("{label}, {cells}/b"),
+                        r.curve.iter().map(|&(s, q)| (s / 2.0, q / nc)).collect(),
+                    ));
                 }
                 ratios.push(q_u / nc);
                 finest = Some((cells, ratio, r.max_iterations, r.to_tolerance));
@@ -167,9 +207,15 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
             // checked with the assumed strain on the full sweep's finest mesh.
             if let Some((cells, ratio, its, to_tolerance)) = finest.filter(|_| anti_locking == assumed) {
                 if !quick {
-                    report.rows.push(Row::upper(format!("V3 {name}, assumed strain, {cells}/b"), "abs_qu_over_q_ref_minus_1", ratio.abs(), 0.05));
+                    report.rows.push(Row::upper(
+                        format!("V3 {name}, assumed strain, {cells}/b"),
+                        "abs_qu_over_q_ref_minus_1",
+                        ratio.abs(),
+                        0.05,
+                    ));
                 }
-                let order = order.map_or(String::new(), |p| format!(" (observed order of q_u over the last three meshes: {p:.2})"));
+                let order = order
+                    .map_or(String::new(), |p| format!(" (observed order of q_u over the last three meshes: {p:.2})"));
                 verdicts.push(format!(
                     "- {name}: {ratio:+.4} at {cells} cells per b{order} — 5 % bound {}; ≤ 8 Newton iterations per step to 1e-9 {} ({to_tolerance} corrections to 1e-9, {its} to convergence)",
                     if ratio.abs() <= 0.05 { "met" } else { "NOT met" },
@@ -182,10 +228,20 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
         // force scale, so a converged curve can wobble by about that much of q_ref; 1e-6 q_ref
         // leaves three decades for it and still catches any real fall (an unloading or a lost
         // equilibrium moves q by percent).
-        report.rows.push(Row::upper(format!("V3 {name}, every treatment and mesh"), "largest_drop_over_q_ref", law_drop, 1e-6));
+        report.rows.push(Row::upper(
+            format!("V3 {name}, every treatment and mesh"),
+            "largest_drop_over_q_ref",
+            law_drop,
+            1e-6,
+        ));
         // A run that stops short has no q_u and hides the rest of its curve from the check
         // above: every run must reach 0.1 B.
-        report.rows.push(Row::upper(format!("V3 {name}, every treatment and mesh"), "runs_stopped_before_0.1B", stopped as f64, 0.0));
+        report.rows.push(Row::upper(
+            format!("V3 {name}, every treatment and mesh"),
+            "runs_stopped_before_0.1B",
+            stopped as f64,
+            0.0,
+        ));
     }
     plot.series.push(crate::svg::Series::new("Prandtl", vec![(0.0, 1.0), (SETTLEMENT / 2.0, 1.0)]).dashed());
     std::fs::write(report.out.join("footing_curves.csv"), csv)?;
@@ -193,6 +249,10 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
     let md = &mut report.md;
     writeln!(md, "\n![V3 load–settlement curves](footing_curves.svg)\n")?;
     writeln!(md, "\nWith the assumed strain on the finest mesh of this run:\n\n{}\n", verdicts.join("\n"))?;
-    writeln!(md, "Relative residuals of the sub-step with the most Newton iterations, assumed strain, finest mesh:\n\n{}\n", residuals.join("\n"))?;
+    writeln!(
+        md,
+        "Relative residuals of the sub-step with the most Newton iterations, assumed strain, finest mesh:\n\n{}\n",
+        residuals.join("\n")
+    )?;
     Ok(())
 }

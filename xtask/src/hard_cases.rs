@@ -7,7 +7,9 @@ use crate::{basis_name, Report, Row};
 use anyhow::Result;
 use loam::grid::BasisKind;
 use loam::implicit::{Kinematics, QuasiStatic, QuasiStaticSettings, StepError};
-use loam::verification::{column_errors, column_model, condition_number, softening_specimen, translated_block, Column, LayeredColumn};
+use loam::verification::{
+    column_errors, column_model, condition_number, softening_specimen, translated_block, Column, LayeredColumn,
+};
 use std::fmt::Write as _;
 use std::time::Instant;
 
@@ -31,7 +33,10 @@ struct Softening {
 
 fn softening(cells: usize, margin: f64) -> Softening {
     const SHORTENING: f64 = 0.04;
-    let mut qs = QuasiStatic::new(softening_specimen(cells, margin, SHORTENING), QuasiStaticSettings { load_steps: 80, ..Default::default() });
+    let mut qs = QuasiStatic::new(
+        softening_specimen(cells, margin, SHORTENING),
+        QuasiStaticSettings { load_steps: 80, ..Default::default() },
+    );
     let t = Instant::now();
     let start = qs.model().points.len();
     let mut out = Softening {
@@ -75,16 +80,33 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
     writeln!(md, "## Hard cases\n")?;
 
     writeln!(md, "### Stiffness contrast\n\nThe V1a column (small strain, one load step, 32 cells) with its upper half `contrast` times softer than the lower; the interface on a cell face. The stress is the weight above whatever the stiffness; the displacement integrates σ/E per layer.\n")?;
-    writeln!(md, "| basis | contrast | Newton its | final residual | e_σ | e_u (top) |\n|---|---:|---:|---:|---:|---:|")?;
+    writeln!(
+        md,
+        "| basis | contrast | Newton its | final residual | e_σ | e_u (top) |\n|---|---:|---:|---:|---:|---:|"
+    )?;
     for basis in [BasisKind::Gimp, BasisKind::QuadraticBSpline] {
         for contrast in [1.0, 1e3, 1e6] {
             let layered = LayeredColumn { column: Column::V1A, contrast };
-            let mut qs = QuasiStatic::new(layered.model(32, basis), QuasiStaticSettings { load_steps: 1, ..Default::default() });
+            let mut qs =
+                QuasiStatic::new(layered.model(32, basis), QuasiStaticSettings { load_steps: 1, ..Default::default() });
             let r = qs.step()?;
             let e = column_errors(&qs.model().points, &layered.column, 1, |y| layered.displacement(y));
-            writeln!(md, "| {} | {contrast:.0e} | {} | {:.1e} | {:.3e} | {:.3e} |", basis_name(basis), r.iterations, r.final_residual(), e.stress, e.top_displacement)?;
+            writeln!(
+                md,
+                "| {} | {contrast:.0e} | {} | {:.1e} | {:.3e} | {:.3e} |",
+                basis_name(basis),
+                r.iterations,
+                r.final_residual(),
+                e.stress,
+                e.top_displacement
+            )?;
             if contrast == 1e6 {
-                report.rows.push(Row::upper(format!("H1 contrast 1e6 {}", basis_name(basis)), "newton_iterations", r.iterations as f64, 2.0));
+                report.rows.push(Row::upper(
+                    format!("H1 contrast 1e6 {}", basis_name(basis)),
+                    "newton_iterations",
+                    r.iterations as f64,
+                    2.0,
+                ));
             }
         }
     }
@@ -97,7 +119,11 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
     for &cells in meshes {
         eprintln!("verify: hard case, softening, {cells} cells across");
         let s = softening(cells, 0.5);
-        writeln!(md, "| {cells} | {:.2} | {:.2} | {:.4} | {} | {} | {:.2} |", s.peak, s.last, s.reached, s.max_iterations, s.cutbacks, s.wall_s)?;
+        writeln!(
+            md,
+            "| {cells} | {:.2} | {:.2} | {:.4} | {} | {} | {:.2} |",
+            s.peak, s.last, s.reached, s.max_iterations, s.cutbacks, s.wall_s
+        )?;
         stops.push(format!("- {cells} cells across: {}", s.stop));
         report.rows.push(Row::info(format!("H2 softening {cells} cells"), "peak_load", s.peak));
         report.rows.push(Row::info(format!("H2 softening {cells} cells"), "shortening_reached", s.reached));
@@ -108,7 +134,10 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
     let c = Column::V1C;
     let mut settings = QuasiStaticSettings { load_steps: 1, ..Default::default() };
     settings.newton.max_iterations = 3;
-    let mut qs = QuasiStatic::new(column_model::<2>(&c, c.height / 16.0, 16, 2, BasisKind::Gimp, Kinematics::FiniteStrain), settings);
+    let mut qs = QuasiStatic::new(
+        column_model::<2>(&c, c.height / 16.0, 16, 2, BasisKind::Gimp, Kinematics::FiniteStrain),
+        settings,
+    );
     let r = qs.step()?;
     let e = column_errors(&qs.model().points, &c, 1, |y| c.hencky_displacement(y));
     writeln!(md, "- {} failed attempts (cut-backs), {} converged sub-steps with {} Newton iterations (the sub-step halves on a failure and doubles after two successes); load factor {:.3} reached; e_σ = {:.3e} (3.7e-3 with 40 load steps). run_log.csv records the cut-backs and sub-steps of every step.\n", r.cutbacks, r.substeps, r.iterations, r.load_factor, e.stress)?;
@@ -118,7 +147,12 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
     let s = softening(8, 0.0);
     writeln!(md, "- the run stops with: `{}`; the model holds the last converged step's state ({:.4} shortening): {}, with {} of its {} points.\n", s.stop, s.reached, if s.kept_last_state { "unchanged" } else { "CHANGED" }, s.points.1, s.points.0)?;
     let reported = s.left_grid && s.kept_last_state && s.points.0 == s.points.1;
-    report.rows.push(Row { case: "H4 point leaving the grid".into(), quantity: "reported as such, last state kept (1 = yes)".into(), value: reported as u8 as f64, bound: Some((1.0, false)) });
+    report.rows.push(Row {
+        case: "H4 point leaving the grid".into(),
+        quantity: "reported as such, last state kept (1 = yes)".into(),
+        value: reported as u8 as f64,
+        bound: Some((1.0, false)),
+    });
     small_cuts(report)?;
     let md = &mut report.md;
     writeln!(md, "An explicit step above the critical one is the remaining hard case; V2 above shows it detected (the explicit row at 2 Δt_c), and a scene asking for one is refused unless `allow_above_critical`.\n")?;
@@ -128,7 +162,10 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
 /// One load step of the translated block: the start tangent's condition number, whether
 /// Newton converged and in how many iterations, and the largest displacement.
 fn block_step(overlap: f64, basis: BasisKind, ghost: Option<f64>) -> Result<(f64, Option<usize>, f64)> {
-    let mut qs = QuasiStatic::new(translated_block(overlap, basis, ghost), QuasiStaticSettings { load_steps: 1, ..Default::default() });
+    let mut qs = QuasiStatic::new(
+        translated_block(overlap, basis, ghost),
+        QuasiStaticSettings { load_steps: 1, ..Default::default() },
+    );
     let (pattern, values, constrained) = qs.start_tangent()?;
     let condition = condition_number(&pattern, &values, &constrained);
     let its = qs.step().ok().map(|r| r.iterations);
@@ -151,7 +188,13 @@ fn small_cuts(report: &mut Report) -> Result<()> {
         let (c2, i2, u2) = block_step(overlap, BasisKind::Gimp, Some(0.01))?;
         ghost_failures += i1.is_none() as usize + i2.is_none() as usize;
         worst_ratio = worst_ratio.max(c1 / reference);
-        writeln!(md, "| {overlap:.0e} | {c0:.2e} | {} | {u0:.5} | {c1:.2e} | {} | {u1:.5} | {c2:.2e} | {} | {u2:.5} |", its(i0), its(i1), its(i2))?;
+        writeln!(
+            md,
+            "| {overlap:.0e} | {c0:.2e} | {} | {u0:.5} | {c1:.2e} | {} | {u1:.5} | {c2:.2e} | {} | {u2:.5} |",
+            its(i0),
+            its(i1),
+            its(i2)
+        )?;
         report.rows.push(Row::info(format!("H5 small cut {overlap:.0e}"), "condition_plain", c0));
         report.rows.push(Row::info(format!("H5 small cut {overlap:.0e}"), "condition_ghost_0.1", c1));
     }

@@ -275,7 +275,11 @@ fn verify(quick: bool, out: &Path) -> Result<()> {
     let mut rows: Vec<Row> = Vec::new();
     let mut md = String::new();
     writeln!(md, "# loam verification report\n")?;
-    writeln!(md, "Mode: {}. Columns of VERIFICATION.md V1, 2x2(x2) points per cell, ν = 0, rollers on sides and base.", if quick { "quick (CI subset)" } else { "full" })?;
+    writeln!(
+        md,
+        "Mode: {}. Columns of VERIFICATION.md V1, 2x2(x2) points per cell, ν = 0, rollers on sides and base.",
+        if quick { "quick (CI subset)" } else { "full" }
+    )?;
     writeln!(md, "e_σ = Σ|σ_yy − σ_yy(Y)|V⁰ / (ΣV⁰ ρ₀gH₀); e_u = relative error of the highest point's displacement; rate = least-squares slope of ln e_σ against ln h over the finest three meshes.\n")?;
     let mut plot = svg::Plot {
         log_x: true,
@@ -285,7 +289,12 @@ fn verify(quick: bool, out: &Path) -> Result<()> {
     };
     let mut residual_doc = String::new();
     for case in &cases {
-        for method in [Method::Mpm(BasisKind::Gimp), Method::Mpm(BasisKind::QuadraticBSpline), Method::Mpm(BasisKind::Linear), Method::Fem] {
+        for method in [
+            Method::Mpm(BasisKind::Gimp),
+            Method::Mpm(BasisKind::QuadraticBSpline),
+            Method::Mpm(BasisKind::Linear),
+            Method::Fem,
+        ] {
             if case.id == "V1a-small" && method == Method::Mpm(BasisKind::Linear) {
                 continue;
             }
@@ -299,22 +308,48 @@ fn verify(quick: bool, out: &Path) -> Result<()> {
                 ""
             };
             writeln!(md, "## {name}: {}\n\nReference: {}.{fem_note}\n", case.title, case.reference_name)?;
-            writeln!(md, "| cells | e_σ | e_u (top) | max Newton its/step | wall time [s] |\n|---:|---:|---:|---:|---:|")?;
+            writeln!(
+                md,
+                "| cells | e_σ | e_u (top) | max Newton its/step | wall time [s] |\n|---:|---:|---:|---:|---:|"
+            )?;
             for r in &runs {
-                writeln!(md, "| {} | {:.3e} | {:.3e} | {} | {:.4} |", r.cells, r.e_sigma, r.e_top, r.max_iterations, r.wall_s)?;
+                writeln!(
+                    md,
+                    "| {} | {:.3e} | {:.3e} | {} | {:.4} |",
+                    r.cells, r.e_sigma, r.e_top, r.max_iterations, r.wall_s
+                )?;
             }
             let last3: Vec<&ColumnRun> = runs.iter().rev().take(3).rev().collect();
             let rate = observed_rate(&last3);
-            writeln!(md, "\nObserved rate over {:?} cells: **{rate:.2}**\n", last3.iter().map(|r| r.cells).collect::<Vec<_>>())?;
+            writeln!(
+                md,
+                "\nObserved rate over {:?} cells: **{rate:.2}**\n",
+                last3.iter().map(|r| r.cells).collect::<Vec<_>>()
+            )?;
             let gimp_bounded = case.bounded && method == Method::Mpm(BasisKind::Gimp);
-            rows.push(Row { case: name.clone(), quantity: "rate_e_sigma".into(), value: rate, bound: gimp_bounded.then_some((1.5, false)) });
+            rows.push(Row {
+                case: name.clone(),
+                quantity: "rate_e_sigma".into(),
+                value: rate,
+                bound: gimp_bounded.then_some((1.5, false)),
+            });
             if let Some(r64) = runs.iter().find(|r| r.cells == 64) {
-                rows.push(Row { case: name.clone(), quantity: "e_sigma_64".into(), value: r64.e_sigma, bound: gimp_bounded.then_some((1e-3, true)) });
+                rows.push(Row {
+                    case: name.clone(),
+                    quantity: "e_sigma_64".into(),
+                    value: r64.e_sigma,
+                    bound: gimp_bounded.then_some((1e-3, true)),
+                });
                 rows.push(Row { case: name.clone(), quantity: "e_u_64".into(), value: r64.e_top, bound: None });
             }
             let finest = runs.last().unwrap();
             if finest.cells != 64 {
-                rows.push(Row { case: name.clone(), quantity: format!("e_sigma_{}", finest.cells), value: finest.e_sigma, bound: None });
+                rows.push(Row {
+                    case: name.clone(),
+                    quantity: format!("e_sigma_{}", finest.cells),
+                    value: finest.e_sigma,
+                    bound: None,
+                });
             }
             let max_its = runs.iter().map(|r| r.max_iterations).max().unwrap_or(0);
             rows.push(Row {
@@ -323,10 +358,19 @@ fn verify(quick: bool, out: &Path) -> Result<()> {
                 value: max_its as f64,
                 bound: (case.id == "V1c").then_some((6.0, true)),
             });
-            rows.push(Row { case: name.clone(), quantity: "wall_time_total_s".into(), value: runs.iter().map(|r| r.wall_s).sum(), bound: None });
+            rows.push(Row {
+                case: name.clone(),
+                quantity: "wall_time_total_s".into(),
+                value: runs.iter().map(|r| r.wall_s).sum(),
+                bound: None,
+            });
             if case.id == "V1c" && method == Method::Mpm(BasisKind::Gimp) {
-                writeln!(residual_doc, "Newton residuals of the last load step of V1c (GIMP, {} cells): {}", finest.cells,
-                    finest.last_residuals.iter().map(|r| format!("{r:.2e}")).collect::<Vec<_>>().join(" → "))?;
+                writeln!(
+                    residual_doc,
+                    "Newton residuals of the last load step of V1c (GIMP, {} cells): {}",
+                    finest.cells,
+                    finest.last_residuals.iter().map(|r| format!("{r:.2e}")).collect::<Vec<_>>().join(" → ")
+                )?;
             }
             let series = svg::Series::new(name, runs.iter().map(|r| (r.cells as f64, r.e_sigma)).collect());
             plot.series.push(if method == Method::Mpm(BasisKind::Gimp) { series } else { series.dashed() });
@@ -341,7 +385,12 @@ fn verify(quick: bool, out: &Path) -> Result<()> {
         let case = Case { load_steps: steps, ..*v1c };
         let r = run_column(&case, Method::Mpm(BasisKind::Gimp), study_cells)?;
         writeln!(md, "| {steps} | {:.3e} | {:.3e} | {:.4} |", r.e_sigma, r.e_top, r.wall_s)?;
-        rows.push(Row { case: format!("V1c GIMP {study_cells} cells"), quantity: format!("e_sigma_{steps}_steps"), value: r.e_sigma, bound: None });
+        rows.push(Row {
+            case: format!("V1c GIMP {study_cells} cells"),
+            quantity: format!("e_sigma_{steps}_steps"),
+            value: r.e_sigma,
+            bound: None,
+        });
     }
     writeln!(md)?;
     let mut report = Report { md, rows, out: out.to_owned() };
@@ -355,7 +404,9 @@ fn verify(quick: bool, out: &Path) -> Result<()> {
     let mut failed = Vec::new();
     for r in &rows {
         let (bound_s, pass_s) = match (r.bound, r.pass()) {
-            (Some((b, upper)), Some(p)) => (format!("{}{b}", if upper { "<=" } else { ">=" }), if p { "pass" } else { "FAIL" }),
+            (Some((b, upper)), Some(p)) => {
+                (format!("{}{b}", if upper { "<=" } else { ">=" }), if p { "pass" } else { "FAIL" })
+            }
             _ => (String::new(), "n/a"),
         };
         if pass_s == "FAIL" {

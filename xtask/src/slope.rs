@@ -7,7 +7,9 @@ use anyhow::Result;
 use loam::constitutive::{ConstitutiveLaw, Elastic, MohrCoulomb, VonMises};
 use loam::explicit::{Explicit, ExplicitSettings, TimeStep};
 use loam::grid::BasisKind;
-use loam::implicit::{AntiLocking, Dynamic, DynamicSettings, Kinematics, QuasiStatic, QuasiStaticSettings, StrengthReduction};
+use loam::implicit::{
+    AntiLocking, Dynamic, DynamicSettings, Kinematics, QuasiStatic, QuasiStaticSettings, StrengthReduction,
+};
 use loam::model::Model;
 use loam::verification::{slope_model, slope_model_with, SlopeGeometry};
 use std::fmt::Write as _;
@@ -45,7 +47,8 @@ fn undrained(cells: usize, anti_locking: AntiLocking) -> Result<Collapse> {
     let model = slope_model(&g, law, gamma / 10.0, 10.0, cells, anti_locking);
     let mut qs = QuasiStatic::new(model, QuasiStaticSettings { load_steps: GRAVITY_STEPS, ..Default::default() });
     let t = Instant::now();
-    let (mut max_iterations, mut stop, mut carried) = (0, "carried the whole load (no collapse up to γH/c_u = 8)".to_string(), true);
+    let (mut max_iterations, mut stop, mut carried) =
+        (0, "carried the whole load (no collapse up to γH/c_u = 8)".to_string(), true);
     while !qs.is_finished() {
         match qs.step() {
             Ok(r) => max_iterations = max_iterations.max(r.most_iterations()),
@@ -81,9 +84,16 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
     for &cells in meshes {
         eprintln!("verify: V4a undrained slope, B-bar, {cells} cells per H");
         let r = undrained(cells, AntiLocking::BBar)?;
-        anyhow::ensure!(!r.carried, "V4a: the B-bar slope at {cells} cells per H carried γH/c_u = {N_MAX} without collapsing");
+        anyhow::ensure!(
+            !r.carried,
+            "V4a: the B-bar slope at {cells} cells per H carried γH/c_u = {N_MAX} without collapsing"
+        );
         let rel = r.n / TAYLOR - 1.0;
-        writeln!(md, "| {cells} | B-bar | {:.3} | {rel:+.3} | {:.4} | {} | {:.2} |", r.n, r.crest_settlement, r.max_iterations, r.wall_s)?;
+        writeln!(
+            md,
+            "| {cells} | B-bar | {:.3} | {rel:+.3} | {:.4} | {} | {:.2} |",
+            r.n, r.crest_settlement, r.max_iterations, r.wall_s
+        )?;
         stops.push(format!("- {cells} cells per H: {}", r.stop));
         report.rows.push(Row::info(format!("V4a undrained slope {cells}/H"), "gammaH_over_cu_at_collapse", r.n));
         finest = rel;
@@ -92,10 +102,23 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
     eprintln!("verify: V4a undrained slope, plain, {cells} cells per H");
     let plain = undrained(cells, AntiLocking::None)?;
     let at_least = if plain.carried { "> " } else { "" };
-    writeln!(md, "| {cells} | plain | {at_least}{:.3} | {at_least}{:+.3} | {:.4} | {} | {:.2} |", plain.n, plain.n / TAYLOR - 1.0, plain.crest_settlement, plain.max_iterations, plain.wall_s)?;
+    writeln!(
+        md,
+        "| {cells} | plain | {at_least}{:.3} | {at_least}{:+.3} | {:.4} | {} | {:.2} |",
+        plain.n,
+        plain.n / TAYLOR - 1.0,
+        plain.crest_settlement,
+        plain.max_iterations,
+        plain.wall_s
+    )?;
     stops.push(format!("- {cells} cells per H, plain: {}", plain.stop));
     writeln!(md, "\nWhy each run stopped (the collapse criterion is a load step that Newton cannot carry after all its cut-backs; at the limit load the tangent of a perfectly plastic body turns singular, which the Cholesky factorisation reports):\n\n{}\n", stops.join("\n"))?;
-    report.rows.push(Row::upper("V4a undrained slope (finest)", "abs_gammaH_over_cu_over_5.5_minus_1", finest.abs(), 0.10));
+    report.rows.push(Row::upper(
+        "V4a undrained slope (finest)",
+        "abs_gammaH_over_cu_over_5.5_minus_1",
+        finest.abs(),
+        0.10,
+    ));
 
     writeln!(md, "## V4b Griffiths & Lane slope: strength reduction\n\n2:1 slope (26.57°), H = 10, foundation layer H deep, 1.2 H before the toe, 2 H behind the crest; Mohr–Coulomb c = 10, φ = 20°, ψ = 0 (non-associated: sparse LU), γ = 20 (c/(γH) = 0.05), E = {YOUNG:e}, ν = {POISSON}; linear basis, B-bar. Each trial divides c and tan φ by F and applies gravity in 10 load steps (up to 4 halvings); F is bisected between a trial that holds and one that fails, to 0.005. Reference: F ≈ {GL_FOS} (Griffiths & Lane 1999; Bishop's method gives 1.38). Bound: within 5 % on the finest mesh.\n")?;
     writeln!(md, "| cells per H | F (bracket) | /1.4 − 1 | trials | largest displacement at the last stable trial [m] | wall [s] |\n|---:|---:|---:|---:|---:|---:|")?;
@@ -103,7 +126,8 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
     for &cells in meshes {
         eprintln!("verify: V4b Griffiths & Lane slope, {cells} cells per H");
         let g = SlopeGeometry::GRIFFITHS_LANE;
-        let law: Arc<dyn ConstitutiveLaw> = Arc::new(MohrCoulomb::from_degrees(Elastic::new(YOUNG, POISSON)?, 10.0, 20.0, 0.0)?);
+        let law: Arc<dyn ConstitutiveLaw> =
+            Arc::new(MohrCoulomb::from_degrees(Elastic::new(YOUNG, POISSON)?, 10.0, 20.0, 0.0)?);
         let model = slope_model(&g, law, 2.0, 10.0, cells, AntiLocking::BBar);
         let srf = StrengthReduction {
             trial: QuasiStaticSettings { load_steps: 10, max_cutbacks: 4, ..Default::default() },
@@ -112,9 +136,22 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
         };
         let t = Instant::now();
         let fos = srf.factor_of_safety(&model, |_| {})?;
-        let last_stable = fos.trials.iter().filter(|t| t.stable).max_by(|a, b| a.factor.total_cmp(&b.factor)).map_or(f64::NAN, |t| t.max_displacement);
+        let last_stable = fos
+            .trials
+            .iter()
+            .filter(|t| t.stable)
+            .max_by(|a, b| a.factor.total_cmp(&b.factor))
+            .map_or(f64::NAN, |t| t.max_displacement);
         let rel = fos.value() / GL_FOS - 1.0;
-        writeln!(md, "| {cells} | {:.3} ({:.4}–{:.4}) | {rel:+.3} | {} | {last_stable:.3} | {:.1} |", fos.value(), fos.stable, fos.failed, fos.trials.len(), t.elapsed().as_secs_f64())?;
+        writeln!(
+            md,
+            "| {cells} | {:.3} ({:.4}–{:.4}) | {rel:+.3} | {} | {last_stable:.3} | {:.1} |",
+            fos.value(),
+            fos.stable,
+            fos.failed,
+            fos.trials.len(),
+            t.elapsed().as_secs_f64()
+        )?;
         report.rows.push(Row::info(format!("V4b Griffiths-Lane slope {cells}/H"), "factor_of_safety", fos.value()));
         finest = rel;
     }
@@ -150,16 +187,21 @@ fn runout(quick: bool, report: &mut Report) -> Result<()> {
     const DURATION: f64 = 4.0;
     let cells = if quick { 5 } else { 10 };
     let g = SlopeGeometry::UNDRAINED;
-    let law: Arc<dyn ConstitutiveLaw> = Arc::new(VonMises::new(Elastic::new(YOUNG_RUNOUT, POISSON)?, 3f64.sqrt() * C_U, 0.0)?);
+    let law: Arc<dyn ConstitutiveLaw> =
+        Arc::new(VonMises::new(Elastic::new(YOUNG_RUNOUT, POISSON)?, 3f64.sqrt() * C_U, 0.0)?);
     let gamma = N_RUNOUT * C_U / g.height;
-    let model = || slope_model_with(&g, law.clone(), gamma / 10.0, 10.0, cells, BasisKind::Gimp, Kinematics::FiniteStrain);
+    let model =
+        || slope_model_with(&g, law.clone(), gamma / 10.0, 10.0, cells, BasisKind::Gimp, Kinematics::FiniteStrain);
     let h = g.height / cells as f64;
     let md = &mut report.md;
     writeln!(md, "## V4c run-out of the undrained slope: implicit and explicit side by side\n\nThe V4a slope with γH/c_u = {N_RUNOUT} (collapse is at 5.4), E = {YOUNG_RUNOUT:e}, released under full gravity at t = 0 and followed for {DURATION} s (the kinetic energy has fallen by two orders by then); GIMP, finite strain (no anti-locking: B-bar is small-strain only), {cells} cells per H (h = {h}), 2×2 points per cell. Implicit: trapezoidal Newmark, lumped mass. Explicit: MUSL, FLIP, CFL safety 0.5. Profile = highest point per column of cells; crest height = the profile where the crest was (initially {}), heave = the largest rise of the ground in front of the toe (a base failure lifts it). Bound: the implicit and explicit final profiles agree within two cells.\n", (g.depth + 1.0) * g.height)?;
     writeln!(md, "| scheme | Δt [s] | steps | Newton its | cut-backs | wall [s] | crest height [m] | heave before the toe [m] | max profile difference from explicit [cells] |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|")?;
     eprintln!("verify: V4c run-out, explicit, {cells} cells per H");
     let t = Instant::now();
-    let mut ex = Explicit::new(model(), ExplicitSettings { time_step: TimeStep::Cfl { safety: 0.5 }, ..ExplicitSettings::new(DURATION) })?;
+    let mut ex = Explicit::new(
+        model(),
+        ExplicitSettings { time_step: TimeStep::Cfl { safety: 0.5 }, ..ExplicitSettings::new(DURATION) },
+    )?;
     let (mut steps, mut dt_min, mut dt_max) = (0, f64::INFINITY, 0.0f64);
     while !ex.is_finished() {
         let r = ex.step()?;
@@ -170,7 +212,12 @@ fn runout(quick: bool, report: &mut Report) -> Result<()> {
     let wall = t.elapsed().as_secs_f64();
     let explicit = profile(ex.model());
     let crest_i = ((g.toe + g.run) * g.height / h) as usize;
-    writeln!(md, "| explicit | {dt_min:.2e}–{dt_max:.2e} | {steps} | – | – | {wall:.2} | {:.2} | {:.2} | 0 |", explicit[crest_i], heave(&explicit, h, &g))?;
+    writeln!(
+        md,
+        "| explicit | {dt_min:.2e}–{dt_max:.2e} | {steps} | – | – | {wall:.2} | {:.2} | {:.2} | 0 |",
+        explicit[crest_i],
+        heave(&explicit, h, &g)
+    )?;
     report.rows.push(Row::info(format!("V4c run-out explicit {cells}/H"), "wall_time_s", wall));
     let mut worst = 0.0f64;
     for dt in [0.02, 0.05] {
@@ -188,7 +235,12 @@ fn runout(quick: bool, report: &mut Report) -> Result<()> {
         let implicit = profile(im.model());
         let diff = explicit.iter().zip(&implicit).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max) / h;
         worst = worst.max(diff);
-        writeln!(md, "| implicit | {dt} | {steps} | {its} | {cutbacks} | {wall:.2} | {:.2} | {:.2} | {diff:.3} |", implicit[crest_i], heave(&implicit, h, &g))?;
+        writeln!(
+            md,
+            "| implicit | {dt} | {steps} | {its} | {cutbacks} | {wall:.2} | {:.2} | {:.2} | {diff:.3} |",
+            implicit[crest_i],
+            heave(&implicit, h, &g)
+        )?;
         report.rows.push(Row::info(format!("V4c run-out implicit dt={dt} {cells}/H"), "wall_time_s", wall));
     }
     writeln!(md)?;

@@ -42,8 +42,10 @@ pub fn run(quick: bool, out: &Path) -> Result<()> {
     writeln!(md, "# Implicit vs explicit step sizes\n\nMode: {}. Wall time: the steps alone, on this machine, one run each (noisy; compare ratios, not absolute values).\n", if quick { "quick" } else { "full" })?;
 
     // ---------------------------------------------------------------- V2
-    let implicit_multiples: &[f64] = if quick { &[1.0, 5.0, 10.0, 50.0, 100.0] } else { &[1.0, 2.0, 5.0, 10.0, 20.0, 50.0, 100.0, 200.0] };
-    let explicit_fractions: &[f64] = if quick { &[0.25, 0.5, 0.9, 1.5, 2.0] } else { &[0.1, 0.25, 0.5, 0.75, 0.9, 1.0, 1.2, 1.5, 1.7, 1.8, 2.0] };
+    let implicit_multiples: &[f64] =
+        if quick { &[1.0, 5.0, 10.0, 50.0, 100.0] } else { &[1.0, 2.0, 5.0, 10.0, 20.0, 50.0, 100.0, 200.0] };
+    let explicit_fractions: &[f64] =
+        if quick { &[0.25, 0.5, 0.9, 1.5, 2.0] } else { &[0.1, 0.25, 0.5, 0.75, 0.9, 1.0, 1.2, 1.5, 1.7, 1.8, 2.0] };
     let mut points = Vec::new();
     let implicit_runs: [(&str, &dyn Fn(f64) -> DynRun); 2] =
         [("implicit", &|dt| bar_implicit(dt, BasisKind::Linear)), ("UL-FEM implicit", &bar_fem_implicit)];
@@ -68,7 +70,8 @@ pub fn run(quick: bool, out: &Path) -> Result<()> {
     for &f in explicit_fractions {
         let dt = f * dt_c;
         eprintln!("steps: V2 explicit dt = {dt}");
-        let (run, leapfrog_growth) = bar_explicit(TimeStep::Fixed { dt, allow_above_critical: true }, BasisKind::Linear);
+        let (run, leapfrog_growth) =
+            bar_explicit(TimeStep::Fixed { dt, allow_above_critical: true }, BasisKind::Linear);
         let e = bar.errors(&run.record);
         // Stable: reached the end without growth of the leapfrog energy beyond 1 % (a
         // slowly growing instability may not reach NaN within 3 periods; the energy read at
@@ -92,37 +95,96 @@ pub fn run(quick: bool, out: &Path) -> Result<()> {
     writeln!(md, "## V2 vibrating bar\n\nL = 25, E = 100, ρ = 1, h = 1, 2×2 points per cell, linear basis (UL-FEM: one element per cell, 2×2 Gauss points), t_end = 3T = 30, Δt_c = h/c = {dt_c}. Period error against the exact T = 10 (so the implicit figures include the trapezoidal elongation); v_cm error = max |v_cm − exact| / (2v₀/π). Energy growth: implicit W + ½Σm|v|², explicit the leapfrog energy.\n")?;
     writeln!(md, "| scheme | Δt | Δt/Δt_c | steps | period error | v_cm error | max energy growth | wall [s] | outcome |\n|---|---:|---:|---:|---:|---:|---:|---:|---|")?;
     for p in &points {
-        writeln!(md, "| {} | {:.4} | {:.2} | {} | {:.2e} | {:.2e} | {:.2e} | {:.4} | {} |", p.scheme, p.dt, p.dt / dt_c, p.steps, p.period_error, p.vcm_error, p.energy_growth, p.wall_s, p.outcome)?;
-        writeln!(csv, "V2,{},{},{},{:e},{:e},{:e},\"{}\"", p.scheme, p.dt, p.steps, p.period_error, p.vcm_error, p.wall_s, p.outcome.replace('"', "'"))?;
+        writeln!(
+            md,
+            "| {} | {:.4} | {:.2} | {} | {:.2e} | {:.2e} | {:.2e} | {:.4} | {} |",
+            p.scheme,
+            p.dt,
+            p.dt / dt_c,
+            p.steps,
+            p.period_error,
+            p.vcm_error,
+            p.energy_growth,
+            p.wall_s,
+            p.outcome
+        )?;
+        writeln!(
+            csv,
+            "V2,{},{},{},{:e},{:e},{:e},\"{}\"",
+            p.scheme,
+            p.dt,
+            p.steps,
+            p.period_error,
+            p.vcm_error,
+            p.wall_s,
+            p.outcome.replace('"', "'")
+        )?;
     }
     let stable = |p: &&Point| p.outcome == "ran to the end";
-    let largest_explicit = points.iter().filter(|p| p.scheme == "explicit").filter(stable).map(|p| p.dt).fold(f64::NAN, f64::max);
-    let first_unstable = points.iter().filter(|p| p.scheme == "explicit" && !stable(p)).map(|p| p.dt).fold(f64::NAN, f64::min);
-    let implicit_1pct = points.iter().filter(|p| p.scheme == "implicit" && p.period_error < 0.01).max_by(|a, b| a.dt.total_cmp(&b.dt));
-    let fem_1pct = points.iter().filter(|p| p.scheme == "UL-FEM implicit" && p.period_error < 0.01).max_by(|a, b| a.dt.total_cmp(&b.dt));
-    let explicit_1pct = points.iter().filter(|p| p.scheme == "explicit" && stable(p) && p.period_error < 0.01).min_by(|a, b| a.wall_s.total_cmp(&b.wall_s));
+    let largest_explicit =
+        points.iter().filter(|p| p.scheme == "explicit").filter(stable).map(|p| p.dt).fold(f64::NAN, f64::max);
+    let first_unstable =
+        points.iter().filter(|p| p.scheme == "explicit" && !stable(p)).map(|p| p.dt).fold(f64::NAN, f64::min);
+    let implicit_1pct =
+        points.iter().filter(|p| p.scheme == "implicit" && p.period_error < 0.01).max_by(|a, b| a.dt.total_cmp(&b.dt));
+    let fem_1pct = points
+        .iter()
+        .filter(|p| p.scheme == "UL-FEM implicit" && p.period_error < 0.01)
+        .max_by(|a, b| a.dt.total_cmp(&b.dt));
+    let explicit_1pct = points
+        .iter()
+        .filter(|p| p.scheme == "explicit" && stable(p) && p.period_error < 0.01)
+        .min_by(|a, b| a.wall_s.total_cmp(&b.wall_s));
     writeln!(md, "\n- Largest stable explicit step: **{largest_explicit:.4}** ({:.2} Δt_c); the first unstable one tried: {first_unstable:.4} ({:.2} Δt_c).", largest_explicit / dt_c, first_unstable / dt_c)?;
     if let Some(p) = implicit_1pct {
-        writeln!(md, "- Largest implicit step with period error < 1 %: **{:.4}** ({:.0} Δt_c), {} steps, {:.4} s.", p.dt, p.dt / dt_c, p.steps, p.wall_s)?;
+        writeln!(
+            md,
+            "- Largest implicit step with period error < 1 %: **{:.4}** ({:.0} Δt_c), {} steps, {:.4} s.",
+            p.dt,
+            p.dt / dt_c,
+            p.steps,
+            p.wall_s
+        )?;
     }
     if let Some(p) = fem_1pct {
         writeln!(md, "- UL-FEM reference (same Newmark, Newton and laws; one element per cell, 2×2 Gauss points): largest step with period error < 1 %: **{:.4}** ({:.0} Δt_c), {} steps, {:.4} s.", p.dt, p.dt / dt_c, p.steps, p.wall_s)?;
     }
     if let Some(p) = explicit_1pct {
-        writeln!(md, "- Cheapest stable explicit run with period error < 1 %: Δt = {:.4}, {} steps, {:.4} s.", p.dt, p.steps, p.wall_s)?;
+        writeln!(
+            md,
+            "- Cheapest stable explicit run with period error < 1 %: Δt = {:.4}, {} steps, {:.4} s.",
+            p.dt, p.steps, p.wall_s
+        )?;
     }
     if let (Some(i), Some(e)) = (implicit_1pct, explicit_1pct) {
-        writeln!(md, "- Wall time at 1 % period error: implicit {:.4} s, explicit {:.4} s (ratio explicit/implicit {:.2}).", i.wall_s, e.wall_s, e.wall_s / i.wall_s)?;
+        writeln!(
+            md,
+            "- Wall time at 1 % period error: implicit {:.4} s, explicit {:.4} s (ratio explicit/implicit {:.2}).",
+            i.wall_s,
+            e.wall_s,
+            e.wall_s / i.wall_s
+        )?;
     }
     let series = |scheme: &str, x: fn(&Point) -> f64| -> Vec<(f64, f64)> {
-        points.iter().filter(|p| p.scheme == scheme && stable(p) && p.period_error.is_finite() && p.period_error > 0.0).map(|p| (x(p), p.period_error)).collect()
+        points
+            .iter()
+            .filter(|p| p.scheme == scheme && stable(p) && p.period_error.is_finite() && p.period_error > 0.0)
+            .map(|p| (x(p), p.period_error))
+            .collect()
     };
-    let mut plot = Plot { log_x: true, log_y: true, ..Plot::new("V2: period error against time step", "Δt", "|T/T_exact − 1|") };
+    let mut plot =
+        Plot {
+            log_x: true, log_y: true, ..Plot::new("V2: period error against time step", "Δt", "|T/T_exact − 1|")
+        };
     plot.series.push(Series::new("implicit trapezoidal", series("implicit", |p| p.dt)));
     plot.series.push(Series::new("UL-FEM trapezoidal", series("UL-FEM implicit", |p| p.dt)).dashed());
     plot.series.push(Series::new("explicit MUSL (stable runs)", series("explicit", |p| p.dt)).dashed());
     plot.write(&out.join("bar_error_vs_dt.svg"))?;
-    let mut plot = Plot { log_x: true, log_y: true, ..Plot::new("V2: period error against wall time", "wall time of the steps [s]", "|T/T_exact − 1|") };
+    let mut plot = Plot {
+        log_x: true,
+        log_y: true,
+        ..Plot::new("V2: period error against wall time", "wall time of the steps [s]", "|T/T_exact − 1|")
+    };
     plot.series.push(Series::new("implicit trapezoidal", series("implicit", |p| p.wall_s)));
     plot.series.push(Series::new("UL-FEM trapezoidal", series("UL-FEM implicit", |p| p.wall_s)).dashed());
     plot.series.push(Series::new("explicit MUSL (stable runs)", series("explicit", |p| p.wall_s)).dashed());
@@ -141,7 +203,12 @@ pub fn run(quick: bool, out: &Path) -> Result<()> {
     let mut fem_pts = Vec::new();
     let fem_model = || column_fem_model::<2>(&col, h, cells, 2, Kinematics::FiniteStrain);
     for (scheme, make, load_steps, pts) in [
-        ("implicit", &model as &dyn Fn() -> loam::model::Model<2>, &[1usize, 2, 5, 10, 20, 40, 80, 160][..], &mut implicit_pts),
+        (
+            "implicit",
+            &model as &dyn Fn() -> loam::model::Model<2>,
+            &[1usize, 2, 5, 10, 20, 40, 80, 160][..],
+            &mut implicit_pts,
+        ),
         ("UL-FEM implicit", &fem_model, &[1, 5, 20, 80][..], &mut fem_pts),
     ] {
         for &steps in load_steps {
@@ -190,7 +257,11 @@ pub fn run(quick: bool, out: &Path) -> Result<()> {
         let e_final = column_errors(&last.points, &col, 1, reference).stress;
         let outcome = run.failure.clone().unwrap_or_else(|| "ok".into());
         writeln!(md, "| explicit | α = {damping} | {} | {e_final:.3e} | {:.4} |", run.steps, run.wall_s)?;
-        writeln!(csv, "V1c,explicit damping {damping},{damping},{},{e_final:e},,{:e},\"{outcome}\"", run.steps, run.wall_s)?;
+        writeln!(
+            csv,
+            "V1c,explicit damping {damping},{damping},{},{e_final:e},,{:e},\"{outcome}\"",
+            run.steps, run.wall_s
+        )?;
         if run.failure.is_none() {
             // Wall time at which the run first came within 5 % of its final error.
             let reach = curve.iter().find(|(_, e)| *e <= 1.05 * e_final).map(|p| p.0).unwrap_or(run.wall_s);
@@ -208,11 +279,21 @@ pub fn run(quick: bool, out: &Path) -> Result<()> {
             None => writeln!(md, "\nNo implicit run reached the explicit error {e_x:.3e}.\n")?,
         }
     }
-    let mut plot = Plot { log_x: true, log_y: true, ..Plot::new("V1c column: stress error against wall time", "wall time of the steps [s]", "e_σ") };
+    let mut plot = Plot {
+        log_x: true,
+        log_y: true,
+        ..Plot::new("V1c column: stress error against wall time", "wall time of the steps [s]", "e_σ")
+    };
     plot.series.push(Series::new("implicit (load steps 1…160)", implicit_pts.iter().map(|p| (p.0, p.1)).collect()));
     plot.series.push(Series::new("UL-FEM implicit (load steps 1…80)", fem_pts.iter().map(|p| (p.0, p.1)).collect()));
     for (damping, curve) in &explicit_curves {
-        plot.series.push(Series::new(format!("explicit MUSL, damping {damping}"), curve.iter().copied().filter(|p| p.0 > 0.0).collect()).dashed());
+        plot.series.push(
+            Series::new(
+                format!("explicit MUSL, damping {damping}"),
+                curve.iter().copied().filter(|p| p.0 > 0.0).collect(),
+            )
+            .dashed(),
+        );
     }
     plot.write(&out.join("column_error_vs_wall.svg"))?;
     writeln!(md, "![column](column_error_vs_wall.svg)\n")?;

@@ -26,11 +26,7 @@ pub struct Series {
 impl Series {
     /// A solid series.
     pub fn new(label: impl Into<String>, points: Vec<(f64, f64)>) -> Self {
-        Self {
-            label: label.into(),
-            points,
-            dashed: false,
-        }
+        Self { label: label.into(), points, dashed: false }
     }
 
     /// Makes the series dashed.
@@ -70,10 +66,8 @@ const BOTTOM: f64 = 420.0;
 const LEGEND_X: f64 = 585.0;
 const MAX_MARKERS: usize = 30;
 
-const COLOURS: [&str; 10] = [
-    "#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf",
-    "#7f7f7f", "#bcbd22",
-];
+const COLOURS: [&str; 10] =
+    ["#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf", "#7f7f7f", "#bcbd22"];
 
 /// Values beyond this magnitude are skipped on linear axes (their spans
 /// would overflow).
@@ -141,10 +135,7 @@ fn log_decades(lo_t: f64, hi_t: f64) -> (i32, i32, Vec<i32>) {
 
 fn log_axis(lo_t: f64, hi_t: f64) -> Axis {
     let (lo, hi, decades) = log_decades(lo_t, hi_t);
-    let ticks = decades
-        .iter()
-        .map(|&k| (k as f64, format!("1e{k}")))
-        .collect();
+    let ticks = decades.iter().map(|&k| (k as f64, format!("1e{k}"))).collect();
     let mut minor = Vec::new();
     if hi - lo <= 6 {
         for k in lo..hi {
@@ -153,12 +144,7 @@ fn log_axis(lo_t: f64, hi_t: f64) -> Axis {
             }
         }
     }
-    Axis {
-        lo: lo as f64,
-        hi: hi as f64,
-        ticks,
-        minor,
-    }
+    Axis { lo: lo as f64, hi: hi as f64, ticks, minor }
 }
 
 /// The 1-2-5 step nearest (geometrically) to `raw`.
@@ -194,12 +180,7 @@ fn linear_axis(mut min: f64, mut max: f64) -> Axis {
             (v, tick_label(if i == 0 { 0.0 } else { v }, step, max_abs))
         })
         .collect();
-    Axis {
-        lo,
-        hi,
-        ticks,
-        minor: Vec::new(),
-    }
+    Axis { lo, hi, ticks, minor: Vec::new() }
 }
 
 /// Label for a linear tick `v` on an axis with tick spacing `step` whose
@@ -226,7 +207,6 @@ fn tick_label(v: f64, step: f64, max_abs: f64) -> String {
     }
 }
 
-
 /// Pixel coordinate, or `None` if it would not be finite.
 fn px(v: f64) -> Option<String> {
     v.is_finite().then(|| format!("{v:.2}"))
@@ -239,16 +219,10 @@ fn marker(out: &mut String, kind: usize, x: f64, y: f64, colour: &str) {
         return;
     };
     let poly = |pts: &[(f64, f64)]| {
-        pts.iter()
-            .map(|(dx, dy)| format!("{:.2},{:.2}", x + dx, y + dy))
-            .collect::<Vec<_>>()
-            .join(" ")
+        pts.iter().map(|(dx, dy)| format!("{:.2},{:.2}", x + dx, y + dy)).collect::<Vec<_>>().join(" ")
     };
     let _ = match kind % 6 {
-        0 => writeln!(
-            out,
-            r#"<circle cx="{x:.2}" cy="{y:.2}" r="{r}" fill="{colour}"/>"#
-        ),
+        0 => writeln!(out, r#"<circle cx="{x:.2}" cy="{y:.2}" r="{r}" fill="{colour}"/>"#),
         1 => writeln!(
             out,
             r#"<rect x="{:.2}" y="{:.2}" width="{:.2}" height="{:.2}" fill="{colour}"/>"#,
@@ -265,12 +239,7 @@ fn marker(out: &mut String, kind: usize, x: f64, y: f64, colour: &str) {
         3 => writeln!(
             out,
             r#"<polygon points="{}" fill="{colour}"/>"#,
-            poly(&[
-                (0.0, -1.3 * r),
-                (1.3 * r, 0.0),
-                (0.0, 1.3 * r),
-                (-1.3 * r, 0.0)
-            ])
+            poly(&[(0.0, -1.3 * r), (1.3 * r, 0.0), (0.0, 1.3 * r), (-1.3 * r, 0.0)])
         ),
         4 => writeln!(
             out,
@@ -311,11 +280,7 @@ fn distance_to_lines(p: (f64, f64), lines: &[Vec<(f64, f64)>]) -> f64 {
     let seg = |a: (f64, f64), b: (f64, f64)| {
         let (dx, dy) = (b.0 - a.0, b.1 - a.1);
         let len2 = dx * dx + dy * dy;
-        let t = if len2 > 0.0 {
-            (((p.0 - a.0) * dx + (p.1 - a.1) * dy) / len2).clamp(0.0, 1.0)
-        } else {
-            0.0
-        };
+        let t = if len2 > 0.0 { (((p.0 - a.0) * dx + (p.1 - a.1) * dy) / len2).clamp(0.0, 1.0) } else { 0.0 };
         (p.0 - a.0 - t * dx).hypot(p.1 - a.1 - t * dy)
     };
     let mut d = f64::INFINITY;
@@ -335,17 +300,8 @@ fn distance_to_lines(p: (f64, f64), lines: &[Vec<(f64, f64)>]) -> f64 {
 
 impl Plot {
     /// An empty plot with linear axes.
-    pub fn new(
-        title: impl Into<String>,
-        x_label: impl Into<String>,
-        y_label: impl Into<String>,
-    ) -> Self {
-        Self {
-            title: title.into(),
-            x_label: x_label.into(),
-            y_label: y_label.into(),
-            ..Self::default()
-        }
+    pub fn new(title: impl Into<String>, x_label: impl Into<String>, y_label: impl Into<String>) -> Self {
+        Self { title: title.into(), x_label: x_label.into(), y_label: y_label.into(), ..Self::default() }
     }
 
     /// The visible points of each series, in axis space.
@@ -353,10 +309,7 @@ impl Plot {
         self.series
             .iter()
             .map(|s| {
-                s.points
-                    .iter()
-                    .filter_map(|&(x, y)| Some((to_axis(x, self.log_x)?, to_axis(y, self.log_y)?)))
-                    .collect()
+                s.points.iter().filter_map(|&(x, y)| Some((to_axis(x, self.log_x)?, to_axis(y, self.log_y)?))).collect()
             })
             .collect()
     }
@@ -374,10 +327,7 @@ impl Plot {
             o,
             r#"<svg xmlns="http://www.w3.org/2000/svg" width="{WIDTH}" height="{HEIGHT}" viewBox="0 0 {WIDTH} {HEIGHT}" font-family="sans-serif" font-size="12">"#
         );
-        let _ = writeln!(
-            o,
-            r#"<rect x="0" y="0" width="{WIDTH}" height="{HEIGHT}" fill="white"/>"#
-        );
+        let _ = writeln!(o, r#"<rect x="0" y="0" width="{WIDTH}" height="{HEIGHT}" fill="white"/>"#);
         let _ = writeln!(
             o,
             r#"<defs><clipPath id="plot-area"><rect x="{}" y="{}" width="{}" height="{}"/></clipPath></defs>"#,
@@ -391,45 +341,21 @@ impl Plot {
         let _ = writeln!(o, r##"<g stroke="#dddddd" stroke-width="1">"##);
         for (t, _) in &xa.ticks {
             let x = sx(*t);
-            let _ = writeln!(
-                o,
-                r#"<line x1="{x:.2}" y1="{TOP}" x2="{x:.2}" y2="{BOTTOM}"/>"#
-            );
+            let _ = writeln!(o, r#"<line x1="{x:.2}" y1="{TOP}" x2="{x:.2}" y2="{BOTTOM}"/>"#);
         }
         for (t, _) in &ya.ticks {
             let y = sy(*t);
-            let _ = writeln!(
-                o,
-                r#"<line x1="{LEFT}" y1="{y:.2}" x2="{RIGHT}" y2="{y:.2}"/>"#
-            );
+            let _ = writeln!(o, r#"<line x1="{LEFT}" y1="{y:.2}" x2="{RIGHT}" y2="{y:.2}"/>"#);
         }
         let _ = writeln!(o, "</g>");
         let _ = writeln!(o, r#"<g stroke="black" stroke-width="1">"#);
-        for (t, len) in xa
-            .ticks
-            .iter()
-            .map(|(t, _)| (*t, 6.0))
-            .chain(xa.minor.iter().map(|t| (*t, 3.0)))
-        {
+        for (t, len) in xa.ticks.iter().map(|(t, _)| (*t, 6.0)).chain(xa.minor.iter().map(|t| (*t, 3.0))) {
             let x = sx(t);
-            let _ = writeln!(
-                o,
-                r#"<line x1="{x:.2}" y1="{BOTTOM}" x2="{x:.2}" y2="{:.2}"/>"#,
-                BOTTOM + len
-            );
+            let _ = writeln!(o, r#"<line x1="{x:.2}" y1="{BOTTOM}" x2="{x:.2}" y2="{:.2}"/>"#, BOTTOM + len);
         }
-        for (t, len) in ya
-            .ticks
-            .iter()
-            .map(|(t, _)| (*t, 6.0))
-            .chain(ya.minor.iter().map(|t| (*t, 3.0)))
-        {
+        for (t, len) in ya.ticks.iter().map(|(t, _)| (*t, 6.0)).chain(ya.minor.iter().map(|t| (*t, 3.0))) {
             let y = sy(t);
-            let _ = writeln!(
-                o,
-                r#"<line x1="{:.2}" y1="{y:.2}" x2="{LEFT}" y2="{y:.2}"/>"#,
-                LEFT - len
-            );
+            let _ = writeln!(o, r#"<line x1="{:.2}" y1="{y:.2}" x2="{LEFT}" y2="{y:.2}"/>"#, LEFT - len);
         }
         let _ = writeln!(o, "</g>");
         let _ = writeln!(
@@ -484,20 +410,10 @@ impl Plot {
         let mut screen_lines = Vec::with_capacity(data.len());
         for (i, (s, pts)) in self.series.iter().zip(&data).enumerate() {
             let colour = COLOURS[i % COLOURS.len()];
-            let screen: Vec<(f64, f64)> = pts
-                .iter()
-                .map(|&(x, y)| (sx(x), sy(y)))
-                .filter(|(x, y)| x.is_finite() && y.is_finite())
-                .collect();
-            let coords: Vec<String> = screen
-                .iter()
-                .map(|(x, y)| format!("{x:.2},{y:.2}"))
-                .collect();
-            let dash = if s.dashed {
-                r#" stroke-dasharray="7,4""#
-            } else {
-                ""
-            };
+            let screen: Vec<(f64, f64)> =
+                pts.iter().map(|&(x, y)| (sx(x), sy(y))).filter(|(x, y)| x.is_finite() && y.is_finite()).collect();
+            let coords: Vec<String> = screen.iter().map(|(x, y)| format!("{x:.2},{y:.2}")).collect();
+            let dash = if s.dashed { r#" stroke-dasharray="7,4""# } else { "" };
             let _ = writeln!(
                 o,
                 r#"<polyline points="{}" fill="none" stroke="{colour}" stroke-width="1.8"{dash}/>"#,
@@ -516,24 +432,15 @@ impl Plot {
         for (i, s) in self.series.iter().enumerate() {
             let colour = COLOURS[i % COLOURS.len()];
             let y = TOP + 10.0 + 20.0 * i as f64;
-            let dash = if s.dashed {
-                r#" stroke-dasharray="7,4""#
-            } else {
-                ""
-            };
+            let dash = if s.dashed { r#" stroke-dasharray="7,4""# } else { "" };
             let _ = writeln!(
                 o,
                 r#"<line x1="{LEGEND_X}" y1="{y:.2}" x2="{:.2}" y2="{y:.2}" stroke="{colour}" stroke-width="1.8"{dash}/>"#,
                 LEGEND_X + 30.0
             );
             marker(&mut o, i, LEGEND_X + 15.0, y, colour);
-            let _ = writeln!(
-                o,
-                r#"<text x="{:.2}" y="{:.2}">{}</text>"#,
-                LEGEND_X + 38.0,
-                y + 4.0,
-                xml_escape(&s.label)
-            );
+            let _ =
+                writeln!(o, r#"<text x="{:.2}" y="{:.2}">{}</text>"#, LEGEND_X + 38.0, y + 4.0, xml_escape(&s.label));
         }
         let _ = writeln!(o, "</svg>");
         o
@@ -575,15 +482,9 @@ impl Plot {
                 // Vertices: start and end of the hypotenuse, right-angle
                 // corner (always at the bottom), label anchor.
                 if up {
-                    (
-                        [(x0, y0), (x0 + w, y0 - h), (x0 + w, y0)],
-                        (x0 + w + 5.0, y0 - h / 2.0),
-                    )
+                    ([(x0, y0), (x0 + w, y0 - h), (x0 + w, y0)], (x0 + w + 5.0, y0 - h / 2.0))
                 } else {
-                    (
-                        [(x0, y0 - h), (x0 + w, y0), (x0, y0)],
-                        (x0 - 5.0, y0 - h / 2.0),
-                    )
+                    ([(x0, y0 - h), (x0 + w, y0), (x0, y0)], (x0 - 5.0, y0 - h / 2.0))
                 }
             };
             let n = 12;
@@ -595,12 +496,8 @@ impl Plot {
                     let (tri, lab) = shape(x0, y0);
                     let mut samples = edge_samples(&tri);
                     let dir = if up { 1.0 } else { -1.0 };
-                    samples
-                        .extend((0..4).map(|k| (lab.0 + dir * label_room * k as f64 / 3.0, lab.1)));
-                    let score = samples
-                        .iter()
-                        .map(|&p| distance_to_lines(p, &obstacles))
-                        .fold(f64::INFINITY, f64::min);
+                    samples.extend((0..4).map(|k| (lab.0 + dir * label_room * k as f64 / 3.0, lab.1)));
+                    let score = samples.iter().map(|&p| distance_to_lines(p, &obstacles)).fold(f64::INFINITY, f64::min);
                     // Prefer the clearest spot; on ties, the lowest, left-most one.
                     if best.is_none_or(|b| score > b.2 + 1e-9) {
                         best = Some((x0, y0, score));
@@ -609,11 +506,7 @@ impl Plot {
             }
             let Some((x0, y0, _)) = best else { continue };
             let (tri, lab) = shape(x0, y0);
-            if tri
-                .iter()
-                .chain([&lab])
-                .any(|(x, y)| !x.is_finite() || !y.is_finite())
-            {
+            if tri.iter().chain([&lab]).any(|(x, y)| !x.is_finite() || !y.is_finite()) {
                 continue;
             }
             let coords: Vec<String> = tri.iter().map(|(x, y)| format!("{x:.2},{y:.2}")).collect();
@@ -663,10 +556,7 @@ mod tests {
             series: vec![
                 Series::new("u", h.iter().map(|&h| (h, 0.3 * h * h)).collect()),
                 Series::new("p", h.iter().map(|&h| (h, 0.1 * h)).collect()).dashed(),
-                Series::new(
-                    "bad",
-                    vec![(0.0, 1.0), (-1.0, 2.0), (0.1, f64::NAN), (0.2, 0.0)],
-                ),
+                Series::new("bad", vec![(0.0, 1.0), (-1.0, 2.0), (0.1, f64::NAN), (0.2, 0.0)]),
             ],
             reference_slopes: vec![(2.0, "rate 2".into()), (1.0, "rate 1".into())],
         }
@@ -691,10 +581,7 @@ mod tests {
         // Linear axes with NaN/inf values, and a plot with no usable data.
         p.log_x = false;
         p.log_y = false;
-        p.series.push(Series::new(
-            "huge",
-            vec![(f64::INFINITY, 1.0), (1.0, f64::NEG_INFINITY)],
-        ));
+        p.series.push(Series::new("huge", vec![(f64::INFINITY, 1.0), (1.0, f64::NEG_INFINITY)]));
         let svg = p.to_svg();
         assert!(!svg.contains("NaN") && !svg.contains("inf"));
         let empty = Plot {
@@ -708,10 +595,7 @@ mod tests {
         assert!(!svg.contains("NaN") && !svg.contains("inf"));
         assert_eq!(svg.matches("<polyline").count(), 1);
         // Constant data on linear axes.
-        let flat = Plot {
-            series: vec![Series::new("c", vec![(1.0, 5.0), (1.0, 5.0)])],
-            ..Plot::default()
-        };
+        let flat = Plot { series: vec![Series::new("c", vec![(1.0, 5.0), (1.0, 5.0)])], ..Plot::default() };
         assert!(!flat.to_svg().contains("NaN"));
     }
 

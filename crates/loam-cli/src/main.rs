@@ -4,10 +4,10 @@ use anyhow::Context;
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use loam_io::{run_scene, LoadedScene};
-use tracing_subscriber::filter::LevelFilter;
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 use std::process::ExitCode;
+use tracing_subscriber::filter::LevelFilter;
 
 #[derive(Parser)]
 #[command(name = "loam", version, about = "Implicit material point method for geotechnics")]
@@ -107,7 +107,9 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             let out = out.unwrap_or_else(|| {
                 PathBuf::from("out").join(scene.file_stem().map(|s| s.to_owned()).unwrap_or_default())
             });
-            if let loam_io::scene::AnalysisSpec::QuasiStatic { strength_reduction: Some(srf), .. } = &loaded.scene.analysis {
+            if let loam_io::scene::AnalysisSpec::QuasiStatic { strength_reduction: Some(srf), .. } =
+                &loaded.scene.analysis
+            {
                 if !quiet {
                     println!(
                         "strength reduction: bisecting F between {} and {} to {}, one trial per row in {}",

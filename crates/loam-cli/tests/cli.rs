@@ -34,7 +34,8 @@ fn log_levels_follow_the_flags() {
     let scene = example("column.ron");
     let run = |flags: &[&str]| {
         let out = tempfile::tempdir().unwrap();
-        let mut args: Vec<&std::ffi::OsStr> = vec!["run".as_ref(), scene.as_os_str(), "--out".as_ref(), out.path().as_os_str()];
+        let mut args: Vec<&std::ffi::OsStr> =
+            vec!["run".as_ref(), scene.as_os_str(), "--out".as_ref(), out.path().as_os_str()];
         args.extend(flags.iter().map(std::ffi::OsStr::new));
         let o = loam(&args);
         assert!(o.status.success(), "{flags:?}: {}", String::from_utf8_lossy(&o.stderr));
@@ -43,7 +44,10 @@ fn log_levels_follow_the_flags() {
     let quiet_default = run(&[]);
     assert!(!quiet_default.contains("linear solver") && !quiet_default.contains("DEBUG"), "stderr: {quiet_default}");
     let debug = run(&["-vv"]);
-    assert!(debug.contains("linear solver chosen") && debug.contains("DEBUG") && debug.contains("newton"), "stderr: {debug}");
+    assert!(
+        debug.contains("linear solver chosen") && debug.contains("DEBUG") && debug.contains("newton"),
+        "stderr: {debug}"
+    );
     let o = loam(&["run".as_ref(), scene.as_os_str(), "-q".as_ref(), "-v".as_ref()]);
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("cannot be used with"));

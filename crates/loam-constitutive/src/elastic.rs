@@ -19,16 +19,10 @@ impl Elastic {
     /// Validates `E > 0` and `-1 < ν < 0.5` (strict: ν = 0.5 makes λ infinite).
     pub fn new(young: f64, poisson: f64) -> Result<Self, ConstitutiveError> {
         if !(young.is_finite() && young > 0.0) {
-            return Err(ConstitutiveError::InvalidParameter {
-                name: "young",
-                value: young,
-            });
+            return Err(ConstitutiveError::InvalidParameter { name: "young", value: young });
         }
         if !(poisson.is_finite() && poisson > -1.0 && poisson < 0.5) {
-            return Err(ConstitutiveError::InvalidParameter {
-                name: "poisson",
-                value: poisson,
-            });
+            return Err(ConstitutiveError::InvalidParameter { name: "poisson", value: poisson });
         }
         Ok(Self { young, poisson })
     }
@@ -78,11 +72,7 @@ impl ConstitutiveLaw for Elastic {
         _h_out: &mut [f64],
     ) -> Result<StressUpdate, ConstitutiveError> {
         check_finite(eps_trial, "trial strain")?;
-        Ok(StressUpdate {
-            stress: self.stress(eps_trial),
-            elastic_strain: *eps_trial,
-            tangent: self.stiffness(),
-        })
+        Ok(StressUpdate { stress: self.stress(eps_trial), elastic_strain: *eps_trial, tangent: self.stiffness() })
     }
 
     fn stored_energy(&self, eps: &Matrix3<f64>) -> f64 {
@@ -117,10 +107,7 @@ mod tests {
         let law = Elastic::new(1.0, 0.2).unwrap();
         let mut e = Matrix3::zeros();
         e[(0, 0)] = f64::INFINITY;
-        assert!(matches!(
-            law.update(&e, &[], &mut []),
-            Err(ConstitutiveError::NonFinite { .. })
-        ));
+        assert!(matches!(law.update(&e, &[], &mut []), Err(ConstitutiveError::NonFinite { .. })));
     }
 
     #[test]

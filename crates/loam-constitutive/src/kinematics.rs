@@ -10,11 +10,7 @@ use nalgebra::Matrix3;
 use crate::tensor::{b_operator, idx, log_derivative_spectral, spectral, Spectral, Tensor4};
 use crate::{check_finite, ConstitutiveError, ConstitutiveLaw, StressUpdate};
 
-fn check_history(
-    law: &dyn ConstitutiveLaw,
-    h_n: &[f64],
-    h_out: &[f64],
-) -> Result<(), ConstitutiveError> {
+fn check_history(law: &dyn ConstitutiveLaw, h_n: &[f64], h_out: &[f64]) -> Result<(), ConstitutiveError> {
     let expected = law.history_len();
     for got in [h_n.len(), h_out.len()] {
         if got != expected {
@@ -73,9 +69,7 @@ pub fn finite_strain_update(
     check_finite(delta_f, "deformation-gradient increment")?;
     check_finite(be_n, "elastic left Cauchy-Green tensor")?;
     if !j_total.is_finite() {
-        return Err(ConstitutiveError::NonFinite {
-            what: "total Jacobian",
-        });
+        return Err(ConstitutiveError::NonFinite { what: "total Jacobian" });
     }
     if j_total <= 0.0 {
         return Err(ConstitutiveError::NonPositiveJacobian { j: j_total });
@@ -93,9 +87,7 @@ pub fn finite_strain_update(
     let spec = spectral(&b_tr)?;
     let min = spec.min_value();
     if min <= 0.0 {
-        return Err(ConstitutiveError::NotPositiveDefinite {
-            min_eigenvalue: min,
-        });
+        return Err(ConstitutiveError::NotPositiveDefinite { min_eigenvalue: min });
     }
     let eps_tr = spec.map(|l| 0.5 * l.ln());
 
@@ -119,12 +111,7 @@ pub fn finite_strain_update(
         }
     }
 
-    Ok(FiniteStrainUpdate {
-        cauchy: sigma,
-        kirchhoff: tau,
-        be,
-        spatial_tangent: a,
-    })
+    Ok(FiniteStrainUpdate { cauchy: sigma, kirchhoff: tau, be, spatial_tangent: a })
 }
 
 /// `b^e = exp(2 ε^e)`, avoiding a second eigen-decomposition in the common cases: an

@@ -27,10 +27,10 @@ mod mohr_coulomb;
 mod von_mises;
 
 pub use elastic::Elastic;
-pub use mohr_coulomb::{MohrCoulomb, MohrCoulombRegion, MohrCoulombReturn, Softening};
-pub use von_mises::{VonMises, VonMisesRegion};
 pub use kinematics::{finite_strain_update, small_strain_update, FiniteStrainUpdate};
+pub use mohr_coulomb::{MohrCoulomb, MohrCoulombRegion, MohrCoulombReturn, Softening};
 pub use tensor::Tensor4;
+pub use von_mises::{VonMises, VonMisesRegion};
 
 use nalgebra::Matrix3;
 
@@ -51,11 +51,7 @@ pub enum ConstitutiveError {
     #[error("history slice has length {got}, law needs {expected}")]
     HistoryLength { expected: usize, got: usize },
     #[error("{law} return mapping did not converge after {iterations} iterations (residual {residual})")]
-    ReturnMappingFailed {
-        law: &'static str,
-        iterations: usize,
-        residual: f64,
-    },
+    ReturnMappingFailed { law: &'static str, iterations: usize, residual: f64 },
 }
 
 /// Output of a small-strain return mapping.
@@ -105,7 +101,10 @@ pub trait ConstitutiveLaw: Send + Sync + std::fmt::Debug {
     /// (Griffiths & Lane 1999): c/F and tan φ/F, the dilation capped at the reduced
     /// friction, yield stresses over F. `None` for a law without a strength (elastic); an
     /// error where the reduced parameters are invalid.
-    fn with_strength_reduced(&self, factor: f64) -> Option<Result<std::sync::Arc<dyn ConstitutiveLaw>, ConstitutiveError>> {
+    fn with_strength_reduced(
+        &self,
+        factor: f64,
+    ) -> Option<Result<std::sync::Arc<dyn ConstitutiveLaw>, ConstitutiveError>> {
         let _ = factor;
         None
     }

@@ -211,9 +211,7 @@ fn dev3(v: &Vector3<f64>) -> Vector3<f64> {
 impl Surface {
     fn f(self, sig: &Vector3<f64>, p: &Params, t: f64) -> f64 {
         match self {
-            Surface::Mc(i, j) => {
-                (1.0 + p.sphi) * sig[i] - (1.0 - p.sphi) * sig[j] - 2.0 * p.c * p.cphi
-            }
+            Surface::Mc(i, j) => (1.0 + p.sphi) * sig[i] - (1.0 - p.sphi) * sig[j] - 2.0 * p.c * p.cphi,
             Surface::Cut(i) => sig[i] - t,
         }
     }
@@ -242,8 +240,7 @@ impl Surface {
     fn df(self, sig: &Vector3<f64>, p: &Params) -> f64 {
         match self {
             Surface::Mc(i, j) => {
-                p.cphi * p.dphi * (sig[i] + sig[j]) - 2.0 * p.dc * p.cphi
-                    + 2.0 * p.c * p.sphi * p.dphi
+                p.cphi * p.dphi * (sig[i] + sig[j]) - 2.0 * p.dc * p.cphi + 2.0 * p.c * p.sphi * p.dphi
             }
             Surface::Cut(_) => 0.0,
         }
@@ -305,20 +302,8 @@ struct Candidate {
 
 impl MohrCoulomb {
     /// Angles in radians. Validates c ≥ 0, 0 ≤ φ < π/2, 0 ≤ ψ ≤ φ (all finite).
-    pub fn new(
-        elastic: Elastic,
-        cohesion: f64,
-        friction: f64,
-        dilation: f64,
-    ) -> Result<Self, ConstitutiveError> {
-        let law = Self {
-            elastic,
-            cohesion,
-            friction,
-            dilation,
-            tension_cutoff: None,
-            softening: None,
-        };
+    pub fn new(elastic: Elastic, cohesion: f64, friction: f64, dilation: f64) -> Result<Self, ConstitutiveError> {
+        let law = Self { elastic, cohesion, friction, dilation, tension_cutoff: None, softening: None };
         law.validate()?;
         Ok(law)
     }
@@ -330,12 +315,7 @@ impl MohrCoulomb {
         friction_deg: f64,
         dilation_deg: f64,
     ) -> Result<Self, ConstitutiveError> {
-        Self::new(
-            elastic,
-            cohesion,
-            friction_deg.to_radians(),
-            dilation_deg.to_radians(),
-        )
+        Self::new(elastic, cohesion, friction_deg.to_radians(), dilation_deg.to_radians())
     }
 
     /// Adds the cut-off plane σ₁ ≤ σ_t; σ_t must be finite and, for φ > 0, at most the peak
@@ -366,9 +346,7 @@ impl MohrCoulomb {
     }
 
     fn validate(&self) -> Result<(), ConstitutiveError> {
-        let bad = |name: &'static str, value: f64| {
-            Err(ConstitutiveError::InvalidParameter { name, value })
-        };
+        let bad = |name: &'static str, value: f64| Err(ConstitutiveError::InvalidParameter { name, value });
         Elastic::new(self.elastic.young, self.elastic.poisson)?;
         let half_pi = std::f64::consts::FRAC_PI_2;
         if !(self.cohesion.is_finite() && self.cohesion >= 0.0) {
@@ -398,10 +376,7 @@ impl MohrCoulomb {
             if !(s.friction.is_finite() && s.friction >= 0.0 && s.friction <= self.friction) {
                 return bad("residual friction", s.friction);
             }
-            if !(s.dilation.is_finite()
-                && s.dilation >= 0.0
-                && s.dilation <= self.dilation
-                && s.dilation <= s.friction)
+            if !(s.dilation.is_finite() && s.dilation >= 0.0 && s.dilation <= self.dilation && s.dilation <= s.friction)
             {
                 return bad("residual dilation", s.dilation);
             }
@@ -414,11 +389,8 @@ impl MohrCoulomb {
 
     /// True when the softening law makes c, φ or ψ vary.
     fn softens(&self) -> bool {
-        self.softening.is_some_and(|s| {
-            s.cohesion != self.cohesion
-                || s.friction != self.friction
-                || s.dilation != self.dilation
-        })
+        self.softening
+            .is_some_and(|s| s.cohesion != self.cohesion || s.friction != self.friction || s.dilation != self.dilation)
     }
 
     /// (c, φ, ψ) at accumulated plastic strain κ (angles in radians).
@@ -460,16 +432,7 @@ impl MohrCoulomb {
             (Branch::Residual, Some(s)) => (s.cohesion, s.friction, s.dilation, 0.0, 0.0, 0.0),
             _ => (self.cohesion, self.friction, self.dilation, 0.0, 0.0, 0.0),
         };
-        Params {
-            c,
-            sphi: phi.sin(),
-            cphi: phi.cos(),
-            spsi: psi.sin(),
-            cpsi: psi.cos(),
-            dc,
-            dphi,
-            dpsi,
-        }
+        Params { c, sphi: phi.sin(), cphi: phi.cos(), spsi: psi.sin(), cpsi: psi.cos(), dc, dphi, dpsi }
     }
 
     /// (f_MC, f_t) of principal stresses in any order: f_MC = max over the six planes, f_t =
@@ -484,11 +447,7 @@ impl MohrCoulomb {
     /// Yield function values (f_MC, f_t) of a stress tensor at accumulated plastic strain κ
     /// (f_t = None without cut-off). f_MC is the Mohr–Coulomb function of the ordered
     /// principal stresses, f_t = σ₁ − σ_t.
-    pub fn yield_function(
-        &self,
-        stress: &Matrix3<f64>,
-        kappa: f64,
-    ) -> Result<(f64, Option<f64>), ConstitutiveError> {
+    pub fn yield_function(&self, stress: &Matrix3<f64>, kappa: f64) -> Result<(f64, Option<f64>), ConstitutiveError> {
         let s = spectral(stress)?;
         let p = self.params(kappa, self.branch_at(kappa));
         let (f, ft) = self.yield_principal(&s.values, &p);
@@ -551,8 +510,7 @@ impl MohrCoulomb {
         let mut last = f64::NAN;
         for _ in 0..MAX_ITERATIONS {
             let p = self.params(kappa, branch);
-            let bs: [Vector3<f64>; 3] =
-                std::array::from_fn(|j| set.get(j).map_or(Vector3::zeros(), |s| s.b(&p)));
+            let bs: [Vector3<f64>; 3] = std::array::from_fn(|j| set.get(j).map_or(Vector3::zeros(), |s| s.b(&p)));
             let mut eps_p = Vector3::zeros();
             let mut dbsum = Vector3::zeros();
             for j in 0..m {
@@ -564,11 +522,7 @@ impl MohrCoulomb {
             let nw = w.norm();
             // ‖dev Δε^p‖ is not differentiable at 0 (e.g. hydrostatic flow at the cut-off
             // apex): below round-off level use the zero subgradient.
-            let what = if nw > 1e-14 * eps_p.norm() {
-                w / nw
-            } else {
-                Vector3::zeros()
-            };
+            let what = if nw > 1e-14 * eps_p.norm() { w / nw } else { Vector3::zeros() };
 
             let mut r = Vector4::zeros();
             let mut jm = Matrix4::identity();
@@ -595,8 +549,7 @@ impl MohrCoulomb {
             let rf = (0..m).map(|j| r[j].abs()).fold(0.0, f64::max);
             last = rf / tr.scale;
             // κ residual relative to κ or, for κ ≈ 0, to the plastic strain it comes from.
-            let conv = rf <= NEWTON_TOL * tr.scale
-                && r[3].abs() <= NEWTON_TOL * kappa.abs().max(eps_p.norm());
+            let conv = rf <= NEWTON_TOL * tr.scale && r[3].abs() <= NEWTON_TOL * kappa.abs().max(eps_p.norm());
             // Singular local system: Hadamard ratio |det| / Π ‖row‖.
             let hadamard: f64 = jm.row_iter().map(|row| row.norm()).product();
             let det = jm.determinant();
@@ -622,15 +575,7 @@ impl MohrCoulomb {
                 let jp = dsig * tr.de;
                 let gmax = dg[..m].iter().fold(0.0f64, |a, &v| a.max(v.abs()));
                 let flow_ok = dg[..m].iter().all(|&v| v >= -1e-12 * gmax);
-                return Ok(Some(Candidate {
-                    region,
-                    sig,
-                    deps_p: eps_p,
-                    kappa,
-                    branch,
-                    jp,
-                    flow_ok,
-                }));
+                return Ok(Some(Candidate { region, sig, deps_p: eps_p, kappa, branch, jp, flow_ok }));
             }
             if conv {
                 polished = true;
@@ -641,20 +586,12 @@ impl MohrCoulomb {
             }
             kappa = (kappa + delta[3]).max(tr.kappa_n);
         }
-        Err(ConstitutiveError::ReturnMappingFailed {
-            law: "mohr-coulomb",
-            iterations: MAX_ITERATIONS,
-            residual: last,
-        })
+        Err(ConstitutiveError::ReturnMappingFailed { law: "mohr-coulomb", iterations: MAX_ITERATIONS, residual: last })
     }
 
     /// Vertex σ₁ = σ₂ = σ_t on the MC surface: σ₃ = ((1 + sin φ) σ_t − 2c cos φ)/(1 − sin φ),
     /// with κ from the scalar equation κ = κ_n + √(2/3)/(2G) ‖dev(σ_tr − σ_V(κ))‖.
-    fn solve_corner12(
-        &self,
-        tr: &Trial,
-        branch: Branch,
-    ) -> Result<Option<Candidate>, ConstitutiveError> {
+    fn solve_corner12(&self, tr: &Trial, branch: Branch) -> Result<Option<Candidate>, ConstitutiveError> {
         let Some(t) = self.tension_cutoff else {
             return Ok(None);
         };
@@ -673,11 +610,7 @@ impl MohrCoulomb {
             let dsigv = Vector3::new(0.0, 0.0, ds3);
             let u = dev3(&(tr.sig - sigv));
             let nu = u.norm();
-            let uhat = if nu > 1e-14 * tr.sig.norm() {
-                u / nu
-            } else {
-                Vector3::zeros()
-            };
+            let uhat = if nu > 1e-14 * tr.sig.norm() { u / nu } else { Vector3::zeros() };
             let r = kappa - tr.kappa_n - beta * nu;
             let dr = 1.0 + beta * uhat.dot(&dsigv);
             if !(r.is_finite() && dr.is_finite()) || dr.abs() < 1e-12 {
@@ -709,11 +642,7 @@ impl MohrCoulomb {
             }
             kappa = (kappa - r / dr).max(tr.kappa_n);
         }
-        Err(ConstitutiveError::ReturnMappingFailed {
-            law: "mohr-coulomb",
-            iterations: MAX_ITERATIONS,
-            residual: last,
-        })
+        Err(ConstitutiveError::ReturnMappingFailed { law: "mohr-coulomb", iterations: MAX_ITERATIONS, residual: last })
     }
 
     /// Apex σ = c cot φ I. Δε^p = ε_tr − Dᵉ⁻¹σ has deviatoric part dev ε_tr, so κ is
@@ -723,11 +652,7 @@ impl MohrCoulomb {
         let nde = de.norm();
         // Zero subgradient of ‖dev ε_tr‖ for a (round-off) hydrostatic trial, which is what
         // a symmetric difference quotient sees.
-        let what = if nde > 1e-14 * tr.e.norm() {
-            de / nde
-        } else {
-            Vector3::zeros()
-        };
+        let what = if nde > 1e-14 * tr.e.norm() { de / nde } else { Vector3::zeros() };
         let kappa = tr.kappa_n + alpha() * nde;
         let branch = self.branch_at(kappa);
         let p = self.params(kappa, branch);
@@ -740,26 +665,11 @@ impl MohrCoulomb {
         let sig = Vector3::repeat(pa);
         let jp = Vector3::repeat(1.0) * (what * (dpa * alpha())).transpose();
         let deps_p = tr.de_inv * (tr.sig - sig);
-        let gens = [
-            Mc(0, 2).b(&p),
-            Mc(1, 2).b(&p),
-            Mc(0, 1).b(&p),
-            Mc(2, 0).b(&p),
-            Mc(2, 1).b(&p),
-            Mc(1, 0).b(&p),
-        ];
+        let gens = [Mc(0, 2).b(&p), Mc(1, 2).b(&p), Mc(0, 1).b(&p), Mc(2, 0).b(&p), Mc(2, 1).b(&p), Mc(1, 0).b(&p)];
         if !(sig.iter().chain(jp.iter()).all(|v| v.is_finite())) {
             return None;
         }
-        Some(Candidate {
-            region: R::Apex,
-            sig,
-            deps_p,
-            kappa,
-            branch,
-            jp,
-            flow_ok: in_cone(&deps_p, &gens),
-        })
+        Some(Candidate { region: R::Apex, sig, deps_p, kappa, branch, jp, flow_ok: in_cone(&deps_p, &gens) })
     }
 
     /// The stress update with its return region and diagnostics.
@@ -777,9 +687,7 @@ impl MohrCoulomb {
         }
         let (kappa_n, evp_n) = (h_n[0], h_n[1]);
         if !(kappa_n.is_finite() && kappa_n >= 0.0 && evp_n.is_finite()) {
-            return Err(ConstitutiveError::NonFinite {
-                what: "Mohr-Coulomb history",
-            });
+            return Err(ConstitutiveError::NonFinite { what: "Mohr-Coulomb history" });
         }
         let eps = (eps_trial + eps_trial.transpose()) * 0.5;
         let (lambda, g) = self.elastic.lame();
@@ -790,19 +698,13 @@ impl MohrCoulomb {
         let e = Vector3::from_fn(|a, _| spec.values[order[a]]);
         let n = Matrix3::from_fn(|r, c| spec.vectors[(r, order[c])]);
         let de = Matrix3::repeat(lambda) + Matrix3::identity() * (2.0 * g);
-        let de_inv =
-            (Matrix3::identity() - Matrix3::repeat(lambda / (3.0 * lambda + 2.0 * g))) / (2.0 * g);
+        let de_inv = (Matrix3::identity() - Matrix3::repeat(lambda / (3.0 * lambda + 2.0 * g))) / (2.0 * g);
         let sig_tr = de * e;
         if !sig_tr.iter().all(|v| v.is_finite()) {
-            return Err(ConstitutiveError::NonFinite {
-                what: "Mohr-Coulomb trial stress",
-            });
+            return Err(ConstitutiveError::NonFinite { what: "Mohr-Coulomb trial stress" });
         }
-        let scale = sig_tr
-            .amax()
-            .max(self.cohesion)
-            .max(self.tension_cutoff.map_or(0.0, f64::abs))
-            .max(f64::MIN_POSITIVE);
+        let scale =
+            sig_tr.amax().max(self.cohesion).max(self.tension_cutoff.map_or(0.0, f64::abs)).max(f64::MIN_POSITIVE);
         let branch_n = self.branch_at(kappa_n);
         let p_n = self.params(kappa_n, branch_n);
         let (f_tr, ft_tr) = self.yield_principal(&sig_tr, &p_n);
@@ -824,17 +726,8 @@ impl MohrCoulomb {
             ));
         }
 
-        let tr = Trial {
-            e,
-            sig: sig_tr,
-            kappa_n,
-            de,
-            de_inv,
-            g,
-            scale,
-        };
-        let admissible =
-            |c: &Candidate| self.admissible(&c.sig, &self.params(c.kappa, c.branch), scale);
+        let tr = Trial { e, sig: sig_tr, kappa_n, de, de_inv, g, scale };
+        let admissible = |c: &Candidate| self.admissible(&c.sig, &self.params(c.kappa, c.branch), scale);
         let mut chosen: Option<(Candidate, bool)> = None;
         // Rejected candidates (at most 8 flow regions + 2 vertices; no heap allocation).
         let mut seen: [Option<Candidate>; 10] = [None; 10];
@@ -880,11 +773,7 @@ impl MohrCoulomb {
                 .map(|c| (*c, true));
         }
         let Some((mut c, fallback)) = chosen else {
-            return Err(ConstitutiveError::ReturnMappingFailed {
-                law: "mohr-coulomb",
-                iterations: 0,
-                residual: f_tr,
-            });
+            return Err(ConstitutiveError::ReturnMappingFailed { law: "mohr-coulomb", iterations: 0, residual: f_tr });
         };
 
         // Enforce the equalities the region implies exactly (they hold to round-off).
@@ -908,35 +797,19 @@ impl MohrCoulomb {
         let tangent = assemble(&n, &e, &c.sig, &c.jp, tied);
         check_finite(&stress, "Mohr-Coulomb stress")?;
         if !tangent.iter().all(|v| v.is_finite()) {
-            return Err(ConstitutiveError::NonFinite {
-                what: "Mohr-Coulomb tangent",
-            });
+            return Err(ConstitutiveError::NonFinite { what: "Mohr-Coulomb tangent" });
         }
         h_out[0] = c.kappa;
         h_out[1] = evp_n + c.deps_p.sum();
         Ok((
-            StressUpdate {
-                stress,
-                elastic_strain,
-                tangent,
-            },
-            MohrCoulombReturn {
-                region: c.region,
-                fallback,
-                residual_branch: c.branch == Branch::Residual,
-            },
+            StressUpdate { stress, elastic_strain, tangent },
+            MohrCoulombReturn { region: c.region, fallback, residual_branch: c.branch == Branch::Residual },
         ))
     }
 }
 
 /// Full tangent from the principal one (de Souza Neto Appendix A.5), see module docs.
-fn assemble(
-    n: &Matrix3<f64>,
-    e: &Vector3<f64>,
-    sig: &Vector3<f64>,
-    jp: &Matrix3<f64>,
-    tied: [bool; 3],
-) -> Tensor4 {
+fn assemble(n: &Matrix3<f64>, e: &Vector3<f64>, sig: &Vector3<f64>, jp: &Matrix3<f64>, tied: [bool; 3]) -> Tensor4 {
     let na: [_; 3] = std::array::from_fn(|a| {
         let v = n.column(a);
         flatten(&(v * v.transpose()))
@@ -1021,7 +894,10 @@ impl ConstitutiveLaw for MohrCoulomb {
     /// c/F, φ_F = atan(tan φ / F), ψ_F = min(ψ, φ_F) (a dilation above the reduced
     /// friction would break ψ ≤ φ), the tension cut-off over F (the apex c cot φ is
     /// unchanged) and the residual values of softening alike.
-    fn with_strength_reduced(&self, factor: f64) -> Option<Result<std::sync::Arc<dyn ConstitutiveLaw>, ConstitutiveError>> {
+    fn with_strength_reduced(
+        &self,
+        factor: f64,
+    ) -> Option<Result<std::sync::Arc<dyn ConstitutiveLaw>, ConstitutiveError>> {
         if !(factor.is_finite() && factor > 0.0) {
             return Some(Err(ConstitutiveError::InvalidParameter { name: "strength reduction factor", value: factor }));
         }
@@ -1035,7 +911,12 @@ impl ConstitutiveLaw for MohrCoulomb {
             tension_cutoff: self.tension_cutoff.map(|t| t / factor),
             softening: self.softening.map(|s| {
                 let friction_res = reduce(s.friction);
-                Softening { cohesion: s.cohesion / factor, friction: friction_res, dilation: s.dilation.min(friction_res).min(self.dilation.min(friction)), kappa: s.kappa }
+                Softening {
+                    cohesion: s.cohesion / factor,
+                    friction: friction_res,
+                    dilation: s.dilation.min(friction_res).min(self.dilation.min(friction)),
+                    kappa: s.kappa,
+                }
             }),
         };
         Some(law.validate().map(|()| std::sync::Arc::new(law) as std::sync::Arc<dyn ConstitutiveLaw>))
@@ -1100,77 +981,27 @@ mod tests {
             Err(ConstitutiveError::InvalidParameter { name, .. }) => name,
             other => panic!("expected InvalidParameter, got {other:?}"),
         };
-        assert_eq!(
-            name_of(MohrCoulomb::from_degrees(el(), -1.0, 30.0, 0.0)),
-            "cohesion"
-        );
-        assert_eq!(
-            name_of(MohrCoulomb::from_degrees(el(), f64::NAN, 30.0, 0.0)),
-            "cohesion"
-        );
-        assert_eq!(
-            name_of(MohrCoulomb::from_degrees(el(), 1.0, 90.0, 0.0)),
-            "friction"
-        );
-        assert_eq!(
-            name_of(MohrCoulomb::from_degrees(el(), 1.0, -1.0, 0.0)),
-            "friction"
-        );
-        assert_eq!(
-            name_of(MohrCoulomb::from_degrees(el(), 1.0, 30.0, 31.0)),
-            "dilation"
-        );
-        assert_eq!(
-            name_of(MohrCoulomb::from_degrees(el(), 1.0, 30.0, -1.0)),
-            "dilation"
-        );
+        assert_eq!(name_of(MohrCoulomb::from_degrees(el(), -1.0, 30.0, 0.0)), "cohesion");
+        assert_eq!(name_of(MohrCoulomb::from_degrees(el(), f64::NAN, 30.0, 0.0)), "cohesion");
+        assert_eq!(name_of(MohrCoulomb::from_degrees(el(), 1.0, 90.0, 0.0)), "friction");
+        assert_eq!(name_of(MohrCoulomb::from_degrees(el(), 1.0, -1.0, 0.0)), "friction");
+        assert_eq!(name_of(MohrCoulomb::from_degrees(el(), 1.0, 30.0, 31.0)), "dilation");
+        assert_eq!(name_of(MohrCoulomb::from_degrees(el(), 1.0, 30.0, -1.0)), "dilation");
         let law = MohrCoulomb::from_degrees(el(), 10.0, 30.0, 10.0).unwrap();
         // Apex c cot φ = 17.32: a cut-off above it is rejected, at or below it accepted.
         assert_eq!(name_of(law.with_tension_cutoff(17.4)), "tension_cutoff");
-        assert_eq!(
-            name_of(law.with_tension_cutoff(f64::INFINITY)),
-            "tension_cutoff"
-        );
-        assert!(law
-            .with_tension_cutoff(10.0 / 30f64.to_radians().tan())
-            .is_ok());
+        assert_eq!(name_of(law.with_tension_cutoff(f64::INFINITY)), "tension_cutoff");
+        assert!(law.with_tension_cutoff(10.0 / 30f64.to_radians().tan()).is_ok());
         assert!(law.with_tension_cutoff(-3.0).is_ok());
         // Tresca has no apex: any finite cut-off.
-        assert!(MohrCoulomb::from_degrees(el(), 10.0, 0.0, 0.0)
-            .unwrap()
-            .with_tension_cutoff(1e6)
-            .is_ok());
-        assert_eq!(
-            name_of(law.with_softening(11.0, 20.0, 0.0, 0.1)),
-            "residual cohesion"
-        );
-        assert_eq!(
-            name_of(law.with_softening(1.0, 31.0, 0.0, 0.1)),
-            "residual friction"
-        );
-        assert_eq!(
-            name_of(law.with_softening(1.0, 20.0, 11.0, 0.1)),
-            "residual dilation"
-        );
-        assert_eq!(
-            name_of(law.with_softening(1.0, 5.0, 6.0, 0.1)),
-            "residual dilation"
-        );
-        assert_eq!(
-            name_of(law.with_softening(1.0, 20.0, 0.0, 0.0)),
-            "kappa_res"
-        );
+        assert!(MohrCoulomb::from_degrees(el(), 10.0, 0.0, 0.0).unwrap().with_tension_cutoff(1e6).is_ok());
+        assert_eq!(name_of(law.with_softening(11.0, 20.0, 0.0, 0.1)), "residual cohesion");
+        assert_eq!(name_of(law.with_softening(1.0, 31.0, 0.0, 0.1)), "residual friction");
+        assert_eq!(name_of(law.with_softening(1.0, 20.0, 11.0, 0.1)), "residual dilation");
+        assert_eq!(name_of(law.with_softening(1.0, 5.0, 6.0, 0.1)), "residual dilation");
+        assert_eq!(name_of(law.with_softening(1.0, 20.0, 0.0, 0.0)), "kappa_res");
         assert!(law.with_softening(1.0, 20.0, 0.0, 0.1).is_ok());
-        assert!(MohrCoulomb::from_degrees(
-            Elastic {
-                young: -1.0,
-                poisson: 0.3
-            },
-            1.0,
-            30.0,
-            0.0
-        )
-        .is_err());
+        assert!(MohrCoulomb::from_degrees(Elastic { young: -1.0, poisson: 0.3 }, 1.0, 30.0, 0.0).is_err());
         // Angles are stored in radians.
         assert!((law.friction - 30f64.to_radians()).abs() < 1e-15);
         assert_eq!(law.history_len(), 2);
@@ -1206,17 +1037,9 @@ mod tests {
         assert!(assoc.symmetric_tangent());
         assert!(assoc.with_tension_cutoff(5.0).unwrap().symmetric_tangent());
         // Softening to the same values changes nothing.
-        assert!(assoc
-            .with_softening(10.0, 30.0, 30.0, 0.1)
-            .unwrap()
-            .symmetric_tangent());
-        assert!(!MohrCoulomb::from_degrees(el(), 10.0, 30.0, 20.0)
-            .unwrap()
-            .symmetric_tangent());
-        assert!(!assoc
-            .with_softening(5.0, 30.0, 30.0, 0.1)
-            .unwrap()
-            .symmetric_tangent());
+        assert!(assoc.with_softening(10.0, 30.0, 30.0, 0.1).unwrap().symmetric_tangent());
+        assert!(!MohrCoulomb::from_degrees(el(), 10.0, 30.0, 20.0).unwrap().symmetric_tangent());
+        assert!(!assoc.with_softening(5.0, 30.0, 30.0, 0.1).unwrap().symmetric_tangent());
     }
 
     /// Why softening reports a non-symmetric tangent even for associated flow: κ is the
@@ -1224,14 +1047,10 @@ mod tests {
     /// the two multipliers and the tangent loses major symmetry (cohesion softening only).
     #[test]
     fn associated_softening_edge_is_not_symmetric() {
-        let law = MohrCoulomb::from_degrees(el(), 10.0, 30.0, 30.0)
-            .unwrap()
-            .with_softening(2.0, 30.0, 30.0, 0.05)
-            .unwrap();
+        let law =
+            MohrCoulomb::from_degrees(el(), 10.0, 30.0, 30.0).unwrap().with_softening(2.0, 30.0, 30.0, 0.05).unwrap();
         let eps = strain_for_stress([-60.0, -62.0, -250.0]);
-        let (up, info) = law
-            .update_with_info(&eps, &[0.0, 0.0], &mut [0.0; 2])
-            .unwrap();
+        let (up, info) = law.update_with_info(&eps, &[0.0, 0.0], &mut [0.0; 2]).unwrap();
         assert_eq!(info.region, MohrCoulombRegion::Edge12);
         let d = up.tangent;
         assert!((d - d.transpose()).norm() > 1e-6 * d.norm());
@@ -1240,15 +1059,8 @@ mod tests {
     #[test]
     fn tangent_is_minor_symmetric() {
         let law = MohrCoulomb::from_degrees(el(), 10.0, 30.0, 10.0).unwrap();
-        for s in [
-            [-50.0, -100.0, -250.0],
-            [-60.0, -62.0, -250.0],
-            [300.0, 200.0, -100.0],
-        ] {
-            let d = law
-                .update(&strain_for_stress(s), &[0.0, 0.0], &mut [0.0; 2])
-                .unwrap()
-                .tangent;
+        for s in [[-50.0, -100.0, -250.0], [-60.0, -62.0, -250.0], [300.0, 200.0, -100.0]] {
+            let d = law.update(&strain_for_stress(s), &[0.0, 0.0], &mut [0.0; 2]).unwrap().tangent;
             for i in 0..3 {
                 for j in 0..3 {
                     for k in 0..3 {
@@ -1266,20 +1078,12 @@ mod tests {
 
     #[test]
     fn cone_membership() {
-        let g = [
-            Vector3::new(1.0, 0.0, 0.0),
-            Vector3::new(0.0, 1.0, 0.0),
-            Vector3::new(0.0, 0.0, 1.0),
-        ];
+        let g = [Vector3::new(1.0, 0.0, 0.0), Vector3::new(0.0, 1.0, 0.0), Vector3::new(0.0, 0.0, 1.0)];
         assert!(in_cone(&Vector3::new(1.0, 2.0, 3.0), &g));
         assert!(!in_cone(&Vector3::new(1.0, -2.0, 3.0), &g));
         assert!(in_cone(&Vector3::zeros(), &g));
         // Rank-deficient generators (ψ = 0: deviatoric flow only).
-        let d = [
-            Vector3::new(1.0, 0.0, -1.0),
-            Vector3::new(0.0, 1.0, -1.0),
-            Vector3::new(1.0, -1.0, 0.0),
-        ];
+        let d = [Vector3::new(1.0, 0.0, -1.0), Vector3::new(0.0, 1.0, -1.0), Vector3::new(1.0, -1.0, 0.0)];
         assert!(in_cone(&Vector3::new(2.0, 1.0, -3.0), &d));
         assert!(!in_cone(&Vector3::new(1.0, 1.0, 1.0), &d));
     }

@@ -99,12 +99,8 @@ pub fn spectral(m: &Matrix3<f64>) -> Result<Spectral, ConstitutiveError> {
     let s = (m + m.transpose()) * 0.5;
     // Bounded iteration count: a 3×3 symmetric QR converges in a handful of sweeps, so
     // hitting the limit signals garbage input rather than a hard matrix.
-    let eig =
-        SymmetricEigen::try_new(s, f64::EPSILON, 1000).ok_or(ConstitutiveError::EigenFailed)?;
-    Ok(Spectral {
-        values: eig.eigenvalues,
-        vectors: eig.eigenvectors,
-    })
+    let eig = SymmetricEigen::try_new(s, f64::EPSILON, 1000).ok_or(ConstitutiveError::EigenFailed)?;
+    Ok(Spectral { values: eig.eigenvalues, vectors: eig.eigenvectors })
 }
 
 fn check_spd(s: &Spectral) -> Result<(), ConstitutiveError> {
@@ -112,9 +108,7 @@ fn check_spd(s: &Spectral) -> Result<(), ConstitutiveError> {
     if min > 0.0 && min.is_finite() {
         Ok(())
     } else {
-        Err(ConstitutiveError::NotPositiveDefinite {
-            min_eigenvalue: min,
-        })
+        Err(ConstitutiveError::NotPositiveDefinite { min_eigenvalue: min })
     }
 }
 
@@ -233,12 +227,7 @@ mod tests {
 
     /// Relative difference in the Frobenius norm (reference `b` is never zero here).
     fn rel(a: &[f64], b: &[f64]) -> f64 {
-        let num: f64 = a
-            .iter()
-            .zip(b)
-            .map(|(x, y)| (x - y).powi(2))
-            .sum::<f64>()
-            .sqrt();
+        let num: f64 = a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>().sqrt();
         let den: f64 = b.iter().map(|y| y * y).sum::<f64>().sqrt();
         num / den
     }
@@ -283,10 +272,7 @@ mod tests {
     fn spectral_rejects_nan() {
         let mut b = Matrix3::identity();
         b[(1, 2)] = f64::NAN;
-        assert!(matches!(
-            spectral(&b),
-            Err(ConstitutiveError::NonFinite { .. })
-        ));
+        assert!(matches!(spectral(&b), Err(ConstitutiveError::NonFinite { .. })));
     }
 
     #[test]
@@ -300,10 +286,7 @@ mod tests {
     #[test]
     fn log_rejects_non_spd() {
         let b = Matrix3::from_diagonal(&Vector3::new(1.0, -0.1, 2.0));
-        assert!(matches!(
-            sym_log(&b),
-            Err(ConstitutiveError::NotPositiveDefinite { .. })
-        ));
+        assert!(matches!(sym_log(&b), Err(ConstitutiveError::NotPositiveDefinite { .. })));
         assert!(log_derivative(&b).is_err());
         let z = Matrix3::from_diagonal(&Vector3::new(1.0, 0.0, 2.0));
         assert!(sym_log(&z).is_err());
@@ -343,11 +326,7 @@ mod tests {
 
     #[test]
     fn log_derivative_two_equal_eigenvalues() {
-        for lam in [
-            [1.3, 1.3, 0.6],
-            [2.0, 0.7, 2.0],
-            [0.9, 0.9, 0.9 * (1.0 + 1e-10)],
-        ] {
+        for lam in [[1.3, 1.3, 0.6], [2.0, 0.7, 2.0], [0.9, 0.9, 0.9 * (1.0 + 1e-10)]] {
             let b = spd([0.5, -0.2, 0.8], lam);
             let l = log_derivative(&b).unwrap();
             assert!(l.iter().all(|v| v.is_finite()));

@@ -42,41 +42,23 @@ const YIELD_TOL: f64 = 1e-12;
 impl VonMises {
     /// Validates σ_y > 0 (finite) and −3G < H < ∞ (H ≤ −3G makes the return mapping
     /// ill-posed: Φ(Δγ) would no longer decrease with Δγ). Residual yield stress is 0.
-    pub fn new(
-        elastic: Elastic,
-        yield_stress: f64,
-        hardening: f64,
-    ) -> Result<Self, ConstitutiveError> {
+    pub fn new(elastic: Elastic, yield_stress: f64, hardening: f64) -> Result<Self, ConstitutiveError> {
         // Re-validate the elastic constants: the fields are public.
         let elastic = Elastic::new(elastic.young, elastic.poisson)?;
         if !(yield_stress.is_finite() && yield_stress > 0.0) {
-            return Err(ConstitutiveError::InvalidParameter {
-                name: "yield_stress",
-                value: yield_stress,
-            });
+            return Err(ConstitutiveError::InvalidParameter { name: "yield_stress", value: yield_stress });
         }
         let (_, mu) = elastic.lame();
         if !(hardening.is_finite() && hardening > -3.0 * mu) {
-            return Err(ConstitutiveError::InvalidParameter {
-                name: "hardening",
-                value: hardening,
-            });
+            return Err(ConstitutiveError::InvalidParameter { name: "hardening", value: hardening });
         }
-        Ok(Self {
-            elastic,
-            yield_stress,
-            hardening,
-            residual_yield_stress: 0.0,
-        })
+        Ok(Self { elastic, yield_stress, hardening, residual_yield_stress: 0.0 })
     }
 
     /// Sets the residual yield stress, which must lie in [0, σ_y0].
     pub fn with_residual_yield_stress(mut self, residual: f64) -> Result<Self, ConstitutiveError> {
         if !(residual.is_finite() && residual >= 0.0 && residual <= self.yield_stress) {
-            return Err(ConstitutiveError::InvalidParameter {
-                name: "residual_yield_stress",
-                value: residual,
-            });
+            return Err(ConstitutiveError::InvalidParameter { name: "residual_yield_stress", value: residual });
         }
         self.residual_yield_stress = residual;
         Ok(self)
@@ -102,9 +84,7 @@ impl VonMises {
         }
         let eqps_n = h_n[0];
         if !(eqps_n.is_finite() && eqps_n >= 0.0) {
-            return Err(ConstitutiveError::NonFinite {
-                what: "equivalent plastic strain history",
-            });
+            return Err(ConstitutiveError::NonFinite { what: "equivalent plastic strain history" });
         }
         let eps = (eps_trial + eps_trial.transpose()) * 0.5;
         let (lambda, mu) = self.elastic.lame();
@@ -116,9 +96,7 @@ impl VonMises {
         let s_tr = dev * (2.0 * g);
         let s_norm = s_tr.norm();
         if !(s_norm.is_finite() && vol.is_finite()) {
-            return Err(ConstitutiveError::NonFinite {
-                what: "von Mises trial stress",
-            });
+            return Err(ConstitutiveError::NonFinite { what: "von Mises trial stress" });
         }
         let q_tr = (1.5f64).sqrt() * s_norm;
         let sy_n = self.current_yield_stress(eqps_n);
@@ -172,14 +150,7 @@ impl VonMises {
 
         check_finite(&stress, "von Mises stress")?;
         h_out[0] = eqps_n + dgamma;
-        Ok((
-            StressUpdate {
-                stress,
-                elastic_strain,
-                tangent,
-            },
-            region,
-        ))
+        Ok((StressUpdate { stress, elastic_strain, tangent }, region))
     }
 }
 
@@ -194,7 +165,10 @@ impl ConstitutiveLaw for VonMises {
     }
 
     /// σ_y, H and the residual σ_y over F: the undrained strength c_u = σ_y/√3 over F.
-    fn with_strength_reduced(&self, factor: f64) -> Option<Result<std::sync::Arc<dyn ConstitutiveLaw>, ConstitutiveError>> {
+    fn with_strength_reduced(
+        &self,
+        factor: f64,
+    ) -> Option<Result<std::sync::Arc<dyn ConstitutiveLaw>, ConstitutiveError>> {
         Some(
             VonMises::new(self.elastic, self.yield_stress / factor, self.hardening / factor)
                 .and_then(|law| law.with_residual_yield_stress(self.residual_yield_stress / factor))
@@ -216,8 +190,7 @@ impl ConstitutiveLaw for VonMises {
         h_n: &[f64],
         h_out: &mut [f64],
     ) -> Result<StressUpdate, ConstitutiveError> {
-        self.update_with_region(eps_trial, h_n, h_out)
-            .map(|(u, _)| u)
+        self.update_with_region(eps_trial, h_n, h_out).map(|(u, _)| u)
     }
 
     fn p_wave_modulus(&self) -> f64 {
@@ -266,10 +239,7 @@ mod tests {
         assert!(l.with_residual_yield_stress(0.4).is_ok());
         assert!(matches!(
             VonMises::new(el, 1.0, f64::NAN),
-            Err(ConstitutiveError::InvalidParameter {
-                name: "hardening",
-                ..
-            })
+            Err(ConstitutiveError::InvalidParameter { name: "hardening", .. })
         ));
     }
 
@@ -301,10 +271,7 @@ mod tests {
             // Already on the floor.
             (-2000.0, 25.0, 0.01, VonMisesRegion::Residual),
         ] {
-            let l = VonMises::new(el, 30.0, h)
-                .unwrap()
-                .with_residual_yield_stress(res)
-                .unwrap();
+            let l = VonMises::new(el, 30.0, h).unwrap().with_residual_yield_stress(res).unwrap();
             let mut h_out = [0.0];
             let (up, region) = l.update_with_region(&eps, &[eqps_n], &mut h_out).unwrap();
             assert_eq!(region, expect, "H {h}");
@@ -312,10 +279,7 @@ mod tests {
             let sy = l.current_yield_stress(h_out[0]);
             assert!((q_of(&up.stress) - sy).abs() < 1e-12 * sy, "H {h}");
             // σ = C:ε^e.
-            assert!(
-                (l.elastic.stress(&up.elastic_strain) - up.stress).norm()
-                    < 1e-12 * up.stress.norm()
-            );
+            assert!((l.elastic.stress(&up.elastic_strain) - up.stress).norm() < 1e-12 * up.stress.norm());
             let fd = fd_tangent(&l, &eps, &[eqps_n]);
             let r = (up.tangent - fd).norm() / up.tangent.norm();
             // Brief: relative difference ≤ 1e-6.
@@ -337,10 +301,7 @@ mod tests {
     fn bad_input_is_an_error() {
         let l = law();
         let mut e = Matrix3::zeros();
-        assert!(matches!(
-            l.update(&e, &[], &mut [0.0]),
-            Err(ConstitutiveError::HistoryLength { .. })
-        ));
+        assert!(matches!(l.update(&e, &[], &mut [0.0]), Err(ConstitutiveError::HistoryLength { .. })));
         assert!(l.update(&e, &[f64::NAN], &mut [0.0]).is_err());
         e[(1, 2)] = f64::NAN;
         assert!(l.update(&e, &[0.0], &mut [0.0]).is_err());

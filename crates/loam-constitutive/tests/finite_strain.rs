@@ -3,12 +3,9 @@
 //! `J a : g = δτ − τ gᵀ` (f_int per reference volume is τ_ij ∂N/∂x_j and
 //! δ(∂N/∂x_j) = −∂N/∂x_m g_mj).
 
-use loam_constitutive::tensor::{
-    b_operator, contract, idx, isotropic, log_derivative, sym_exp, sym_identity, Tensor4,
-};
+use loam_constitutive::tensor::{b_operator, contract, idx, isotropic, log_derivative, sym_exp, sym_identity, Tensor4};
 use loam_constitutive::{
-    finite_strain_update, small_strain_update, ConstitutiveError, ConstitutiveLaw, Elastic,
-    StressUpdate,
+    finite_strain_update, small_strain_update, ConstitutiveError, ConstitutiveLaw, Elastic, StressUpdate,
 };
 use nalgebra::{Matrix3, Rotation3, Vector3};
 use proptest::prelude::*;
@@ -51,14 +48,8 @@ impl ConstitutiveLaw for Quadratic {
     fn name(&self) -> &'static str {
         "quadratic"
     }
-    fn update(
-        &self,
-        e: &Matrix3<f64>,
-        _: &[f64],
-        _: &mut [f64],
-    ) -> Result<StressUpdate, ConstitutiveError> {
-        let stress =
-            Matrix3::identity() * (self.lambda * e.trace()) + e * (2.0 * self.mu) + e * e * self.c;
+    fn update(&self, e: &Matrix3<f64>, _: &[f64], _: &mut [f64]) -> Result<StressUpdate, ConstitutiveError> {
+        let stress = Matrix3::identity() * (self.lambda * e.trace()) + e * (2.0 * self.mu) + e * e * self.c;
         let mut d = isotropic(self.lambda, self.mu);
         let dl = |a: usize, b: usize| if a == b { 1.0 } else { 0.0 };
         for i in 0..3 {
@@ -75,11 +66,7 @@ impl ConstitutiveLaw for Quadratic {
                 }
             }
         }
-        Ok(StressUpdate {
-            stress,
-            elastic_strain: *e,
-            tangent: d,
-        })
+        Ok(StressUpdate { stress, elastic_strain: *e, tangent: d })
     }
     fn p_wave_modulus(&self) -> f64 {
         self.lambda + 2.0 * self.mu
@@ -110,12 +97,7 @@ impl ConstitutiveLaw for Relax {
     fn symmetric_tangent(&self) -> bool {
         false
     }
-    fn update(
-        &self,
-        e: &Matrix3<f64>,
-        h_n: &[f64],
-        h_out: &mut [f64],
-    ) -> Result<StressUpdate, ConstitutiveError> {
+    fn update(&self, e: &Matrix3<f64>, h_n: &[f64], h_out: &mut [f64]) -> Result<StressUpdate, ConstitutiveError> {
         let s = self.m.dot(e);
         let ee = e - self.m * (self.beta * s);
         h_out[0] = h_n[0] + self.beta * s.abs();
@@ -123,11 +105,7 @@ impl ConstitutiveLaw for Relax {
         // D = Del (I^s − β m ⊗ m)
         let mf = loam_constitutive::tensor::flatten(&self.m);
         let proj = sym_identity() - mf * mf.transpose() * self.beta;
-        Ok(StressUpdate {
-            stress: self.el.stress(&ee),
-            elastic_strain: ee,
-            tangent: del * proj,
-        })
+        Ok(StressUpdate { stress: self.el.stress(&ee), elastic_strain: ee, tangent: del * proj })
     }
     fn p_wave_modulus(&self) -> f64 {
         self.el.p_wave_modulus()
@@ -139,22 +117,13 @@ impl ConstitutiveLaw for Relax {
 
 fn relax_law() -> Relax {
     let m = mat([0.6, 0.2, 0.0, 0.2, -0.3, 0.1, 0.0, 0.1, 0.4]);
-    Relax {
-        el: Elastic::new(800.0, 0.25).unwrap(),
-        beta: 0.4,
-        m: m / m.norm(),
-    }
+    Relax { el: Elastic::new(800.0, 0.25).unwrap(), beta: 0.4, m: m / m.norm() }
 }
 
 // ---------------------------------------------------------------- the consistency check
 
 /// Returns the relative difference between `J a : g` and `δτ − τ gᵀ`.
-fn consistency(
-    law: &dyn ConstitutiveLaw,
-    df: &Matrix3<f64>,
-    be_n: &Matrix3<f64>,
-    g: &Matrix3<f64>,
-) -> f64 {
+fn consistency(law: &dyn ConstitutiveLaw, df: &Matrix3<f64>, be_n: &Matrix3<f64>, g: &Matrix3<f64>) -> f64 {
     let nh = law.history_len();
     let h_n = vec![0.0; nh];
     let mut h = vec![0.0; nh];
@@ -165,9 +134,7 @@ fn consistency(
         let dfe = (Matrix3::identity() + g * s) * df;
         let je = dfe.determinant() * det_fn;
         let mut h = vec![0.0; nh];
-        finite_strain_update(law, &dfe, be_n, je, &h_n, &mut h)
-            .unwrap()
-            .kirchhoff
+        finite_strain_update(law, &dfe, be_n, je, &h_n, &mut h).unwrap().kirchhoff
     };
     let dtau = (tau_at(FD_EPS) - tau_at(-FD_EPS)) / (2.0 * FD_EPS);
     let lhs = contract(&base.spatial_tangent, g) * j;
@@ -180,11 +147,7 @@ fn elastic() -> Elastic {
 }
 
 fn quadratic() -> Quadratic {
-    Quadratic {
-        lambda: 500.0,
-        mu: 300.0,
-        c: 2000.0,
-    }
+    Quadratic { lambda: 500.0, mu: 300.0, c: 2000.0 }
 }
 
 #[test]
@@ -192,11 +155,7 @@ fn consistency_fixed_cases() {
     let df = mat([1.05, 0.1, -0.02, 0.03, 0.97, 0.04, -0.01, 0.02, 1.01]);
     let be_n = be_from([0.3, -0.5, 0.2], [0.05, -0.1, 0.02]);
     let g = mat([0.3, -0.7, 0.2, 0.5, 0.1, -0.4, -0.6, 0.9, 0.25]);
-    for law in [
-        &elastic() as &dyn ConstitutiveLaw,
-        &quadratic(),
-        &relax_law(),
-    ] {
+    for law in [&elastic() as &dyn ConstitutiveLaw, &quadratic(), &relax_law()] {
         let r = consistency(law, &df, &be_n, &g);
         assert!(r < TOL, "{}: rel {r}", law.name());
     }
@@ -319,14 +278,10 @@ fn hencky_uniaxial_closed_form() {
     let law = Elastic::new(young, 0.0).unwrap();
     for stretch in [0.5, 0.8, 1.0, 1.3, 2.0] {
         let df = Matrix3::from_diagonal(&Vector3::new(1.0, stretch, 1.0));
-        let up =
-            finite_strain_update(&law, &df, &Matrix3::identity(), stretch, &[], &mut []).unwrap();
+        let up = finite_strain_update(&law, &df, &Matrix3::identity(), stretch, &[], &mut []).unwrap();
         let expect = young * f64::ln(stretch) / stretch;
         // Closed form σ_yy = E ln λ / λ; only round-off in ln and the decomposition.
-        assert!(
-            (up.cauchy[(1, 1)] - expect).abs() < 1e-12 * young,
-            "λ {stretch}"
-        );
+        assert!((up.cauchy[(1, 1)] - expect).abs() < 1e-12 * young, "λ {stretch}");
         assert!(up.cauchy[(0, 0)].abs() < 1e-12 * young && up.cauchy[(2, 2)].abs() < 1e-12 * young);
         assert!((up.be - df * df).norm() < 1e-14 * 4.0);
     }
@@ -357,15 +312,7 @@ fn rigid_rotation_rotates_state() {
 #[test]
 fn identity_step_keeps_state_and_gives_small_strain_tangent() {
     let law = elastic();
-    let up = finite_strain_update(
-        &law,
-        &Matrix3::identity(),
-        &Matrix3::identity(),
-        1.0,
-        &[],
-        &mut [],
-    )
-    .unwrap();
+    let up = finite_strain_update(&law, &Matrix3::identity(), &Matrix3::identity(), 1.0, &[], &mut []).unwrap();
     assert_eq!(up.kirchhoff, Matrix3::zeros());
     assert!(up.spatial_tangent.iter().all(|v| v.is_finite()));
     // At zero strain, a = D:I^s ... acting as D on sym(g): (1/2)·D·2I^s = D.
@@ -383,10 +330,7 @@ fn relax_law_updates_be_and_history() {
     assert!(h[0] > 0.5);
     let b_tr = df * be_n * df.transpose();
     let eps_tr = loam_constitutive::tensor::sym_log(&b_tr).unwrap() * 0.5;
-    let ee = law
-        .update(&eps_tr, &[0.0], &mut [0.0])
-        .unwrap()
-        .elastic_strain;
+    let ee = law.update(&eps_tr, &[0.0], &mut [0.0]).unwrap().elastic_strain;
     assert!((up.be - sym_exp(&(ee * 2.0)).unwrap()).norm() < 1e-13);
     // Wrong history length is an error, not a panic.
     assert!(matches!(

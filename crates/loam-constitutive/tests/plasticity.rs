@@ -13,8 +13,8 @@
 
 use loam_constitutive::tensor::{central_difference, idx, symmetric_unit_directions, Tensor4};
 use loam_constitutive::{
-    finite_strain_update, small_strain_update, ConstitutiveError, ConstitutiveLaw, Elastic,
-    MohrCoulomb, MohrCoulombRegion, StressUpdate, VonMises, VonMisesRegion,
+    finite_strain_update, small_strain_update, ConstitutiveError, ConstitutiveLaw, Elastic, MohrCoulomb,
+    MohrCoulombRegion, StressUpdate, VonMises, VonMisesRegion,
 };
 use nalgebra::{Matrix3, Rotation3, Vector3};
 use proptest::prelude::*;
@@ -61,11 +61,7 @@ fn fd_tangent(law: &dyn ConstitutiveLaw, eps: &Matrix3<f64>, h_n: &[f64]) -> Ten
 /// the perfectly plastic apexes, where σ is constant) a relative error against ‖D‖ = 0 is
 /// undefined and ‖Dᵉ‖ (`del_norm`) is the reference instead.
 fn tangent_error(d: &Tensor4, fd: &Tensor4, del_norm: f64) -> f64 {
-    let reference = if d.norm() <= 1e-8 * del_norm {
-        del_norm
-    } else {
-        d.norm()
-    };
+    let reference = if d.norm() <= 1e-8 * del_norm { del_norm } else { d.norm() };
     (d - fd).norm() / reference
 }
 
@@ -76,11 +72,7 @@ fn principal(s: &Matrix3<f64>) -> Vector3<f64> {
 }
 
 fn finite(up: &StressUpdate) -> bool {
-    up.stress
-        .iter()
-        .chain(up.elastic_strain.iter())
-        .chain(up.tangent.iter())
-        .all(|v| v.is_finite())
+    up.stress.iter().chain(up.elastic_strain.iter()).chain(up.tangent.iter()).all(|v| v.is_finite())
 }
 
 /// Largest FD error seen per (law, region), printed by `report_fd_errors`
@@ -111,13 +103,7 @@ fn vm_laws() -> Vec<(&'static str, VonMises)> {
     vec![
         ("perfect", VonMises::new(el(), 30.0, 0.0).unwrap()),
         ("hardening", VonMises::new(el(), 30.0, 0.1 * g).unwrap()),
-        (
-            "softening",
-            VonMises::new(el(), 30.0, -0.2 * g)
-                .unwrap()
-                .with_residual_yield_stress(20.0)
-                .unwrap(),
-        ),
+        ("softening", VonMises::new(el(), 30.0, -0.2 * g).unwrap().with_residual_yield_stress(20.0).unwrap()),
     ]
 }
 
@@ -134,10 +120,7 @@ fn von_mises_regions_fd_and_consistency() {
             let dev = up.stress - Matrix3::identity() * (up.stress.trace() / 3.0);
             let q = 1.5f64.sqrt() * dev.norm();
             let sy = law.current_yield_stress(h[0]);
-            assert!(
-                (q - sy).abs() <= F_TOL * sy.max(30.0),
-                "{name}: q {q} σy {sy}"
-            );
+            assert!((q - sy).abs() <= F_TOL * sy.max(30.0), "{name}: q {q} σy {sy}");
             let fd = fd_tangent(&law, &eps, &[eqps_n]);
             let r = tangent_error(&up.tangent, &fd, law.elastic.stiffness().norm());
             record(format!("von Mises {name} {region:?}"), r);
@@ -158,18 +141,10 @@ fn von_mises_rotation_invariance() {
     let q = rot([0.4, -1.1, 0.8]);
     for (name, law) in vm_laws() {
         let a = law.update(&eps, &[0.01], &mut [0.0]).unwrap();
-        let b = law
-            .update(&(q * eps * q.transpose()), &[0.01], &mut [0.0])
-            .unwrap();
+        let b = law.update(&(q * eps * q.transpose()), &[0.01], &mut [0.0]).unwrap();
         // Round-off of a few products (1e-12 relative).
-        assert!(
-            (b.stress - q * a.stress * q.transpose()).norm() < 1e-12 * a.stress.norm(),
-            "{name}"
-        );
-        assert!(
-            (b.tangent - rotate4(&q, &a.tangent)).norm() < 1e-12 * a.tangent.norm(),
-            "{name}"
-        );
+        assert!((b.stress - q * a.stress * q.transpose()).norm() < 1e-12 * a.stress.norm(), "{name}");
+        assert!((b.tangent - rotate4(&q, &a.tangent)).norm() < 1e-12 * a.tangent.norm(), "{name}");
     }
 }
 
@@ -204,10 +179,7 @@ fn von_mises_oedometer_closed_form() {
         let mut h_out = [0.0];
         let (up, _) = {
             let up = small_strain_update(&law, &grad, &ee, &h, &mut h_out).unwrap();
-            let region = law
-                .update_with_region(&(ee + grad), &h, &mut [0.0])
-                .unwrap()
-                .1;
+            let region = law.update_with_region(&(ee + grad), &h, &mut [0.0]).unwrap().1;
             (up, region)
         };
         ee = up.elastic_strain;
@@ -220,10 +192,7 @@ fn von_mises_oedometer_closed_form() {
             assert!((sxx + lambda * eps).abs() < 1e-10 * sy);
             assert_eq!(h[0], 0.0);
         } else if eps >= eps_y * (1.0 + 1e-9) {
-            assert!(
-                (szz - (-k * eps - 2.0 * sy / 3.0)).abs() < 1e-10 * sy,
-                "plastic step {step}: {szz}"
-            );
+            assert!((szz - (-k * eps - 2.0 * sy / 3.0)).abs() < 1e-10 * sy, "plastic step {step}: {szz}");
             assert!((sxx - (szz + sy)).abs() < 1e-10 * sy);
             // Plastic branch slope: D_zzzz = K exactly for perfect plasticity (round-off).
             assert!((up.tangent[(idx(2, 2), idx(2, 2))] - k).abs() < 1e-10 * k);
@@ -305,38 +274,17 @@ fn mc_laws() -> Vec<(&'static str, MohrCoulomb)> {
         ("assoc", mc(10.0, 30.0, 30.0)),
         ("nonassoc", mc(10.0, 30.0, 5.0)),
         ("tresca", mc(10.0, 0.0, 0.0)),
-        (
-            "assoc+cut",
-            mc(10.0, 30.0, 30.0).with_tension_cutoff(5.0).unwrap(),
-        ),
-        (
-            "nonassoc+cut",
-            mc(10.0, 30.0, 10.0).with_tension_cutoff(5.0).unwrap(),
-        ),
-        (
-            "softening",
-            mc(10.0, 30.0, 10.0)
-                .with_softening(2.0, 20.0, 0.0, 0.05)
-                .unwrap(),
-        ),
+        ("assoc+cut", mc(10.0, 30.0, 30.0).with_tension_cutoff(5.0).unwrap()),
+        ("nonassoc+cut", mc(10.0, 30.0, 10.0).with_tension_cutoff(5.0).unwrap()),
+        ("softening", mc(10.0, 30.0, 10.0).with_softening(2.0, 20.0, 0.0, 0.05).unwrap()),
         (
             "softening+cut",
-            mc(10.0, 30.0, 10.0)
-                .with_tension_cutoff(5.0)
-                .unwrap()
-                .with_softening(2.0, 20.0, 0.0, 0.05)
-                .unwrap(),
+            mc(10.0, 30.0, 10.0).with_tension_cutoff(5.0).unwrap().with_softening(2.0, 20.0, 0.0, 0.05).unwrap(),
         ),
-        (
-            "tiny-phi",
-            MohrCoulomb::new(el(), 10.0, 1e-8, 1e-8).unwrap(),
-        ),
+        ("tiny-phi", MohrCoulomb::new(el(), 10.0, 1e-8, 1e-8).unwrap()),
         ("sand", mc(0.0, 35.0, 0.0)),
         ("sand-assoc", mc(0.0, 35.0, 35.0)),
-        (
-            "tresca+cut",
-            mc(10.0, 0.0, 0.0).with_tension_cutoff(5.0).unwrap(),
-        ),
+        ("tresca+cut", mc(10.0, 0.0, 0.0).with_tension_cutoff(5.0).unwrap()),
     ]
 }
 
@@ -346,9 +294,7 @@ fn law_named(name: &str) -> MohrCoulomb {
 
 /// Scale for F_TOL: largest |trial principal stress| or c.
 fn f_scale(law: &MohrCoulomb, sig_tr: &[f64; 3]) -> f64 {
-    sig_tr
-        .iter()
-        .fold(law.cohesion.max(1.0), |a, &v| a.max(v.abs()))
+    sig_tr.iter().fold(law.cohesion.max(1.0), |a, &v| a.max(v.abs()))
 }
 
 /// Checks one plastic update: region, no fallback (unless allowed), consistency for every
@@ -368,10 +314,7 @@ fn check_mc_case(
     assert_eq!(info.region, expect, "{name} {sig_tr:?} κn {kappa_n}");
     assert!(!info.fallback, "{name} {sig_tr:?}: fallback");
     if let Some(r) = expect_residual {
-        assert_eq!(
-            info.residual_branch, r,
-            "{name} {sig_tr:?}: residual branch"
-        );
+        assert_eq!(info.residual_branch, r, "{name} {sig_tr:?}: residual branch");
     }
     assert!(finite(&up));
     // F_TOL for both surfaces.
@@ -383,10 +326,7 @@ fn check_mc_case(
     }
     // κ never decreases; σ = C : ε^e (round-off, 1e-12 relative).
     assert!(h[0] >= kappa_n);
-    assert!(
-        (law.elastic.stress(&up.elastic_strain) - up.stress).norm()
-            <= 1e-12 * scale.max(up.stress.norm())
-    );
+    assert!((law.elastic.stress(&up.elastic_strain) - up.stress).norm() <= 1e-12 * scale.max(up.stress.norm()));
     let fd = fd_tangent(law, &eps, &h_n);
     let r = tangent_error(&up.tangent, &fd, law.elastic.stiffness().norm());
     record(format!("MC {name} {expect:?}"), r);
@@ -424,12 +364,7 @@ fn mc_every_region_fd_and_consistency() {
         ("assoc+cut", [40.0, 35.0, 30.0], 0.0, R::CutoffApex),
         ("nonassoc+cut", [8.0, -5.0, -10.0], 0.0, R::Cutoff),
         ("nonassoc+cut", [30.0, -5.0, -10.0], 0.0, R::CutoffPlane),
-        (
-            "nonassoc+cut",
-            [300.0, 200.0, -100.0],
-            0.0,
-            R::CutoffCorner12,
-        ),
+        ("nonassoc+cut", [300.0, 200.0, -100.0], 0.0, R::CutoffCorner12),
         ("nonassoc+cut", [30.0, 28.0, 26.0], 0.0, R::CutoffApex),
         ("tresca+cut", [8.0, -5.0, -10.0], 0.0, R::Cutoff),
         ("tresca+cut", [9.0, 8.5, -3.0], 0.0, R::CutoffEdge12),
@@ -461,48 +396,12 @@ fn mc_softening_regions_fd_and_consistency() {
         // Crossing κ_res during the step (κ_n = 0.045 < 0.05 < κ_{n+1}).
         ("softening", [-50.0, -100.0, -250.0], 0.045, R::Plane, true),
         ("softening+cut", [8.0, -5.0, -10.0], 0.0, R::Cutoff, false),
-        (
-            "softening+cut",
-            [30.0, -5.0, -10.0],
-            0.0,
-            R::CutoffPlane,
-            false,
-        ),
-        (
-            "softening+cut",
-            [30.0, -5.0, -10.0],
-            0.03,
-            R::CutoffCorner23,
-            false,
-        ),
-        (
-            "softening+cut",
-            [9.0, 8.5, -3.0],
-            0.0,
-            R::CutoffEdge12,
-            false,
-        ),
-        (
-            "softening+cut",
-            [30.0, 28.0, -10.0],
-            0.0,
-            R::CutoffCorner12,
-            false,
-        ),
-        (
-            "softening+cut",
-            [300.0, 200.0, -100.0],
-            0.03,
-            R::CutoffCorner12,
-            true,
-        ),
-        (
-            "softening+cut",
-            [40.0, 35.0, 30.0],
-            0.0,
-            R::CutoffApex,
-            false,
-        ),
+        ("softening+cut", [30.0, -5.0, -10.0], 0.0, R::CutoffPlane, false),
+        ("softening+cut", [30.0, -5.0, -10.0], 0.03, R::CutoffCorner23, false),
+        ("softening+cut", [9.0, 8.5, -3.0], 0.0, R::CutoffEdge12, false),
+        ("softening+cut", [30.0, 28.0, -10.0], 0.0, R::CutoffCorner12, false),
+        ("softening+cut", [300.0, 200.0, -100.0], 0.03, R::CutoffCorner12, true),
+        ("softening+cut", [40.0, 35.0, 30.0], 0.0, R::CutoffApex, false),
     ];
     for &(name, s, k, region, residual) in cases {
         check_mc_case(name, &law_named(name), s, k, region, Some(residual));
@@ -528,11 +427,7 @@ fn mc_strength_softens_linearly() {
     assert_eq!((c0, p0, s0), (10.0, 30f64.to_radians(), 10f64.to_radians()));
     let (c, p, s) = law.strength(0.025);
     // Halfway: exact mid-values up to round-off.
-    assert!(
-        (c - 6.0).abs() < 1e-12
-            && (p - 25f64.to_radians()).abs() < 1e-12
-            && (s - 5f64.to_radians()).abs() < 1e-12
-    );
+    assert!((c - 6.0).abs() < 1e-12 && (p - 25f64.to_radians()).abs() < 1e-12 && (s - 5f64.to_radians()).abs() < 1e-12);
     assert_eq!(law.strength(0.05), law.strength(1.0));
     assert_eq!(law.strength(1.0), (2.0, 20f64.to_radians(), 0.0));
 }
@@ -551,9 +446,7 @@ fn mc_elastic_trial_unchanged() {
     }
     // Zero strain, and with c = 0 (sand): zero stress is admissible, not a plastic state.
     for (name, law) in mc_laws() {
-        let (up, info) = law
-            .update_with_info(&Matrix3::zeros(), &[0.0, 0.0], &mut [0.0; 2])
-            .unwrap();
+        let (up, info) = law.update_with_info(&Matrix3::zeros(), &[0.0, 0.0], &mut [0.0; 2]).unwrap();
         assert_eq!(info.region, R::Elastic, "{name}");
         assert_eq!(up.stress, Matrix3::zeros());
     }
@@ -578,23 +471,13 @@ fn mc_rotation_invariance() {
         let h_n = [k, 0.0];
         let (mut ha, mut hb) = ([0.0; 2], [0.0; 2]);
         let a = law.update(&eps, &h_n, &mut ha).unwrap();
-        let b = law
-            .update(&(q * eps * q.transpose()), &h_n, &mut hb)
-            .unwrap();
+        let b = law.update(&(q * eps * q.transpose()), &h_n, &mut hb).unwrap();
         // Two eigen-decompositions: round-off well inside 1e-10 relative.
         let sc = a.stress.norm();
-        assert!(
-            (b.stress - q * a.stress * q.transpose()).norm() < 1e-10 * sc,
-            "{name} {s:?}"
-        );
-        assert!(
-            (b.elastic_strain - q * a.elastic_strain * q.transpose()).norm() < 1e-10 * eps.norm()
-        );
+        assert!((b.stress - q * a.stress * q.transpose()).norm() < 1e-10 * sc, "{name} {s:?}");
+        assert!((b.elastic_strain - q * a.elastic_strain * q.transpose()).norm() < 1e-10 * eps.norm());
         let dt = law.elastic.stiffness().norm();
-        assert!(
-            (b.tangent - rotate4(&q, &a.tangent)).norm() < 1e-9 * dt,
-            "{name} {s:?}"
-        );
+        assert!((b.tangent - rotate4(&q, &a.tangent)).norm() < 1e-9 * dt, "{name} {s:?}");
         assert!((ha[0] - hb[0]).abs() < 1e-12 * ha[0].max(1e-3));
     }
 }
@@ -622,24 +505,14 @@ fn mc_tangent_symmetry() {
     ] {
         let law = law_named(name);
         let eps = strain_for_stress(&law.elastic, s, [0.3, -0.5, 0.7]);
-        let d = law
-            .update(&eps, &[0.0, 0.0], &mut [0.0; 2])
-            .unwrap()
-            .tangent;
+        let d = law.update(&eps, &[0.0, 0.0], &mut [0.0; 2]).unwrap().tangent;
         assert!((d - d.transpose()).norm() < 1e-12 * dnorm, "{name} {s:?}");
     }
     // ψ ≠ φ: clearly non-symmetric on the plane and the edges (> 1 % of ‖D‖).
-    for s in [
-        [-50.0, -100.0, -250.0],
-        [-60.0, -62.0, -250.0],
-        [-50.0, -240.0, -250.0],
-    ] {
+    for s in [[-50.0, -100.0, -250.0], [-60.0, -62.0, -250.0], [-50.0, -240.0, -250.0]] {
         let law = law_named("nonassoc");
         let eps = strain_for_stress(&law.elastic, s, [0.3, -0.5, 0.7]);
-        let d = law
-            .update(&eps, &[0.0, 0.0], &mut [0.0; 2])
-            .unwrap()
-            .tangent;
+        let d = law.update(&eps, &[0.0, 0.0], &mut [0.0; 2]).unwrap().tangent;
         assert!((d - d.transpose()).norm() > 1e-2 * d.norm(), "{s:?}");
     }
 }
@@ -671,9 +544,8 @@ fn mc_no_nan_at_apex_edges_and_repeated_values() {
         for eps in &strains {
             for kappa_n in [0.0, 0.04, 1.0] {
                 let mut h = [0.0; 2];
-                let (up, info) = law
-                    .update_with_info(eps, &[kappa_n, 0.0], &mut h)
-                    .unwrap_or_else(|e| panic!("{name} {eps}: {e}"));
+                let (up, info) =
+                    law.update_with_info(eps, &[kappa_n, 0.0], &mut h).unwrap_or_else(|e| panic!("{name} {eps}: {e}"));
                 assert!(finite(&up), "{name} {eps} {info:?}");
                 assert!(h.iter().all(|v| v.is_finite()));
                 let sc = law.elastic.stress(eps).amax().max(law.cohesion).max(1.0);
@@ -686,26 +558,19 @@ fn mc_no_nan_at_apex_edges_and_repeated_values() {
     }
     // Hydrostatic tension beyond the apex lands on it (φ > 0) or is elastic (Tresca).
     let eps = Matrix3::identity() * 1e3;
-    let (up, info) = law_named("assoc")
-        .update_with_info(&eps, &[0.0, 0.0], &mut [0.0; 2])
-        .unwrap();
+    let (up, info) = law_named("assoc").update_with_info(&eps, &[0.0, 0.0], &mut [0.0; 2]).unwrap();
     assert_eq!(info.region, R::Apex);
     let apex = 10.0 / 30f64.to_radians().tan();
     // Closed form c cot φ (round-off, 1e-12 relative).
     assert!((up.stress - Matrix3::identity() * apex).norm() < 1e-12 * apex);
     assert_eq!(up.tangent, Tensor4::zeros());
-    let (_, info) = law_named("tresca")
-        .update_with_info(&eps, &[0.0, 0.0], &mut [0.0; 2])
-        .unwrap();
+    let (_, info) = law_named("tresca").update_with_info(&eps, &[0.0, 0.0], &mut [0.0; 2]).unwrap();
     assert_eq!(info.region, R::Elastic);
-    let (up, info) = law_named("tresca+cut")
-        .update_with_info(&eps, &[0.0, 0.0], &mut [0.0; 2])
-        .unwrap();
+    let (up, info) = law_named("tresca+cut").update_with_info(&eps, &[0.0, 0.0], &mut [0.0; 2]).unwrap();
     assert_eq!(info.region, R::CutoffApex);
     // Round-off relative to the trial stress (~1e7 here), 1e-12.
     assert!(
-        (up.stress - Matrix3::identity() * 5.0).norm()
-            < 1e-12 * law_named("tresca+cut").elastic.stress(&eps).norm()
+        (up.stress - Matrix3::identity() * 5.0).norm() < 1e-12 * law_named("tresca+cut").elastic.stress(&eps).norm()
     );
 }
 
@@ -715,25 +580,14 @@ fn mc_tresca_limit_is_continuous() {
     let tresca = law_named("tresca");
     for phi in [1e-8, 1e-6] {
         let near = MohrCoulomb::new(el(), 10.0, phi, phi).unwrap();
-        for s in [
-            [30.0, -20.0, -60.0],
-            [-60.0, -62.0, -250.0],
-            [-50.0, -240.0, -250.0],
-            [500.0, 0.0, -500.0],
-        ] {
+        for s in [[30.0, -20.0, -60.0], [-60.0, -62.0, -250.0], [-50.0, -240.0, -250.0], [500.0, 0.0, -500.0]] {
             let eps = strain_for_stress(&el(), s, [0.3, -0.5, 0.7]);
             let a = tresca.update(&eps, &[0.0, 0.0], &mut [0.0; 2]).unwrap();
             let b = near.update(&eps, &[0.0, 0.0], &mut [0.0; 2]).unwrap();
             // The yield function changes by ~φ(σ₁ + σ₃) + φ² c: bound 10 φ |σ|.
             let sc = f_scale(&tresca, &s);
-            assert!(
-                (a.stress - b.stress).norm() < 10.0 * phi * sc,
-                "φ {phi} {s:?}"
-            );
-            assert!(
-                (a.tangent - b.tangent).norm() < 1e3 * phi * el().stiffness().norm(),
-                "φ {phi} {s:?}"
-            );
+            assert!((a.stress - b.stress).norm() < 10.0 * phi * sc, "φ {phi} {s:?}");
+            assert!((a.tangent - b.tangent).norm() < 1e3 * phi * el().stiffness().norm(), "φ {phi} {s:?}");
         }
     }
 }
@@ -798,10 +652,7 @@ fn mc_triaxial_compression_closed_form() {
         assert!((q[0] - 1e4 * de).abs() < 1e-9 * q_f, "φ {phi}: {}", q[0]);
         // Perfect plasticity: the deviator plateaus at q_f (F_TOL-level consistency).
         let last = *q.last().unwrap();
-        assert!(
-            (last - q_f).abs() < F_TOL * 10.0 * p_c,
-            "φ {phi} ψ {psi}: q {last} vs {q_f}"
-        );
+        assert!((last - q_f).abs() < F_TOL * 10.0 * p_c, "φ {phi} ψ {psi}: q {last} vs {q_f}");
         assert!(q.iter().all(|&v| v <= q_f * (1.0 + 1e-10)));
         // A consistent tangent: the lateral stress condition converges in a few iterations.
         assert!(max_it <= 6, "φ {phi} ψ {psi}: {max_it} iterations");
@@ -817,10 +668,7 @@ fn tresca_and_von_mises_triaxial_limits() {
         let (q, _) = triaxial(&mc(c, 0.0, 0.0), p_c, 300, 1e-4);
         let last = *q.last().unwrap();
         // F_TOL-level consistency at the plateau.
-        assert!(
-            (last - 2.0 * c).abs() < F_TOL * 10.0 * p_c.max(2.0 * c),
-            "p_c {p_c}: {last}"
-        );
+        assert!((last - 2.0 * c).abs() < F_TOL * 10.0 * p_c.max(2.0 * c), "p_c {p_c}: {last}");
     }
     let vm = VonMises::new(el(), 30.0, 0.0).unwrap();
     let (q, _) = triaxial(&vm, 100.0, 300, 1e-4);
@@ -854,16 +702,7 @@ fn plastic_laws_in_finite_strain_driver() {
         let eps = 1e-6;
         let tau_at = |s: f64| {
             let dfe = (Matrix3::identity() + g * s) * df;
-            finite_strain_update(
-                law,
-                &dfe,
-                &be_n,
-                dfe.determinant(),
-                &h_n,
-                &mut vec![0.0; nh],
-            )
-            .unwrap()
-            .kirchhoff
+            finite_strain_update(law, &dfe, &be_n, dfe.determinant(), &h_n, &mut vec![0.0; nh]).unwrap().kirchhoff
         };
         let dtau = (tau_at(eps) - tau_at(-eps)) / (2.0 * eps);
         let lhs = loam_constitutive::tensor::contract(&base.spatial_tangent, &g) * j;
@@ -878,14 +717,8 @@ fn plastic_laws_in_finite_strain_driver() {
 fn mc_errors_not_panics() {
     let law = law_named("assoc");
     let e = Matrix3::zeros();
-    assert!(matches!(
-        law.update(&e, &[0.0], &mut [0.0; 2]),
-        Err(ConstitutiveError::HistoryLength { .. })
-    ));
-    assert!(matches!(
-        law.update(&e, &[0.0; 2], &mut [0.0; 3]),
-        Err(ConstitutiveError::HistoryLength { .. })
-    ));
+    assert!(matches!(law.update(&e, &[0.0], &mut [0.0; 2]), Err(ConstitutiveError::HistoryLength { .. })));
+    assert!(matches!(law.update(&e, &[0.0; 2], &mut [0.0; 3]), Err(ConstitutiveError::HistoryLength { .. })));
     assert!(law.update(&e, &[f64::NAN, 0.0], &mut [0.0; 2]).is_err());
     assert!(law.update(&e, &[-1.0, 0.0], &mut [0.0; 2]).is_err());
     let mut bad = e;
@@ -937,11 +770,7 @@ fn stress_triple() -> impl Strategy<Value = [f64; 3]> {
         prop::array::uniform3(-400.0f64..100.0),
         prop::array::uniform3(-40.0f64..40.0),
         // Near-hydrostatic tension (apex regions).
-        (0.0f64..200.0, prop::array::uniform3(-5.0f64..5.0)).prop_map(|(p, d)| [
-            p + d[0],
-            p + d[1],
-            p + d[2]
-        ]),
+        (0.0f64..200.0, prop::array::uniform3(-5.0f64..5.0)).prop_map(|(p, d)| [p + d[0], p + d[1], p + d[2]]),
         // Two nearly equal values (edges).
         (-300.0f64..50.0, -300.0f64..50.0, -1.0f64..1.0).prop_map(|(a, b, d)| [a, a + d, b]),
         // Around the tension cut-off σ_t = 5 and its corners.

@@ -20,7 +20,11 @@ pub struct LeapfrogEnergy<const D: usize> {
 
 impl<const D: usize> LeapfrogEnergy<D> {
     pub fn new(scheme: UpdateScheme, initial: &Model<D>) -> Self {
-        Self { leads: scheme == UpdateScheme::Usf, stored: initial.stored_energy(), velocity: initial.points.velocity.clone() }
+        Self {
+            leads: scheme == UpdateScheme::Usf,
+            stored: initial.stored_energy(),
+            velocity: initial.points.velocity.clone(),
+        }
     }
 
     /// Feed the state after a step; returns E of the latest time level it can: this step's

@@ -225,7 +225,9 @@ impl<const D: usize> Explicit<D> {
         let time = self.time;
         let unstable = |(point, failure): (usize, PointFailure), model: &Model<D>, sc: &PointScratch<D>| match failure {
             PointFailure::Unstable(reason) => ExplicitError::Unstable { step, time, point, reason },
-            PointFailure::Outside => ExplicitError::PointOutsideGrid { step, source: outside_error(model, point, &sc.position[point]) },
+            PointFailure::Outside => {
+                ExplicitError::PointOutsideGrid { step, source: outside_error(model, point, &sc.position[point]) }
+            }
         };
         let Settings { scheme, flip, damping } = Settings::of(&self.settings);
         let (model, conn, constrained) = (&self.model, &self.conn, &self.constrained[..]);
@@ -256,7 +258,8 @@ impl<const D: usize> Explicit<D> {
             &mut nodes.velocity,
             &mut nodes.acceleration,
         );
-        grid_to_points(model, conn, &nodes.velocity, &nodes.acceleration, dt, flip, sc).map_err(|e| unstable(e, model, sc))?;
+        grid_to_points(model, conn, &nodes.velocity, &nodes.acceleration, dt, flip, sc)
+            .map_err(|e| unstable(e, model, sc))?;
         match scheme {
             UpdateScheme::Usf => {}
             UpdateScheme::Usl => {
@@ -403,7 +406,12 @@ fn internal_force<const D: usize>(model: &Model<D>, conn: &Connectivity<D>, sc: 
 }
 
 /// MUSL: p_I = Σ N_I m_p v_p^{n+1} from the updated point velocities.
-fn remap_momentum<const D: usize>(model: &Model<D>, conn: &Connectivity<D>, velocity: &[SVector<f64, D>], out: &mut [f64]) {
+fn remap_momentum<const D: usize>(
+    model: &Model<D>,
+    conn: &Connectivity<D>,
+    velocity: &[SVector<f64, D>],
+    out: &mut [f64],
+) {
     let mass = &model.points.mass;
     gather_nodal(&PointCouplings(conn), D, out, |p, a, o| {
         let nm = conn.support_values(p)[a] * mass[p];
@@ -415,15 +423,14 @@ fn remap_momentum<const D: usize>(model: &Model<D>, conn: &Connectivity<D>, velo
 
 /// In place: nodal momentum → velocity p_I / m_I; zero at empty nodes and constrained dofs.
 fn momentum_to_velocity<const D: usize>(gathered: &[f64], constrained: &[bool], m_min: f64, v: &mut [f64]) {
-    v.par_chunks_mut(D)
-        .zip(gathered.par_chunks(1 + 2 * D))
-        .zip(constrained.par_chunks(D))
-        .for_each(|((v, g), fixed)| {
+    v.par_chunks_mut(D).zip(gathered.par_chunks(1 + 2 * D)).zip(constrained.par_chunks(D)).for_each(
+        |((v, g), fixed)| {
             let m = g[0];
             for i in 0..D {
                 v[i] = if m > m_min && !fixed[i] { v[i] / m } else { 0.0 };
             }
-        });
+        },
+    );
 }
 
 /// Damped grid momentum update: a_I = f_I / m_I, v_I^{n+1} = (p_I + Δt f_I) / m_I, with
@@ -490,7 +497,11 @@ fn grid_to_points<const D: usize>(
             *v = (pts.velocity[p] + ai * dt) * flip + vi * (1.0 - flip);
             *x = pts.position[p] + vi * dt;
             if !(v.iter().all(|c| c.is_finite()) && x.iter().all(|c| c.is_finite())) {
-                let reason = format!("non-finite velocity {:?} or position {:?} after the grid update", v.as_slice(), x.as_slice());
+                let reason = format!(
+                    "non-finite velocity {:?} or position {:?} after the grid update",
+                    v.as_slice(),
+                    x.as_slice()
+                );
                 return Some((p, PointFailure::Unstable(reason)));
             }
             if !grid.contains(x) {
@@ -514,7 +525,12 @@ fn update_stress<const D: usize>(
     let pts = &model.points;
     let hs = pts.history_stride();
     let kinematics = model.kinematics;
-    let failure = (sc.delta_f.par_iter_mut(), sc.volume.par_iter_mut(), sc.stress.par_iter_mut(), sc.elastic_strain.par_iter_mut())
+    let failure = (
+        sc.delta_f.par_iter_mut(),
+        sc.volume.par_iter_mut(),
+        sc.stress.par_iter_mut(),
+        sc.elastic_strain.par_iter_mut(),
+    )
         .into_par_iter()
         .zip(sc.history.par_chunks_mut(hs.max(1)))
         .enumerate()
@@ -539,7 +555,8 @@ fn update_stress<const D: usize>(
             let law = &*model.materials[pts.material[p] as usize];
             let h_n = pts.history(p);
             let h_out = &mut h_out[..hs];
-            let failed = |e: &dyn std::fmt::Display| Some((p, PointFailure::Unstable(format!("stress update failed: {e}"))));
+            let failed =
+                |e: &dyn std::fmt::Display| Some((p, PointFailure::Unstable(format!("stress update failed: {e}"))));
             match kinematics {
                 Kinematics::FiniteStrain => {
                     let j = det * pts.deformation_gradient[p].determinant();
@@ -551,7 +568,8 @@ fn update_stress<const D: usize>(
                         Err(e) => return failed(&e),
                     }
                 }
-                Kinematics::SmallStrain => match small_strain_update(law, &grad_du, &pts.elastic_strain[p], h_n, h_out) {
+                Kinematics::SmallStrain => match small_strain_update(law, &grad_du, &pts.elastic_strain[p], h_n, h_out)
+                {
                     Ok(u) if u.stress.iter().chain(u.elastic_strain.iter()).all(|c| c.is_finite()) => {
                         *stress = u.stress;
                         *elastic = u.elastic_strain;
@@ -581,10 +599,13 @@ mod tests {
     fn block(v: Vector2<f64>, gravity: Vector2<f64>) -> Model<2> {
         let grid = Grid::new(Vector2::zeros(), Vector2::new(0.5, 0.5), [6, 6]).unwrap();
         let mut points = PointStore::new();
-        points.fill(&grid, &Shape::Box { min: Vector2::new(1.0, 1.0), max: Vector2::new(2.0, 2.0) }, 2, 800.0, 0).unwrap();
+        points
+            .fill(&grid, &Shape::Box { min: Vector2::new(1.0, 1.0), max: Vector2::new(2.0, 2.0) }, 2, 800.0, 0)
+            .unwrap();
         points.velocity.iter_mut().for_each(|x| *x = v);
         let law = Elastic::new(2e5, 0.25).unwrap();
-        Model::new(grid, BasisKind::Gimp, Kinematics::FiniteStrain, points, vec![Arc::new(law)], vec![], gravity).unwrap()
+        Model::new(grid, BasisKind::Gimp, Kinematics::FiniteStrain, points, vec![Arc::new(law)], vec![], gravity)
+            .unwrap()
     }
 
     #[test]

@@ -132,11 +132,17 @@ mod tests {
             (ExplicitSettings { time_step: TimeStep::Cfl { safety: 0.0 }, ..base.clone() }, "time_step.safety"),
             (ExplicitSettings { time_step: TimeStep::Cfl { safety: 1.01 }, ..base.clone() }, "time_step.safety"),
             (
-                ExplicitSettings { time_step: TimeStep::Fixed { dt: -1e-3, allow_above_critical: false }, ..base.clone() },
+                ExplicitSettings {
+                    time_step: TimeStep::Fixed { dt: -1e-3, allow_above_critical: false },
+                    ..base.clone()
+                },
                 "time_step.dt",
             ),
             (
-                ExplicitSettings { time_step: TimeStep::Fixed { dt: f64::NAN, allow_above_critical: true }, ..base.clone() },
+                ExplicitSettings {
+                    time_step: TimeStep::Fixed { dt: f64::NAN, allow_above_critical: true },
+                    ..base.clone()
+                },
                 "time_step.dt",
             ),
         ];

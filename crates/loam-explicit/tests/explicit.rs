@@ -196,9 +196,12 @@ fn a_step_above_the_critical_one_is_refused_or_blows_up_cleanly() {
     let model = vibrating_bar(BasisKind::Gimp);
     let critical = Explicit::new(model.clone(), settings(1.0)).unwrap().critical_time_step();
     let fixed = |factor: f64, allow| TimeStep::Fixed { dt: factor * critical, allow_above_critical: allow };
-    let mut ex = Explicit::new(model.clone(), ExplicitSettings { time_step: fixed(1.5, false), ..settings(30.0) }).unwrap();
+    let mut ex =
+        Explicit::new(model.clone(), ExplicitSettings { time_step: fixed(1.5, false), ..settings(30.0) }).unwrap();
     match ex.step() {
-        Err(ExplicitError::AboveCritical { step: 1, dt, critical: c }) => assert_eq!((dt, c), (1.5 * critical, critical)),
+        Err(ExplicitError::AboveCritical { step: 1, dt, critical: c }) => {
+            assert_eq!((dt, c), (1.5 * critical, critical))
+        }
         other => panic!("expected AboveCritical, got {other:?}"),
     }
     assert_eq!((ex.steps_done(), ex.time()), (0, 0.0));
@@ -206,7 +209,8 @@ fn a_step_above_the_critical_one_is_refused_or_blows_up_cleanly() {
 
     // Allowed, MUSL at 1.5 × the estimate is still stable on this bar: the estimate h/c is
     // conservative for FLIP with 2 points per cell (stable to √3 h/c, see the USL test).
-    let mut ex = Explicit::new(model.clone(), ExplicitSettings { time_step: fixed(1.5, true), ..settings(30.0) }).unwrap();
+    let mut ex =
+        Explicit::new(model.clone(), ExplicitSettings { time_step: fixed(1.5, true), ..settings(30.0) }).unwrap();
     run_to_end(&mut ex, |_, _| {});
     assert_finite(ex.model());
 
@@ -214,7 +218,12 @@ fn a_step_above_the_critical_one_is_refused_or_blows_up_cleanly() {
     let cases = [
         ("V2 bar, linear, USL, 1.5x", vibrating_bar(BasisKind::Linear), UpdateScheme::Usl, 1.5),
         ("V2 bar, GIMP, MUSL, 3x", vibrating_bar(BasisKind::Gimp), UpdateScheme::Musl, 3.0),
-        ("V1a column, GIMP, MUSL, 2x", self_weight_column(10, BasisKind::Gimp, Kinematics::FiniteStrain), UpdateScheme::Musl, 2.0),
+        (
+            "V1a column, GIMP, MUSL, 2x",
+            self_weight_column(10, BasisKind::Gimp, Kinematics::FiniteStrain),
+            UpdateScheme::Musl,
+            2.0,
+        ),
         ("V5 disks, linear, MUSL, 2x", colliding_disks(64, BasisKind::Linear), UpdateScheme::Musl, 2.0),
     ];
     for (name, model, scheme, factor) in cases {
@@ -248,7 +257,10 @@ fn damped_column(basis: BasisKind, damping: f64) -> (f64, f64) {
     run_to_end(&mut ex, |_, m| peak = peak.max(m.points.kinetic_energy()));
     let m = ex.model();
     let (e, ratio) = (column_stress_error(&m.points), m.points.kinetic_energy() / peak);
-    println!("V1a column, 10 cells, {basis:?}, damping {damping}: {} steps, e_sigma = {e:.3e}, KE end / peak = {ratio:.1e}", ex.steps_done());
+    println!(
+        "V1a column, 10 cells, {basis:?}, damping {damping}: {} steps, e_sigma = {e:.3e}, KE end / peak = {ratio:.1e}",
+        ex.steps_done()
+    );
     (e, ratio)
 }
 
@@ -306,7 +318,10 @@ fn invalid_settings_are_refused_by_new() {
         (ExplicitSettings { damping: 1.0, ..base.clone() }, "damping"),
         (ExplicitSettings { duration: -1.0, ..base.clone() }, "duration"),
         (ExplicitSettings { time_step: TimeStep::Cfl { safety: 1.5 }, ..base.clone() }, "time_step.safety"),
-        (ExplicitSettings { time_step: TimeStep::Fixed { dt: 0.0, allow_above_critical: false }, ..base.clone() }, "time_step.dt"),
+        (
+            ExplicitSettings { time_step: TimeStep::Fixed { dt: 0.0, allow_above_critical: false }, ..base.clone() },
+            "time_step.dt",
+        ),
     ];
     for (s, name) in cases {
         match Explicit::new(moving_block(BasisKind::Linear, Vector2::zeros()), s) {

@@ -115,14 +115,7 @@ impl BasisKind {
                 BasisKind::Gimp if l < MIN_HALF_LENGTH || xi < 0.0 || xi >= n_cells as f64 => {
                     linear_1d(xi, n_cells, &mut idx[a], &mut w[a], &mut dw[a])
                 }
-                BasisKind::Gimp => gimp_1d(
-                    xi,
-                    l.min(MAX_HALF_LENGTH),
-                    n_cells,
-                    &mut idx[a],
-                    &mut w[a],
-                    &mut dw[a],
-                ),
+                BasisKind::Gimp => gimp_1d(xi, l.min(MAX_HALF_LENGTH), n_cells, &mut idx[a], &mut w[a], &mut dw[a]),
             }
             .ok_or_else(outside)?;
             for v in dw[a][..count[a]].iter_mut() {
@@ -165,13 +158,7 @@ impl BasisKind {
 }
 
 /// Tent function in cell units on the cell owning `xi` (half-open rule).
-fn linear_1d(
-    xi: f64,
-    n_cells: usize,
-    idx: &mut [usize; 4],
-    w: &mut [f64; 4],
-    dw: &mut [f64; 4],
-) -> Option<usize> {
+fn linear_1d(xi: f64, n_cells: usize, idx: &mut [usize; 4], w: &mut [f64; 4], dw: &mut [f64; 4]) -> Option<usize> {
     let cell = xi.floor();
     if cell < 0.0 || cell >= n_cells as f64 {
         return None;
@@ -215,13 +202,7 @@ pub fn bspline_greville(i: usize, n: usize) -> f64 {
 /// cells): the three non-zero functions, which belong to nodes k − 2, k − 1, k of span
 /// [t_k, t_{k+1}), by the Cox–de Boor recursion; derivatives from the degree-1 functions
 /// (Piegl & Tiller, The NURBS Book, A2.2 and eq. 2.9). Needs n ≥ 2.
-fn bspline_1d(
-    xi: f64,
-    n_cells: usize,
-    idx: &mut [usize; 4],
-    w: &mut [f64; 4],
-    dw: &mut [f64; 4],
-) -> Option<usize> {
+fn bspline_1d(xi: f64, n_cells: usize, idx: &mut [usize; 4], w: &mut [f64; 4], dw: &mut [f64; 4]) -> Option<usize> {
     let n = n_cells;
     if !(0.0..n as f64).contains(&xi) {
         return None;

@@ -175,7 +175,11 @@ impl<const D: usize> Connectivity<D> {
             }
             Ok(kept)
         })
-        .map_err(|(p, source)| PointBasisError { point: p, position: positions[p].iter().copied().collect(), source })
+        .map_err(|(p, source)| PointBasisError {
+            point: p,
+            position: positions[p].iter().copied().collect(),
+            source,
+        })
     }
 
     /// The connectivity of an updated Lagrangian FEM run: the points are the mesh's Gauss
@@ -183,8 +187,10 @@ impl<const D: usize> Connectivity<D> {
     /// the current node positions. The stride must hold 2^D nodes (`BasisKind::Linear`).
     pub fn compute_mesh(&mut self, mesh: &FeMesh<D>) -> Result<(), ElementError> {
         assert!(self.stride >= FeMesh::<D>::NODES_PER_ELEMENT, "stride too small for the element nodes");
-        self.fill(mesh.num_gauss_points(), mesh.num_nodes(), |p, nodes, vals, grads| mesh.evaluate(p, nodes, vals, grads))
-            .map_err(|(_, e)| e)
+        self.fill(mesh.num_gauss_points(), mesh.num_nodes(), |p, nodes, vals, grads| {
+            mesh.evaluate(p, nodes, vals, grads)
+        })
+        .map_err(|(_, e)| e)
     }
 
     /// Evaluate every point's support with `evaluate` (nodes ascending, in a numbering of
@@ -243,15 +249,13 @@ impl<const D: usize> Connectivity<D> {
             }
         }
         let g2a = &an.grid_to_active;
-        self.active
-            .par_chunks_mut(stride)
-            .zip(self.grid_nodes.par_chunks(stride))
-            .zip(self.count.par_iter())
-            .for_each(|((act, grid_nodes), &c)| {
+        self.active.par_chunks_mut(stride).zip(self.grid_nodes.par_chunks(stride)).zip(self.count.par_iter()).for_each(
+            |((act, grid_nodes), &c)| {
                 for k in 0..c as usize {
                     act[k] = g2a[grid_nodes[k] as usize];
                 }
-            });
+            },
+        );
 
         // Node → point adjacency by counting sort (points ascending within each node).
         let n_active = an.active_to_grid.len();
@@ -316,7 +320,6 @@ mod tests {
     /// active node and the tangent has no empty row.
     #[test]
     fn nodes_with_no_weight_and_no_gradient_are_dropped() {
-
         let grid = Grid::new(Vector2::zeros(), Vector2::new(1.0, 1.0), [4, 4]).unwrap();
         let mut conn = Connectivity::new(BasisKind::Linear);
         conn.compute(&grid, &[Vector2::new(2.0, 2.0)], &[Vector2::new(0.25, 0.25)]).unwrap();

@@ -38,7 +38,11 @@ pub const CUT_FILL: f64 = 0.95;
 /// every dof of the penalty exists) and of which at least one is cut. `cell_fill[c]` is
 /// the material volume in cell c over the cell volume (cells numbered with axis 0
 /// fastest, like nodes).
-pub fn ghost_faces<const D: usize>(grid: &Grid<D>, cell_fill: &[f64], is_active: impl Fn(usize) -> bool) -> Vec<GhostFace> {
+pub fn ghost_faces<const D: usize>(
+    grid: &Grid<D>,
+    cell_fill: &[f64],
+    is_active: impl Fn(usize) -> bool,
+) -> Vec<GhostFace> {
     let cells = grid.cells();
     assert_eq!(cell_fill.len(), grid.num_cells(), "one fill fraction per cell");
     let supported = |ijk: [usize; D]| cell_nodes(grid, ijk).all(|n| is_active(n as usize));
@@ -52,7 +56,8 @@ pub fn ghost_faces<const D: usize>(grid: &Grid<D>, cell_fill: &[f64], is_active:
             let mut upper = lower;
             upper[axis] += 1;
             let (fl, fu) = (cell_fill[c], cell_fill[grid.cell_index(upper)]);
-            if (fl <= 0.0 && fu <= 0.0) || (fl >= CUT_FILL && fu >= CUT_FILL) || !supported(lower) || !supported(upper) {
+            if (fl <= 0.0 && fu <= 0.0) || (fl >= CUT_FILL && fu >= CUT_FILL) || !supported(lower) || !supported(upper)
+            {
                 continue;
             }
             faces.push(face_matrix(grid, lower, axis));

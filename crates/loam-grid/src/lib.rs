@@ -43,11 +43,7 @@ pub struct Grid<const D: usize> {
 impl<const D: usize> Grid<D> {
     /// A grid with its first node at `origin`, cells of `cell_size` per axis and `cells`
     /// cells per axis.
-    pub fn new(
-        origin: SVector<f64, D>,
-        cell_size: SVector<f64, D>,
-        cells: [usize; D],
-    ) -> Result<Self, GridError> {
+    pub fn new(origin: SVector<f64, D>, cell_size: SVector<f64, D>, cells: [usize; D]) -> Result<Self, GridError> {
         for axis in 0..D {
             if !origin[axis].is_finite() {
                 return Err(GridError::Origin { axis, value: origin[axis] });
@@ -63,12 +59,7 @@ impl<const D: usize> Grid<D> {
         let nodes = cells.iter().map(|c| c + 1).try_fold(1usize, |acc, n| acc.checked_mul(n));
         match nodes {
             Some(n) if n < u32::MAX as usize => {}
-            _ => {
-                return Err(GridError::TooLarge {
-                    nodes: nodes.unwrap_or(usize::MAX),
-                    max: u32::MAX as usize - 1,
-                })
-            }
+            _ => return Err(GridError::TooLarge { nodes: nodes.unwrap_or(usize::MAX), max: u32::MAX as usize - 1 }),
         }
         Ok(Self { origin, cell_size, cells })
     }
@@ -188,8 +179,7 @@ mod tests {
 
     #[test]
     fn node_numbering_round_trips() {
-        let g = Grid::<3>::new(nalgebra::Vector3::zeros(), nalgebra::Vector3::new(1.0, 2.0, 0.5), [3, 4, 5])
-            .unwrap();
+        let g = Grid::<3>::new(nalgebra::Vector3::zeros(), nalgebra::Vector3::new(1.0, 2.0, 0.5), [3, 4, 5]).unwrap();
         assert_eq!(g.num_nodes(), 4 * 5 * 6);
         for idx in 0..g.num_nodes() {
             assert_eq!(g.node_index(g.node_coords(idx)), idx);

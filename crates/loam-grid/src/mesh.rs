@@ -115,13 +115,7 @@ impl<const D: usize> FeMesh<D> {
                 conn.push(node_index(ijk) as u32);
             }
         }
-        Ok(Self {
-            position: reference.clone(),
-            reference,
-            elements: conn,
-            block: vec![0; num_elements],
-            gauss_order,
-        })
+        Ok(Self { position: reference.clone(), reference, elements: conn, block: vec![0; num_elements], gauss_order })
     }
 
     /// Add the blocks of `other` as further blocks (their nodes are not merged with ours:
@@ -200,9 +194,7 @@ impl<const D: usize> FeMesh<D> {
             let s: [f64; D] = std::array::from_fn(|a| if (k >> a) & 1 == 1 { 1.0 } else { -1.0 });
             let f: [f64; D] = std::array::from_fn(|a| 0.5 * (1.0 + s[a] * xi[a]));
             values[k] = f.iter().product();
-            grads[k] = SVector::from_fn(|a, _| {
-                (0..D).map(|b| if b == a { 0.5 * s[a] } else { f[b] }).product()
-            });
+            grads[k] = SVector::from_fn(|a, _| (0..D).map(|b| if b == a { 0.5 * s[a] } else { f[b] }).product());
         }
     }
 
@@ -328,8 +320,17 @@ mod tests {
 
     #[test]
     fn bad_blocks_are_refused() {
-        assert!(matches!(FeMesh::<2>::block(Vector2::zeros(), Vector2::new(1.0, 1.0), [0, 1], 2), Err(MeshError::NoElements(_))));
-        assert!(matches!(FeMesh::<2>::block(Vector2::zeros(), Vector2::new(1.0, 1.0), [1, 1], 4), Err(MeshError::GaussOrder(4))));
-        assert!(matches!(FeMesh::<2>::block(Vector2::zeros(), Vector2::new(-1.0, 1.0), [1, 1], 2), Err(MeshError::Bounds { axis: 0, .. })));
+        assert!(matches!(
+            FeMesh::<2>::block(Vector2::zeros(), Vector2::new(1.0, 1.0), [0, 1], 2),
+            Err(MeshError::NoElements(_))
+        ));
+        assert!(matches!(
+            FeMesh::<2>::block(Vector2::zeros(), Vector2::new(1.0, 1.0), [1, 1], 4),
+            Err(MeshError::GaussOrder(4))
+        ));
+        assert!(matches!(
+            FeMesh::<2>::block(Vector2::zeros(), Vector2::new(-1.0, 1.0), [1, 1], 2),
+            Err(MeshError::Bounds { axis: 0, .. })
+        ));
     }
 }

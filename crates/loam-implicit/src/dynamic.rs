@@ -254,9 +254,8 @@ impl<const D: usize> Dynamic<D> {
         self.engine.external_forces(1.0);
         let n = self.engine.num_dofs();
         self.predictor.clear();
-        self.predictor.extend(
-            self.velocity.iter().zip(&self.acceleration).map(|(v, a)| dt * v + dt * dt * (0.5 - beta) * a),
-        );
+        self.predictor
+            .extend(self.velocity.iter().zip(&self.acceleration).map(|(v, a)| dt * v + dt * dt * (0.5 - beta) * a));
         self.bossak_term.clear();
         self.bossak_term.extend(self.acceleration.iter().map(|a| alpha * a));
         self.engine.du.clear();
@@ -279,8 +278,7 @@ impl<const D: usize> Dynamic<D> {
         // New nodal accelerations, then the points' velocity and acceleration (before the
         // commit moves the points; the connectivity is that of the step's start).
         let e = &mut self.engine;
-        let a_new: Vec<f64> =
-            e.du.iter().zip(&self.predictor).map(|(u, p)| (u - p) / (beta * dt * dt)).collect();
+        let a_new: Vec<f64> = e.du.iter().zip(&self.predictor).map(|(u, p)| (u - p) / (beta * dt * dt)).collect();
         let conn = &e.conn;
         let pts = &mut e.model.points;
         let interpolate = |p: usize, field: &[f64]| {

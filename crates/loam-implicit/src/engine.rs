@@ -4,10 +4,9 @@
 //! implicit step", steps 1, 4). Quasi-static load stepping and Newmark dynamics differ only
 //! in what they add to the Newton system and in how they advance time or load.
 
-use crate::step::{CellAverage, Inertia, PointCouplings, StepSystem, TrialState};
 use crate::step::PointUpdateError;
+use crate::step::{CellAverage, Inertia, PointCouplings, StepSystem, TrialState};
 use crate::{StepError, StepReport};
-use std::time::Instant;
 use loam_grid::{ghost_faces, Connectivity, GhostFace, INACTIVE};
 use loam_model::Model;
 use loam_points::stretched_half_length;
@@ -17,6 +16,7 @@ use loam_solve::{
 };
 use nalgebra::SVector;
 use rayon::prelude::*;
+use std::time::Instant;
 
 pub(crate) struct Engine<const D: usize> {
     pub model: Model<D>,
@@ -228,14 +228,24 @@ impl<const D: usize> Engine<D> {
 
 /// The cell averages of the model's anti-locking treatment over the cell-averaged
 /// gradients `cell_gradients`; `None` without anti-locking.
-pub(crate) fn cell_average<'a, const D: usize>(model: &Model<D>, cell_gradients: &'a [SVector<f64, D>]) -> Option<CellAverage<'a, D>> {
-    model.anti_locking.deviatoric_weight().map(|deviatoric_weight| CellAverage { gradients: cell_gradients, deviatoric_weight })
+pub(crate) fn cell_average<'a, const D: usize>(
+    model: &Model<D>,
+    cell_gradients: &'a [SVector<f64, D>],
+) -> Option<CellAverage<'a, D>> {
+    model
+        .anti_locking
+        .deviatoric_weight()
+        .map(|deviatoric_weight| CellAverage { gradients: cell_gradients, deviatoric_weight })
 }
 
 /// B-bar's b̄ of every point's support slot: Σ_q v_q ∂N_a(x_q) / Σ_q v_q over the points q
 /// of its averaging cell (docs/theory.md §13), `stride` per point. Points are grouped by
 /// sorting on the cell, so the sums run in a fixed order (deterministic).
-pub(crate) fn cell_averaged_gradients<const D: usize>(model: &Model<D>, conn: &Connectivity<D>, out: &mut Vec<SVector<f64, D>>) {
+pub(crate) fn cell_averaged_gradients<const D: usize>(
+    model: &Model<D>,
+    conn: &Connectivity<D>,
+    out: &mut Vec<SVector<f64, D>>,
+) {
     let n = model.points.len();
     let stride = conn.stride();
     let mut order: Vec<(usize, usize)> = (0..n).map(|p| (model.averaging_cell(p), p)).collect();
@@ -293,7 +303,14 @@ pub(crate) struct Advanced {
 
 impl Advanced {
     /// The report of step `step`, which reached `load_factor` and `time`, started at `start`.
-    pub fn into_report(self, step: usize, load_factor: f64, time: f64, reactions: Vec<[f64; 3]>, start: Instant) -> StepReport {
+    pub fn into_report(
+        self,
+        step: usize,
+        load_factor: f64,
+        time: f64,
+        reactions: Vec<[f64; 3]>,
+        start: Instant,
+    ) -> StepReport {
         StepReport {
             step,
             load_factor,
@@ -383,7 +400,11 @@ pub(crate) fn advance<const D: usize, A: CutBack<D>>(
 /// are all active, renumbered to active nodes and scaled by γ times the largest P-wave
 /// modulus of the points in the face's two cells (so a soft layer is not stiffened by a
 /// stiff one elsewhere).
-pub(crate) fn scaled_ghost_faces<const D: usize>(model: &Model<D>, conn: &Connectivity<D>, gamma: f64) -> Vec<GhostFace> {
+pub(crate) fn scaled_ghost_faces<const D: usize>(
+    model: &Model<D>,
+    conn: &Connectivity<D>,
+    gamma: f64,
+) -> Vec<GhostFace> {
     let grid = &model.grid;
     let (mut fill, mut modulus) = (vec![0.0; grid.num_cells()], vec![0.0f64; grid.num_cells()]);
     let moduli: Vec<f64> = model.materials.iter().map(|m| m.p_wave_modulus()).collect();

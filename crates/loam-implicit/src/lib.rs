@@ -9,8 +9,8 @@ mod quasi_static;
 mod step;
 mod strength_reduction;
 
-pub use loam_model::{AntiLocking, Kinematics, Model, ModelError, PlaneConstraint};
 pub use dynamic::{Dynamic, DynamicSettings, MassMatrix};
+pub use loam_model::{AntiLocking, Kinematics, Model, ModelError, PlaneConstraint};
 pub use quasi_static::{IterationProfile, QuasiStatic, QuasiStaticSettings, RunError, StepError, StepReport};
 pub use step::PointUpdateError;
 pub use strength_reduction::{FactorOfSafety, StrengthReduction, StrengthReductionError, StrengthTrial};

@@ -7,11 +7,13 @@
 //! the smallest size stops the run with an error naming the step, the load factor and the
 //! residual history. An unconverged state is never committed.
 
-use loam_model::Model;
 use crate::engine::{advance, CutBack, Engine};
 use crate::step::PointUpdateError;
 use loam_grid::{ElementError, PointBasisError};
-use loam_solve::{LinearSolverKind, LinearSolverTimings, NewtonError, NewtonReport, NewtonSettings, SparseDirectSolver};
+use loam_model::Model;
+use loam_solve::{
+    LinearSolverKind, LinearSolverTimings, NewtonError, NewtonReport, NewtonSettings, SparseDirectSolver,
+};
 use std::time::{Duration, Instant};
 
 /// Settings of a quasi-static analysis.
@@ -36,7 +38,13 @@ pub struct QuasiStaticSettings {
 
 impl Default for QuasiStaticSettings {
     fn default() -> Self {
-        Self { load_steps: 10, newton: NewtonSettings::default(), max_cutbacks: 8, linear_solver: None, extrapolate: false }
+        Self {
+            load_steps: 10,
+            newton: NewtonSettings::default(),
+            max_cutbacks: 8,
+            linear_solver: None,
+            extrapolate: false,
+        }
     }
 }
 
@@ -114,7 +122,14 @@ pub struct QuasiStatic<const D: usize> {
 
 impl<const D: usize> QuasiStatic<D> {
     pub fn new(model: Model<D>, settings: QuasiStaticSettings) -> Self {
-        Self { engine: Engine::new(model, settings.newton, settings.linear_solver), settings, step: 0, load_factor: 0.0, previous: Vec::new(), previous_increment: None }
+        Self {
+            engine: Engine::new(model, settings.newton, settings.linear_solver),
+            settings,
+            step: 0,
+            load_factor: 0.0,
+            previous: Vec::new(),
+            previous_increment: None,
+        }
     }
 
     pub fn model(&self) -> &Model<D> {
@@ -235,7 +250,8 @@ impl<const D: usize> QuasiStatic<D> {
         let (step, lambda) = self.prepare_next_step();
         let (mut system, du, _) = self.engine.system(None);
         let mut r = vec![0.0; du.len()];
-        loam_solve::NewtonProblem::evaluate(&mut system, du, &mut r).map_err(|e| inspection_error(step, lambda, e.to_string()))?;
+        loam_solve::NewtonProblem::evaluate(&mut system, du, &mut r)
+            .map_err(|e| inspection_error(step, lambda, e.to_string()))?;
         loam_solve::NewtonProblem::assemble(&mut system);
         let e = &self.engine;
         Ok((e.pattern.clone(), e.values.clone(), e.constrained.clone()))

@@ -7,10 +7,10 @@
 //!   f_int,I = Σ_p v_p σ_p ∂N_I/∂x,   K_IJ = Σ_p v_p (∂N_I/∂x)_j a_ijkl (∂N_J/∂x)_l
 //! with a the spatial tangent (finite strain, THEORY.md §2) or D (small strain, §3).
 
-use loam_model::{internal_force, Kinematics, Model};
 use loam_constitutive::{finite_strain_update, small_strain_update, ConstitutiveError, Tensor4};
 use loam_grid::{Connectivity, GhostFace};
 pub(crate) use loam_model::PointCouplings;
+use loam_model::{internal_force, Kinematics, Model};
 use loam_solve::{gather_nodal, BlockPattern, NewtonProblem};
 use nalgebra::{Matrix3, SMatrix, SVector};
 use rayon::prelude::*;
@@ -123,7 +123,11 @@ impl<'a, const D: usize> CellAverage<'a, D> {
     #[inline]
     pub fn strain_gradient(&self, k: usize, grad: &SVector<f64, D>) -> SVector<f64, D> {
         let beta = self.deviatoric_weight;
-        if beta == 1.0 { *grad } else { grad * beta + self.gradients[k] * (1.0 - beta) }
+        if beta == 1.0 {
+            *grad
+        } else {
+            grad * beta + self.gradients[k] * (1.0 - beta)
+        }
     }
 
     #[inline]
@@ -252,7 +256,11 @@ impl<const D: usize> StepSystem<'_, D> {
                             let theta_bar: f64 = nodes
                                 .iter()
                                 .enumerate()
-                                .map(|(a, &node)| (0..D).map(|i| du[node as usize * D + i] * avg.average(p * stride + a)[i]).sum::<f64>())
+                                .map(|(a, &node)| {
+                                    (0..D)
+                                        .map(|i| du[node as usize * D + i] * avg.average(p * stride + a)[i])
+                                        .sum::<f64>()
+                                })
                                 .sum();
                             let theta = g.trace();
                             g3 += Matrix3::identity() * ((theta_bar - theta) / 3.0);
@@ -361,7 +369,9 @@ impl<const D: usize> NewtonProblem for StepSystem<'_, D> {
             }
         }
         self.reaction.resize(r.len(), 0.0);
-        for (((ri, &fe), &fixed), reaction) in r.iter_mut().zip(self.f_ext).zip(self.constrained).zip(self.reaction.iter_mut()) {
+        for (((ri, &fe), &fixed), reaction) in
+            r.iter_mut().zip(self.f_ext).zip(self.constrained).zip(self.reaction.iter_mut())
+        {
             *reaction = 0.0;
             if fixed {
                 reference += *ri * *ri;
@@ -387,7 +397,15 @@ impl<const D: usize> NewtonProblem for StepSystem<'_, D> {
         self.pattern.assemble(&PointCouplings(conn), self.constrained, self.values, |p, a, b, out| {
             if let Some((c, consistent)) = inertia {
                 let n = conn.support_values(p);
-                let m = c * mass[p] * if consistent { n[a] * n[b] } else if a == b { n[a] } else { 0.0 };
+                let m = c
+                    * mass[p]
+                    * if consistent {
+                        n[a] * n[b]
+                    } else if a == b {
+                        n[a]
+                    } else {
+                        0.0
+                    };
                 for i in 0..D {
                     out[i * D + i] += m;
                 }
@@ -456,7 +474,13 @@ mod tests {
 
     /// A 2×2-cell block on a 5×5 grid, pre-loaded by gravity to a stressed state. With a
     /// ghost penalty the block is shifted 0.3 cells along x, so that it cuts cells.
-    fn stressed_block_with(kinematics: Kinematics, basis: BasisKind, anti_locking: AntiLocking, ghost: Option<f64>, law: Arc<dyn ConstitutiveLaw>) -> Model<2> {
+    fn stressed_block_with(
+        kinematics: Kinematics,
+        basis: BasisKind,
+        anti_locking: AntiLocking,
+        ghost: Option<f64>,
+        law: Arc<dyn ConstitutiveLaw>,
+    ) -> Model<2> {
         let grid = Grid::new(Vector2::zeros(), Vector2::new(1.0, 1.0), [5, 5]).unwrap();
         let mut points = PointStore::new();
         let shape = Shape::Box { min: Vector2::new(1.0, 0.0), max: Vector2::new(3.0, 2.0) };
@@ -502,7 +526,8 @@ mod tests {
         let elastic = Elastic::new(1e5, 0.3).unwrap();
         let linear: Arc<dyn ConstitutiveLaw> = Arc::new(elastic);
         let von_mises: Arc<dyn ConstitutiveLaw> = Arc::new(VonMises::new(elastic, 2.4e4, 0.0).unwrap());
-        let mohr_coulomb: Arc<dyn ConstitutiveLaw> = Arc::new(MohrCoulomb::from_degrees(elastic, 8e3, 30.0, 30.0).unwrap());
+        let mohr_coulomb: Arc<dyn ConstitutiveLaw> =
+            Arc::new(MohrCoulomb::from_degrees(elastic, 8e3, 30.0, 30.0).unwrap());
         let assumed = AntiLocking::AssumedStrain { stabilization: 0.2 };
         let cases = [
             (Kinematics::FiniteStrain, BasisKind::Gimp, AntiLocking::None, None, &linear),
@@ -558,7 +583,11 @@ mod tests {
                 sys.evaluate(&vec![0.0; n], &mut vec![0.0; n]).unwrap();
                 let elastic_tangents = sys.trial.tangent.clone();
                 sys.evaluate(&du, &mut vec![0.0; n]).unwrap();
-                let returned = elastic_tangents.iter().zip(&sys.trial.tangent).filter(|(e, t)| (*e - *t).norm() > 1e-6 * e.norm()).count();
+                let returned = elastic_tangents
+                    .iter()
+                    .zip(&sys.trial.tangent)
+                    .filter(|(e, t)| (*e - *t).norm() > 1e-6 * e.norm())
+                    .count();
                 assert!(returned > 0, "{anti_locking:?}: no point returned to the yield surface");
             }
             let v = noise(n, 11);
@@ -572,9 +601,18 @@ mod tests {
             sys.assemble();
             let mut kv = vec![0.0; n];
             pattern.mul_vec(sys.values, &v, &mut kv);
-            let diff: f64 = kv.iter().zip(rp.iter().zip(&rm)).map(|(k, (p, m))| (k - (p - m) / (2.0 * eps)).powi(2)).sum::<f64>().sqrt();
+            let diff: f64 = kv
+                .iter()
+                .zip(rp.iter().zip(&rm))
+                .map(|(k, (p, m))| (k - (p - m) / (2.0 * eps)).powi(2))
+                .sum::<f64>()
+                .sqrt();
             let scale: f64 = kv.iter().map(|k| k * k).sum::<f64>().sqrt();
-            assert!(diff <= 1e-6 * scale, "{kinematics:?} {anti_locking:?} plastic {plastic}: |Kv - FD| / |Kv| = {:e}", diff / scale);
+            assert!(
+                diff <= 1e-6 * scale,
+                "{kinematics:?} {anti_locking:?} plastic {plastic}: |Kv - FD| / |Kv| = {:e}",
+                diff / scale
+            );
             // Hyperelastic (Hencky), linear elastic and associated tangents are symmetric
             // as a whole.
             let asym = pattern.asymmetry(sys.values);

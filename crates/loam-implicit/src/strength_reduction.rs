@@ -82,13 +82,25 @@ impl StrengthReduction {
     ) -> Result<FactorOfSafety, StrengthReductionError> {
         let (lo, hi) = self.bracket;
         if !(lo.is_finite() && lo > 0.0) {
-            return Err(StrengthReductionError::InvalidSettings { field: "bracket.0", value: lo, valid: "a positive number" });
+            return Err(StrengthReductionError::InvalidSettings {
+                field: "bracket.0",
+                value: lo,
+                valid: "a positive number",
+            });
         }
         if !(hi.is_finite() && hi > lo) {
-            return Err(StrengthReductionError::InvalidSettings { field: "bracket.1", value: hi, valid: "a number above the lower factor" });
+            return Err(StrengthReductionError::InvalidSettings {
+                field: "bracket.1",
+                value: hi,
+                valid: "a number above the lower factor",
+            });
         }
         if !(self.tolerance.is_finite() && self.tolerance > 0.0) {
-            return Err(StrengthReductionError::InvalidSettings { field: "tolerance", value: self.tolerance, valid: "a positive number" });
+            return Err(StrengthReductionError::InvalidSettings {
+                field: "tolerance",
+                value: self.tolerance,
+                valid: "a positive number",
+            });
         }
         let mut trials = Vec::new();
         let mut run = |factor: f64| -> Result<bool, StrengthReductionError> {
@@ -122,7 +134,11 @@ impl StrengthReduction {
     }
 
     /// Apply the full load to the model reduced by `factor`.
-    pub fn trial<const D: usize>(&self, model: &Model<D>, factor: f64) -> Result<StrengthTrial, StrengthReductionError> {
+    pub fn trial<const D: usize>(
+        &self,
+        model: &Model<D>,
+        factor: f64,
+    ) -> Result<StrengthTrial, StrengthReductionError> {
         let start = Instant::now();
         let mut qs = QuasiStatic::new(model.with_strength_reduced(factor)?, self.trial.clone());
         let (mut iterations, mut cutbacks, mut stable) = (0, 0, true);
@@ -147,6 +163,14 @@ impl StrengthReduction {
             }
         }
         let max_displacement = qs.model().points.max_displacement();
-        Ok(StrengthTrial { factor, stable, load_factor: qs.load_factor(), iterations, cutbacks, max_displacement, wall_time: start.elapsed() })
+        Ok(StrengthTrial {
+            factor,
+            stable,
+            load_factor: qs.load_factor(),
+            iterations,
+            cutbacks,
+            max_displacement,
+            wall_time: start.elapsed(),
+        })
     }
 }

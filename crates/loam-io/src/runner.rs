@@ -142,7 +142,8 @@ fn run_dim<const D: usize>(
         header.push(format!("constraint{k}_displacement_{}", AXES[i]));
         header.push(format!("constraint{k}_reaction_{}", AXES[i]));
     }
-    let mut log = CsvWriter::create(out_dir.join("run_log.csv"), &header.iter().map(String::as_str).collect::<Vec<_>>())?;
+    let mut log =
+        CsvWriter::create(out_dir.join("run_log.csv"), &header.iter().map(String::as_str).collect::<Vec<_>>())?;
     let mut pvd = if out.vtu_every > 0 { Some(PvdWriter::create(out_dir.join("points.pvd"))?) } else { None };
     if let Some(pvd) = pvd.as_mut() {
         write_frame(analysis.model(), out_dir, pvd, 0, 0.0)?;
@@ -253,11 +254,8 @@ fn fields<const D: usize>(model: &Model<D>) -> Fields {
     let position = flat(&pts.position);
     let position0 = flat(&pts.position0);
     let displacement = position.iter().zip(&position0).map(|(x, x0)| x - x0).collect();
-    let stress = pts
-        .stress
-        .iter()
-        .flat_map(|s| [s[(0, 0)], s[(1, 1)], s[(2, 2)], s[(0, 1)], s[(1, 2)], s[(0, 2)]])
-        .collect();
+    let stress =
+        pts.stress.iter().flat_map(|s| [s[(0, 0)], s[(1, 1)], s[(2, 2)], s[(0, 1)], s[(1, 2)], s[(0, 2)]]).collect();
     Fields { position, displacement, velocity: flat(&pts.velocity), stress }
 }
 

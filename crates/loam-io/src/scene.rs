@@ -3,12 +3,13 @@
 //! a scene is checked completely — down to points outside the grid and constraints that
 //! hold no node — before the first step runs.
 
-use loam_constitutive::{ConstitutiveLaw, Elastic, MohrCoulomb, VonMises};
-use loam_grid::{BasisKind, FeMesh, Grid, MeshError};
 use crate::analysis::{Analysis, AnalysisError};
+use loam_constitutive::{ConstitutiveLaw, Elastic, MohrCoulomb, VonMises};
 use loam_explicit::{Explicit, ExplicitError, ExplicitSettings, TimeStep, UpdateScheme};
+use loam_grid::{BasisKind, FeMesh, Grid, MeshError};
 use loam_implicit::{
-    AntiLocking, Dynamic, DynamicSettings, Kinematics, MassMatrix, Model, PlaneConstraint, QuasiStatic, QuasiStaticSettings, StepError,
+    AntiLocking, Dynamic, DynamicSettings, Kinematics, MassMatrix, Model, PlaneConstraint, QuasiStatic,
+    QuasiStaticSettings, StepError,
 };
 use loam_points::{PointStore, Shape};
 use loam_solve::{LinearSolverKind, NewtonSettings};
@@ -195,7 +196,13 @@ pub enum VelocitySpec {
     Uniform(Vec<f64>),
     /// v(x) = amplitude · sin(2π (x_axis − origin) / wavelength): a standing-wave mode,
     /// e.g. the vibrating bar's first mode with wavelength 4L.
-    Sine { amplitude: Vec<f64>, axis: Axis, wavelength: f64, #[serde(default)] origin: f64 },
+    Sine {
+        amplitude: Vec<f64>,
+        axis: Axis,
+        wavelength: f64,
+        #[serde(default)]
+        origin: f64,
+    },
 }
 
 fn default_ppc() -> usize {
@@ -205,11 +212,19 @@ fn default_ppc() -> usize {
 #[derive(Debug, Clone, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub enum ShapeSpec {
-    Box { min: Vec<f64>, max: Vec<f64> },
+    Box {
+        min: Vec<f64>,
+        max: Vec<f64>,
+    },
     /// 2D only: vertices [x, y] in order.
-    Polygon { vertices: Vec<[f64; 2]> },
+    Polygon {
+        vertices: Vec<[f64; 2]>,
+    },
     /// A disk (2D) or ball (3D).
-    Ball { centre: Vec<f64>, radius: f64 },
+    Ball {
+        centre: Vec<f64>,
+        radius: f64,
+    },
 }
 
 #[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
@@ -233,13 +248,29 @@ impl Axis {
 #[serde(deny_unknown_fields)]
 pub enum ConstraintSpec {
     /// The displacement normal to the grid plane `axis = at` is zero.
-    Roller { axis: Axis, at: f64, #[serde(default)] within: Option<RegionSpec> },
+    Roller {
+        axis: Axis,
+        at: f64,
+        #[serde(default)]
+        within: Option<RegionSpec>,
+    },
     /// All displacement components on the grid plane `axis = at` are zero.
-    Fixed { axis: Axis, at: f64, #[serde(default)] within: Option<RegionSpec> },
+    Fixed {
+        axis: Axis,
+        at: f64,
+        #[serde(default)]
+        within: Option<RegionSpec>,
+    },
     /// Prescribed displacement at full load on the nodes of the grid plane `axis = at`
     /// (inside `within`, if given): one entry per axis, `Some(u)` prescribed, `None` free.
     /// Applied with the load factor of a quasi-static analysis (a footing pushed down).
-    Displacement { axis: Axis, at: f64, displacement: Vec<Option<f64>>, #[serde(default)] within: Option<RegionSpec> },
+    Displacement {
+        axis: Axis,
+        at: f64,
+        displacement: Vec<Option<f64>>,
+        #[serde(default)]
+        within: Option<RegionSpec>,
+    },
 }
 
 /// A box limiting a constraint to part of its plane.
@@ -323,7 +354,11 @@ pub enum TimeStepSpec {
     /// Δt = safety × the critical step, every step.
     Cfl(f64),
     /// A fixed Δt.
-    Fixed { dt: f64, #[serde(default)] allow_above_critical: bool },
+    Fixed {
+        dt: f64,
+        #[serde(default)]
+        allow_above_critical: bool,
+    },
 }
 
 #[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
@@ -465,7 +500,10 @@ impl LoadedScene {
     pub fn build<const D: usize>(&self) -> Result<Analysis<D>, SceneError> {
         let s = &self.scene;
         if s.dimension != D {
-            return Err(self.error(&[Seg::Key("dimension")], format!("dimension is {}; loam runs 2 (plane strain) or 3", s.dimension)));
+            return Err(self.error(
+                &[Seg::Key("dimension")],
+                format!("dimension is {}; loam runs 2 (plane strain) or 3", s.dimension),
+            ));
         }
         let vec_d = |v: &[f64], path: &[Seg], what: &str| -> Result<SVector<f64, D>, SceneError> {
             if v.len() != D {
@@ -480,7 +518,10 @@ impl LoadedScene {
         let origin = vec_d(&s.grid.origin, &[Seg::Key("grid"), Seg::Key("origin")], "grid.origin")?;
         let cell = vec_d(&s.grid.cell_size, &[Seg::Key("grid"), Seg::Key("cell_size")], "grid.cell_size")?;
         if s.grid.cells.len() != D {
-            return Err(self.error(&[Seg::Key("grid"), Seg::Key("cells")], format!("grid.cells has {} entries; a {D}D scene needs {D}", s.grid.cells.len())));
+            return Err(self.error(
+                &[Seg::Key("grid"), Seg::Key("cells")],
+                format!("grid.cells has {} entries; a {D}D scene needs {D}", s.grid.cells.len()),
+            ));
         }
         let mut cells = [0usize; D];
         cells.copy_from_slice(&s.grid.cells);
@@ -500,16 +541,23 @@ impl LoadedScene {
         for (i, m) in s.materials.iter().enumerate() {
             let at = |key| [Seg::Key("materials"), Seg::Index(i), Seg::Key(key)];
             if !(m.density.is_finite() && m.density > 0.0) {
-                return Err(self.error(&at("density"), format!("material \"{}\": density is {}; it must be a positive number", m.name, m.density)));
+                return Err(self.error(
+                    &at("density"),
+                    format!("material \"{}\": density is {}; it must be a positive number", m.name, m.density),
+                ));
             }
             if s.materials[..i].iter().any(|o| o.name == m.name) {
-                return Err(self.error(&at("name"), format!("material name \"{}\" is used twice; names must be unique", m.name)));
+                return Err(self
+                    .error(&at("name"), format!("material name \"{}\" is used twice; names must be unique", m.name)));
             }
             laws.push(self.law(i, m)?);
         }
         // Bodies.
         if s.bodies.is_empty() {
-            return Err(self.error(&[Seg::Key("bodies")], "no bodies: add at least one Body(material: ..., shape: Box(min: [...], max: [...]))"));
+            return Err(self.error(
+                &[Seg::Key("bodies")],
+                "no bodies: add at least one Body(material: ..., shape: Box(min: [...], max: [...]))",
+            ));
         }
         let fem = s.method == MethodSpec::UpdatedLagrangianFem;
         let mut points = PointStore::<D>::new();
@@ -519,15 +567,30 @@ impl LoadedScene {
             let at = |key| [Seg::Key("bodies"), Seg::Index(i), Seg::Key(key)];
             let Some(mi) = s.materials.iter().position(|m| m.name == b.material) else {
                 let names: Vec<&str> = s.materials.iter().map(|m| m.name.as_str()).collect();
-                return Err(self.error(&at("material"), format!("body {i} uses material \"{}\", which is not defined; defined: {names:?}", b.material)));
+                return Err(self.error(
+                    &at("material"),
+                    format!("body {i} uses material \"{}\", which is not defined; defined: {names:?}", b.material),
+                ));
             };
             let shape = match &b.shape {
                 ShapeSpec::Box { min, max } => Shape::Box {
-                    min: vec_d(min, &[Seg::Key("bodies"), Seg::Index(i), Seg::Key("shape"), Seg::Key("min")], "Box min")?,
-                    max: vec_d(max, &[Seg::Key("bodies"), Seg::Index(i), Seg::Key("shape"), Seg::Key("max")], "Box max")?,
+                    min: vec_d(
+                        min,
+                        &[Seg::Key("bodies"), Seg::Index(i), Seg::Key("shape"), Seg::Key("min")],
+                        "Box min",
+                    )?,
+                    max: vec_d(
+                        max,
+                        &[Seg::Key("bodies"), Seg::Index(i), Seg::Key("shape"), Seg::Key("max")],
+                        "Box max",
+                    )?,
                 },
                 ShapeSpec::Ball { centre, radius } => Shape::Ball {
-                    centre: vec_d(centre, &[Seg::Key("bodies"), Seg::Index(i), Seg::Key("shape"), Seg::Key("centre")], "Ball centre")?,
+                    centre: vec_d(
+                        centre,
+                        &[Seg::Key("bodies"), Seg::Index(i), Seg::Key("shape"), Seg::Key("centre")],
+                        "Ball centre",
+                    )?,
                     radius: *radius,
                 },
                 ShapeSpec::Polygon { vertices } => {
@@ -539,17 +602,27 @@ impl LoadedScene {
             };
             if fem {
                 let Shape::Box { min, max } = shape else {
-                    return Err(self.error(&at("shape"), format!("body {i}: the updated Lagrangian FEM meshes Box bodies only; use a Box or method: Mpm")));
+                    return Err(self.error(
+                        &at("shape"),
+                        format!(
+                            "body {i}: the updated Lagrangian FEM meshes Box bodies only; use a Box or method: Mpm"
+                        ),
+                    ));
                 };
                 let h = grid.cell_size();
                 let elements = std::array::from_fn(|a| (((max[a] - min[a]) / h[a]).round() as usize).max(1));
                 let block = FeMesh::block(min, max, elements, b.points_per_cell).map_err(|e| {
                     let key = if matches!(e, MeshError::GaussOrder(_)) { "points_per_cell" } else { "shape" };
-                    self.error(&at(key), format!("body {i}: {e} (with method UpdatedLagrangianFem, points_per_cell is the Gauss order)"))
+                    self.error(
+                        &at(key),
+                        format!("body {i}: {e} (with method UpdatedLagrangianFem, points_per_cell is the Gauss order)"),
+                    )
                 })?;
                 match &mut mesh {
                     None => mesh = Some(block),
-                    Some(m) => m.append(block).map_err(|e| self.error(&at("points_per_cell"), format!("body {i}: {e}")))?,
+                    Some(m) => {
+                        m.append(block).map_err(|e| self.error(&at("points_per_cell"), format!("body {i}: {e}")))?
+                    }
                 }
                 block_density.push(s.materials[mi].density);
                 block_material.push(mi as u32);
@@ -578,7 +651,9 @@ impl LoadedScene {
             };
             let a = axis.index();
             if a >= D {
-                return Err(self.error(&here, format!("constraint {i} is on axis {axis:?}, which a {D}D scene does not have")));
+                return Err(
+                    self.error(&here, format!("constraint {i} is on axis {axis:?}, which a {D}D scene does not have"))
+                );
             }
             let Some(plane) = grid.node_plane(a, at) else {
                 let h = grid.cell_size()[a];
@@ -596,7 +671,10 @@ impl LoadedScene {
                 }
                 ConstraintSpec::Fixed { .. } => PlaneConstraint::new(a, plane, [true; 3]),
                 ConstraintSpec::Displacement { displacement, .. } => {
-                    if displacement.len() != D || displacement.iter().flatten().any(|u| !u.is_finite()) || displacement.iter().all(Option::is_none) {
+                    if displacement.len() != D
+                        || displacement.iter().flatten().any(|u| !u.is_finite())
+                        || displacement.iter().all(Option::is_none)
+                    {
                         return Err(self.error(&[Seg::Key("constraints"), Seg::Index(i), Seg::Key("displacement")], format!(
                             "constraint {i}: displacement needs {D} entries, Some(u) (finite) for a prescribed component or None for a free one, at least one Some; got {displacement:?}"
                         )));
@@ -615,7 +693,10 @@ impl LoadedScene {
                 let lo = vec_d(&r.min, &at_w("min"), "within.min")?;
                 let hi = vec_d(&r.max, &at_w("max"), "within.max")?;
                 if let Some(k) = (0..D).find(|&k| k != a && lo[k] > hi[k]) {
-                    return Err(self.error(&at_w("min"), format!("constraint {i}: within.min[{k}] = {} exceeds within.max[{k}] = {}", lo[k], hi[k])));
+                    return Err(self.error(
+                        &at_w("min"),
+                        format!("constraint {i}: within.min[{k}] = {} exceeds within.max[{k}] = {}", lo[k], hi[k]),
+                    ));
                 }
                 let mut min = [f64::NEG_INFINITY; 3];
                 let mut max = [f64::INFINITY; 3];
@@ -637,13 +718,22 @@ impl LoadedScene {
         }
         let sv = &s.solver;
         if !(sv.residual_tolerance > 0.0 && sv.residual_tolerance < 1.0) {
-            return Err(self.error(&[Seg::Key("solver"), Seg::Key("residual_tolerance")], format!("residual_tolerance is {}; it must lie in (0, 1)", sv.residual_tolerance)));
+            return Err(self.error(
+                &[Seg::Key("solver"), Seg::Key("residual_tolerance")],
+                format!("residual_tolerance is {}; it must lie in (0, 1)", sv.residual_tolerance),
+            ));
         }
         if !(sv.increment_tolerance > 0.0 && sv.increment_tolerance < 1.0) {
-            return Err(self.error(&[Seg::Key("solver"), Seg::Key("increment_tolerance")], format!("increment_tolerance is {}; it must lie in (0, 1)", sv.increment_tolerance)));
+            return Err(self.error(
+                &[Seg::Key("solver"), Seg::Key("increment_tolerance")],
+                format!("increment_tolerance is {}; it must lie in (0, 1)", sv.increment_tolerance),
+            ));
         }
         if sv.max_iterations == 0 {
-            return Err(self.error(&[Seg::Key("solver"), Seg::Key("max_iterations")], "max_iterations is 0; it must be at least 1"));
+            return Err(self.error(
+                &[Seg::Key("solver"), Seg::Key("max_iterations")],
+                "max_iterations is 0; it must be at least 1",
+            ));
         }
         let newton = NewtonSettings {
             residual_tolerance: sv.residual_tolerance,
@@ -669,7 +759,14 @@ impl LoadedScene {
                 .map_err(|e| self.error(&[Seg::Key("bodies")], e.to_string()))?,
             Some(mesh) => {
                 let mut model = Model::updated_lagrangian_fem(
-                    grid, kinematics, mesh, &block_density, &block_material, laws, constraints, gravity,
+                    grid,
+                    kinematics,
+                    mesh,
+                    &block_density,
+                    &block_material,
+                    laws,
+                    constraints,
+                    gravity,
                 )
                 .map_err(|e| self.error(&[Seg::Key("bodies")], e.to_string()))?;
                 // Initial velocities at the Gauss points of each body's block.
@@ -701,7 +798,9 @@ impl LoadedScene {
                 if matches!(s.analysis, AnalysisSpec::Explicit { .. }) {
                     return Err(self.error(&[Seg::Key("geometrically_linear")], "explicit analysis moves its points by their velocities; set geometrically_linear: false or use an implicit analysis"));
                 }
-                model.with_geometrically_linear().map_err(|e| self.error(&[Seg::Key("geometrically_linear")], e.to_string()))?
+                model
+                    .with_geometrically_linear()
+                    .map_err(|e| self.error(&[Seg::Key("geometrically_linear")], e.to_string()))?
             }
         };
         let mut model = match s.ghost_penalty {
@@ -726,10 +825,22 @@ impl LoadedScene {
                     let at = |key: &'static str| [Seg::Key("analysis"), Seg::Key("strength_reduction"), Seg::Key(key)];
                     let (lo, hi) = srf.bracket;
                     if !(lo.is_finite() && lo > 0.0 && hi.is_finite() && hi > lo) {
-                        return Err(self.error(&at("bracket"), format!("bracket is ({lo}, {hi}); it must be (F_holds, F_fails) with 0 < F_holds < F_fails")));
+                        return Err(self.error(
+                            &at("bracket"),
+                            format!(
+                                "bracket is ({lo}, {hi}); it must be (F_holds, F_fails) with 0 < F_holds < F_fails"
+                            ),
+                        ));
                     }
                     if !(srf.tolerance.is_finite() && srf.tolerance > 0.0 && srf.tolerance < hi - lo) {
-                        return Err(self.error(&at("tolerance"), format!("tolerance is {}; it must be positive and below the bracket's width {}", srf.tolerance, hi - lo)));
+                        return Err(self.error(
+                            &at("tolerance"),
+                            format!(
+                                "tolerance is {}; it must be positive and below the bracket's width {}",
+                                srf.tolerance,
+                                hi - lo
+                            ),
+                        ));
                     }
                     if !model.materials.iter().any(|law| law.with_strength_reduced(1.0).is_some()) {
                         return Err(self.error(&[Seg::Key("materials")], "strength reduction needs a material with a strength (VonMises or MohrCoulomb); every material here is elastic"));
@@ -737,7 +848,13 @@ impl LoadedScene {
                 }
                 Analysis::QuasiStatic(QuasiStatic::new(
                     model,
-                    QuasiStaticSettings { load_steps, newton, max_cutbacks, linear_solver, extrapolate: sv.extrapolate },
+                    QuasiStaticSettings {
+                        load_steps,
+                        newton,
+                        max_cutbacks,
+                        linear_solver,
+                        extrapolate: sv.extrapolate,
+                    },
                 ))
             }
             AnalysisSpec::ImplicitDynamic { time_step, duration, beta, gamma, bossak_alpha, mass, max_cutbacks } => {
@@ -773,7 +890,9 @@ impl LoadedScene {
                     flip,
                     time_step: match *time_step {
                         TimeStepSpec::Cfl(safety) => TimeStep::Cfl { safety },
-                        TimeStepSpec::Fixed { dt, allow_above_critical } => TimeStep::Fixed { dt, allow_above_critical },
+                        TimeStepSpec::Fixed { dt, allow_above_critical } => {
+                            TimeStep::Fixed { dt, allow_above_critical }
+                        }
                     },
                     damping,
                     duration,
@@ -838,14 +957,22 @@ impl LoadedScene {
         let elastic = Elastic::new(young, poisson).map_err(|e| self.error(&at("young"), e.to_string()))?;
         // Whatever the law still refuses (checked combinations) is reported at the law.
         let refused = |e: loam_constitutive::ConstitutiveError| {
-            self.error(&[Seg::Key("materials"), Seg::Index(i), Seg::Key("law")], format!("material \"{}\": {e}", m.name))
+            self.error(
+                &[Seg::Key("materials"), Seg::Index(i), Seg::Key("law")],
+                format!("material \"{}\": {e}", m.name),
+            )
         };
         Ok(match m.law {
             LawSpec::Elastic { .. } => Arc::new(elastic),
             LawSpec::VonMises { yield_stress, hardening, residual_yield_stress, .. } => {
                 check("yield_stress", yield_stress, yield_stress > 0.0, "positive")?;
                 let (_, mu) = elastic.lame();
-                check("hardening", hardening, hardening > -3.0 * mu, "above −3G (a hardening modulus; negative softens)")?;
+                check(
+                    "hardening",
+                    hardening,
+                    hardening > -3.0 * mu,
+                    "above −3G (a hardening modulus; negative softens)",
+                )?;
                 let mut law = VonMises::new(elastic, yield_stress, hardening).map_err(refused)?;
                 if let Some(r) = residual_yield_stress {
                     check("residual_yield_stress", r, (0.0..=yield_stress).contains(&r), "between 0 and yield_stress")?;
@@ -855,8 +982,18 @@ impl LoadedScene {
             }
             LawSpec::MohrCoulomb { cohesion, friction, dilation, tension_cutoff, softening, .. } => {
                 check("friction", friction, (0.0..90.0).contains(&friction), "in [0, 90) degrees (0 is Tresca)")?;
-                check("cohesion", cohesion, cohesion >= 0.0 && (cohesion > 0.0 || friction > 0.0), "≥ 0, and > 0 when friction = 0")?;
-                check("dilation", dilation, (0.0..=friction).contains(&dilation), "in [0, friction] degrees (= friction: associated flow)")?;
+                check(
+                    "cohesion",
+                    cohesion,
+                    cohesion >= 0.0 && (cohesion > 0.0 || friction > 0.0),
+                    "≥ 0, and > 0 when friction = 0",
+                )?;
+                check(
+                    "dilation",
+                    dilation,
+                    (0.0..=friction).contains(&dilation),
+                    "in [0, friction] degrees (= friction: associated flow)",
+                )?;
                 let mut law = MohrCoulomb::from_degrees(elastic, cohesion, friction, dilation).map_err(refused)?;
                 if let Some(t) = tension_cutoff {
                     let apex = if friction > 0.0 { cohesion / friction.to_radians().tan() } else { f64::INFINITY };
@@ -864,7 +1001,9 @@ impl LoadedScene {
                     law = law.with_tension_cutoff(t).map_err(refused)?;
                 }
                 if let Some(sf) = softening {
-                    law = law.with_softening(sf.cohesion, sf.friction, sf.dilation, sf.plastic_strain).map_err(refused)?;
+                    law = law
+                        .with_softening(sf.cohesion, sf.friction, sf.dilation, sf.plastic_strain)
+                        .map_err(refused)?;
                 }
                 Arc::new(law)
             }
@@ -892,15 +1031,21 @@ impl LoadedScene {
             VelocitySpec::Sine { amplitude, axis, wavelength, origin } => {
                 let a = vec_d(amplitude)?;
                 if axis.index() >= D {
-                    return Err(self.error(&at, format!("body {i}: the velocity's axis {axis:?} does not exist in {D}D")));
+                    return Err(
+                        self.error(&at, format!("body {i}: the velocity's axis {axis:?} does not exist in {D}D"))
+                    );
                 }
                 if !(wavelength.is_finite() && *wavelength > 0.0) {
-                    return Err(self.error(&at, format!("body {i}: the wavelength is {wavelength}; it must be positive")));
+                    return Err(
+                        self.error(&at, format!("body {i}: the wavelength is {wavelength}; it must be positive"))
+                    );
                 }
                 (a, axis.index(), 2.0 * std::f64::consts::PI / wavelength, *origin)
             }
         })
-        .map(|(a, axis, k, origin)| move |x: &SVector<f64, D>| if k == 0.0 { a } else { a * (k * (x[axis] - origin)).sin() })
+        .map(|(a, axis, k, origin)| {
+            move |x: &SVector<f64, D>| if k == 0.0 { a } else { a * (k * (x[axis] - origin)).sin() }
+        })
     }
 }
 

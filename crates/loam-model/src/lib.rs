@@ -3,12 +3,12 @@
 //! analyses both take a [`Model`]; quantities that do not depend on the integrator
 //! (constrained dofs, stored energy, external work of dead loads) live here once.
 
+use loam_constitutive::tensor::sym_log;
 use loam_constitutive::ConstitutiveLaw;
 use loam_grid::{ActiveNodes, BasisKind, Connectivity, FeMesh, Grid};
-use loam_solve::Couplings;
 use loam_points::PointStore;
+use loam_solve::Couplings;
 use nalgebra::{Matrix3, SVector};
-use loam_constitutive::tensor::sym_log;
 use rayon::prelude::*;
 use std::sync::Arc;
 
@@ -201,7 +201,21 @@ impl<const D: usize> Model<D> {
         let stride = materials.iter().map(|m| m.history_len()).max().unwrap_or(0);
         let material = points.material.clone();
         points.init_history(stride, |p, h| materials[material[p] as usize].init_history(h));
-        Ok(Self { grid, basis, kinematics, points, materials, constraints, gravity, point_forces: Vec::new(), mesh: None, anti_locking: AntiLocking::None, gravity_preloaded: false, ghost_penalty: None, geometrically_linear: false })
+        Ok(Self {
+            grid,
+            basis,
+            kinematics,
+            points,
+            materials,
+            constraints,
+            gravity,
+            point_forces: Vec::new(),
+            mesh: None,
+            anti_locking: AntiLocking::None,
+            gravity_preloaded: false,
+            ghost_penalty: None,
+            geometrically_linear: false,
+        })
     }
 
     /// The updated Lagrangian FEM reference on the same grid planes, laws and loads: the
@@ -318,7 +332,9 @@ impl<const D: usize> Model<D> {
         if anti_locking != AntiLocking::None {
             let name = anti_locking.name();
             if self.kinematics != Kinematics::SmallStrain {
-                return Err(ModelError::AntiLocking(format!("{name} is a small-strain treatment; use kinematics SmallStrain")));
+                return Err(ModelError::AntiLocking(format!(
+                    "{name} is a small-strain treatment; use kinematics SmallStrain"
+                )));
             }
             if self.mesh.is_none() && self.basis != BasisKind::Linear {
                 return Err(ModelError::AntiLocking(format!(
@@ -343,7 +359,11 @@ impl<const D: usize> Model<D> {
     /// ones of a geometrically linear model (whose current positions only carry the
     /// displacement for output).
     pub fn configuration(&self) -> &[SVector<f64, D>] {
-        if self.geometrically_linear { &self.points.position0 } else { &self.points.position }
+        if self.geometrically_linear {
+            &self.points.position0
+        } else {
+            &self.points.position
+        }
     }
 
     /// Whether node `node` (grid node index in MPM, mesh node index in FEM) lies on the plane
@@ -415,9 +435,10 @@ impl<const D: usize> Model<D> {
     /// The first constraint (by index) that holds no active node: no material point has
     /// support on its plane, so it would silently constrain nothing.
     pub fn constraint_without_nodes(&self, active: &ActiveNodes) -> Option<(usize, &PlaneConstraint)> {
-        self.constraints.iter().enumerate().find(|(_, c)| {
-            !active.active_to_grid.iter().any(|&g| self.node_on_plane(g as usize, c))
-        })
+        self.constraints
+            .iter()
+            .enumerate()
+            .find(|(_, c)| !active.active_to_grid.iter().any(|&g| self.node_on_plane(g as usize, c)))
     }
 
     /// Dead load on point `p` at full load: gravity on its mass plus its point force.
@@ -469,13 +490,17 @@ impl<const D: usize> Model<D> {
             ijk
         };
         let mut order: Vec<([usize; D], usize)> = (0..n).map(|p| (column(p), p)).collect();
-        order.sort_by(|(ca, a), (cb, b)| ca.cmp(cb).then((up * pts.position[*b][vertical]).total_cmp(&(up * pts.position[*a][vertical]))));
+        order.sort_by(|(ca, a), (cb, b)| {
+            ca.cmp(cb).then((up * pts.position[*b][vertical]).total_cmp(&(up * pts.position[*a][vertical])))
+        });
         let tol = 1e-9 * h[vertical];
         let mut sigma_v = vec![0.0; n];
         for col in order.chunk_by(|a, b| a.0 == b.0) {
             let mut above = 0.0;
             // The rows of the column: points at the same height, top down.
-            for row in col.chunk_by(|&(_, a), &(_, b)| (pts.position[a][vertical] - pts.position[b][vertical]).abs() <= tol) {
+            for row in
+                col.chunk_by(|&(_, a), &(_, b)| (pts.position[a][vertical] - pts.position[b][vertical]).abs() <= tol)
+            {
                 let row_mass: f64 = row.iter().map(|&(_, q)| pts.mass[q]).sum();
                 for &(_, q) in row {
                     sigma_v[q] = -g.abs() * (above + 0.5 * row_mass) / area;
@@ -490,7 +515,11 @@ impl<const D: usize> Model<D> {
         for (p, &sv) in sigma_v.iter().enumerate() {
             let law = &self.materials[pts.material[p] as usize];
             let Some(elastic) = law.elasticity() else {
-                return Err(ModelError::Geostatic(format!("material {} ({}) has no isotropic elasticity to carry an initial stress", pts.material[p], law.name())));
+                return Err(ModelError::Geostatic(format!(
+                    "material {} ({}) has no isotropic elasticity to carry an initial stress",
+                    pts.material[p],
+                    law.name()
+                )));
             };
             let mut sigma = Matrix3::identity() * (k0 * sv);
             sigma[(vertical, vertical)] = sv;

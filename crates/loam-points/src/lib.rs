@@ -14,7 +14,9 @@ use nalgebra::{Matrix3, SVector, Vector2};
 /// in-plane block of the 3×3 U is the in-plane stretch.
 pub fn stretched_half_length<const D: usize>(l0: &SVector<f64, D>, f: &Matrix3<f64>) -> SVector<f64, D> {
     let eig = (f.transpose() * f).symmetric_eigen();
-    let u = eig.eigenvectors * Matrix3::from_diagonal(&eig.eigenvalues.map(|e| e.max(0.0).sqrt())) * eig.eigenvectors.transpose();
+    let u = eig.eigenvectors
+        * Matrix3::from_diagonal(&eig.eigenvalues.map(|e| e.max(0.0).sqrt()))
+        * eig.eigenvectors.transpose();
     SVector::from_fn(|i, _| l0[i] * u[(i, i)])
 }
 
@@ -309,9 +311,8 @@ mod tests {
     fn box_fill_conserves_volume_and_mass() {
         let g = Grid::<2>::new(Vector2::zeros(), Vector2::new(0.5, 0.25), [4, 8]).unwrap();
         let mut s = PointStore::<2>::new();
-        let n = s
-            .fill(&g, &Shape::Box { min: Vector2::new(0.0, 0.0), max: Vector2::new(1.0, 1.5) }, 2, 2000.0, 0)
-            .unwrap();
+        let n =
+            s.fill(&g, &Shape::Box { min: Vector2::new(0.0, 0.0), max: Vector2::new(1.0, 1.5) }, 2, 2000.0, 0).unwrap();
         // 2 x 6 cells, 4 points each.
         assert_eq!(n, 48);
         assert_relative_eq!(s.volume.iter().sum::<f64>(), 1.5, epsilon = 1e-12);
@@ -335,9 +336,8 @@ mod tests {
     fn three_dimensional_box() {
         let g = Grid::<3>::new(Vector3::zeros(), Vector3::new(0.4, 0.1, 0.4), [1, 8, 1]).unwrap();
         let mut s = PointStore::<3>::new();
-        let n = s
-            .fill(&g, &Shape::Box { min: Vector3::zeros(), max: Vector3::new(0.4, 0.8, 0.4) }, 2, 50.0, 0)
-            .unwrap();
+        let n =
+            s.fill(&g, &Shape::Box { min: Vector3::zeros(), max: Vector3::new(0.4, 0.8, 0.4) }, 2, 50.0, 0).unwrap();
         assert_eq!(n, 64);
         assert_relative_eq!(s.volume.iter().sum::<f64>(), 0.128, epsilon = 1e-12);
     }

@@ -103,9 +103,8 @@ impl SparseDirectSolver {
                     )
                 }
                 LinearSolverKind::Lu => {
-                    self.symbolic_lu = Some(
-                        SymbolicLu::try_new(symbolic).map_err(|e| LinearSolveError::Symbolic(format!("{e:?}")))?,
-                    )
+                    self.symbolic_lu =
+                        Some(SymbolicLu::try_new(symbolic).map_err(|e| LinearSolveError::Symbolic(format!("{e:?}")))?)
                 }
             }
             self.generation = Some(pattern.generation());

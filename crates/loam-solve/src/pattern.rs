@@ -105,8 +105,8 @@ impl BlockPattern {
         for l in &lists {
             offsets.push(offsets.last().unwrap() + l.len());
         }
-        let same = offsets == self.nbr_offsets
-            && lists.iter().enumerate().all(|(j, l)| l.as_slice() == self.neighbours(j));
+        let same =
+            offsets == self.nbr_offsets && lists.iter().enumerate().all(|(j, l)| l.as_slice() == self.neighbours(j));
         if same {
             return false;
         }
@@ -188,7 +188,9 @@ impl BlockPattern {
     pub fn add_block(&self, values: &mut [f64], constrained: &[bool], i: usize, j: usize, block: &[f64]) {
         let d = self.dofs_per_node;
         let nb = self.neighbours(j);
-        let q = nb.binary_search(&(i as u32)).unwrap_or_else(|_| panic!("add_block: nodes {i} and {j} are not coupled in the pattern"));
+        let q = nb
+            .binary_search(&(i as u32))
+            .unwrap_or_else(|_| panic!("add_block: nodes {i} and {j} are not coupled in the pattern"));
         let col_len = nb.len() * d;
         let start = self.col_ptr[j * d];
         for k in 0..d {

@@ -47,7 +47,16 @@ pub fn rect(x0: f64, y0: f64, x1: f64, y1: f64) -> Shape<2> {
 
 /// A 2 × 1.5 block (cells of 0.5, 2×2 points per cell) in a 12 × 6 grid moving at `v`.
 pub fn moving_block(basis: BasisKind, v: Vector2<f64>) -> Model<2> {
-    let mut m = scene(0.5, [24, 12], &[rect(1.0, 2.5, 3.0, 4.0)], 2, 1000.0, elastic(1e5, 0.3), basis, Kinematics::FiniteStrain);
+    let mut m = scene(
+        0.5,
+        [24, 12],
+        &[rect(1.0, 2.5, 3.0, 4.0)],
+        2,
+        1000.0,
+        elastic(1e5, 0.3),
+        basis,
+        Kinematics::FiniteStrain,
+    );
     m.points.velocity.iter_mut().for_each(|x| *x = v);
     m
 }
@@ -79,7 +88,16 @@ pub mod bar {
 /// x = 0, rollers (y fixed) on the bottom and top node planes, so the motion is 1D;
 /// v(x, 0) = v₀ sin(β₁ x), no stress, ν = 0.
 pub fn vibrating_bar(basis: BasisKind) -> Model<2> {
-    let mut m = scene(1.0, [27, 1], &[rect(0.0, 0.0, bar::L, 1.0)], 2, bar::RHO, elastic(bar::E, 0.0), basis, Kinematics::FiniteStrain);
+    let mut m = scene(
+        1.0,
+        [27, 1],
+        &[rect(0.0, 0.0, bar::L, 1.0)],
+        2,
+        bar::RHO,
+        elastic(bar::E, 0.0),
+        basis,
+        Kinematics::FiniteStrain,
+    );
     for p in 0..m.points.len() {
         m.points.velocity[p] = Vector2::new(bar::V0 * (bar::beta() * m.points.position[p].x).sin(), 0.0);
     }
@@ -100,7 +118,16 @@ pub mod column {
 /// cells above.
 pub fn self_weight_column(cells: usize, basis: BasisKind, kinematics: Kinematics) -> Model<2> {
     let h = column::H / cells as f64;
-    let mut m = scene(h, [1, cells + 2], &[rect(0.0, 0.0, h, column::H)], 2, column::RHO, elastic(column::E, 0.0), basis, kinematics);
+    let mut m = scene(
+        h,
+        [1, cells + 2],
+        &[rect(0.0, 0.0, h, column::H)],
+        2,
+        column::RHO,
+        elastic(column::E, 0.0),
+        basis,
+        kinematics,
+    );
     m.constraints = vec![roller(0, 0), roller(0, 1), roller(1, 0)];
     m.gravity = Vector2::new(0.0, -column::G);
     m

@@ -39,9 +39,8 @@ impl<'a> From<&'a str> for CsvCell<'a> {
 
 /// Quotes a CSV field (RFC 4180) when needed.
 fn quote(s: &str) -> Cow<'_, str> {
-    let needs = s.contains([',', '"', '\n', '\r'])
-        || s.starts_with(char::is_whitespace)
-        || s.ends_with(char::is_whitespace);
+    let needs =
+        s.contains([',', '"', '\n', '\r']) || s.starts_with(char::is_whitespace) || s.ends_with(char::is_whitespace);
     if needs {
         Cow::Owned(format!("\"{}\"", s.replace('"', "\"\"")))
     } else {
@@ -76,11 +75,7 @@ impl CsvWriter {
     pub fn create(path: impl AsRef<Path>, header: &[&str]) -> Result<Self, OutputError> {
         let path = path.as_ref().to_path_buf();
         let file = File::create(&path).map_err(io_err(&path))?;
-        let mut w = Self {
-            columns: header.len(),
-            out: BufWriter::new(file),
-            path,
-        };
+        let mut w = Self { columns: header.len(), out: BufWriter::new(file), path };
         let line: Vec<Cow<str>> = header.iter().map(|h| quote(h)).collect();
         w.write_line(&line.join(","))?;
         Ok(w)
@@ -115,11 +110,7 @@ impl CsvWriter {
         if found == self.columns {
             Ok(())
         } else {
-            Err(OutputError::Shape {
-                field: "row".to_owned(),
-                expected: self.columns,
-                found,
-            })
+            Err(OutputError::Shape { field: "row".to_owned(), expected: self.columns, found })
         }
     }
 
@@ -140,27 +131,15 @@ impl CsvWriter {
 /// Errors with [`OutputError::Shape`] if the number of columns differs from
 /// the header (`field = "columns"`) or a column's length differs from the
 /// first column's (`field` = that column's header name).
-pub fn write_csv_table(
-    path: impl AsRef<Path>,
-    header: &[&str],
-    columns: &[&[f64]],
-) -> Result<(), OutputError> {
+pub fn write_csv_table(path: impl AsRef<Path>, header: &[&str], columns: &[&[f64]]) -> Result<(), OutputError> {
     let path = path.as_ref();
     if columns.len() != header.len() {
-        return Err(OutputError::Shape {
-            field: "columns".to_owned(),
-            expected: header.len(),
-            found: columns.len(),
-        });
+        return Err(OutputError::Shape { field: "columns".to_owned(), expected: header.len(), found: columns.len() });
     }
     let rows = columns.first().map_or(0, |c| c.len());
     for (name, col) in header.iter().zip(columns) {
         if col.len() != rows {
-            return Err(OutputError::Shape {
-                field: (*name).to_owned(),
-                expected: rows,
-                found: col.len(),
-            });
+            return Err(OutputError::Shape { field: (*name).to_owned(), expected: rows, found: col.len() });
         }
     }
     write_atomic(path, |w| {
@@ -199,13 +178,7 @@ mod tests {
             CsvCell::Text("converged, 3 iters"),
         ])
         .unwrap();
-        w.row_mixed(&[
-            2i64.into(),
-            0.2.into(),
-            f64::NAN.into(),
-            "say \"hi\"".into(),
-        ])
-        .unwrap();
+        w.row_mixed(&[2i64.into(), 0.2.into(), f64::NAN.into(), "say \"hi\"".into()]).unwrap();
         // Rows are on disk without dropping the writer.
         insta::assert_snapshot!(fs::read_to_string(&p).unwrap());
     }
@@ -246,17 +219,8 @@ mod tests {
             err,
             OutputError::Shape { ref field, expected: 2, found: 1 } if field == "row"
         ));
-        let err = w
-            .row_mixed(&[CsvCell::Int(1), CsvCell::Int(2), CsvCell::Int(3)])
-            .unwrap_err();
-        assert!(matches!(
-            err,
-            OutputError::Shape {
-                expected: 2,
-                found: 3,
-                ..
-            }
-        ));
+        let err = w.row_mixed(&[CsvCell::Int(1), CsvCell::Int(2), CsvCell::Int(3)]).unwrap_err();
+        assert!(matches!(err, OutputError::Shape { expected: 2, found: 3, .. }));
         // Nothing but the header was written.
         assert_eq!(fs::read_to_string(&p).unwrap(), "a,b\n");
     }

@@ -48,13 +48,7 @@ impl<'a> PointCloud<'a> {
     /// A cloud with positions only; add fields with the builder methods or
     /// by pushing onto the public vectors.
     pub fn new(dim: usize, positions: &'a [f64]) -> Self {
-        Self {
-            dim,
-            positions,
-            scalars: Vec::new(),
-            vectors: Vec::new(),
-            tensors: Vec::new(),
-        }
+        Self { dim, positions, scalars: Vec::new(), vectors: Vec::new(), tensors: Vec::new() }
     }
 
     /// Adds a per-point scalar field.
@@ -97,11 +91,7 @@ impl<'a> PointCloud<'a> {
             if expected == found {
                 Ok(())
             } else {
-                Err(OutputError::Shape {
-                    field: field.to_owned(),
-                    expected,
-                    found,
-                })
+                Err(OutputError::Shape { field: field.to_owned(), expected, found })
             }
         };
         check_len("positions", n * self.dim, self.positions.len())?;
@@ -169,18 +159,12 @@ pub enum OutputError {
 fn check_finite(field: &str, values: &[f64], comps: usize) -> Result<(), OutputError> {
     match values.iter().position(|v| !v.is_finite()) {
         None => Ok(()),
-        Some(i) => Err(OutputError::NonFinite {
-            field: field.to_owned(),
-            point: i / comps.max(1),
-        }),
+        Some(i) => Err(OutputError::NonFinite { field: field.to_owned(), point: i / comps.max(1) }),
     }
 }
 
 pub(crate) fn io_err(path: &Path) -> impl FnOnce(io::Error) -> OutputError + '_ {
-    move |source| OutputError::Io {
-        path: path.to_path_buf(),
-        source,
-    }
+    move |source| OutputError::Io { path: path.to_path_buf(), source }
 }
 
 /// Formats a finite `f64` so that it parses back to the same value.
@@ -218,11 +202,7 @@ where
     };
     let mut tmp_name = std::ffi::OsString::from(".");
     tmp_name.push(file_name);
-    tmp_name.push(format!(
-        ".tmp-{}-{}",
-        std::process::id(),
-        TMP_COUNTER.fetch_add(1, Ordering::Relaxed)
-    ));
+    tmp_name.push(format!(".tmp-{}-{}", std::process::id(), TMP_COUNTER.fetch_add(1, Ordering::Relaxed)));
     let tmp = dir.join(tmp_name);
 
     let result = (|| -> io::Result<()> {
@@ -236,10 +216,7 @@ where
     })();
     if let Err(source) = result {
         let _ = fs::remove_file(&tmp);
-        return Err(OutputError::Io {
-            path: path.to_path_buf(),
-            source,
-        });
+        return Err(OutputError::Io { path: path.to_path_buf(), source });
     }
     Ok(())
 }
@@ -284,11 +261,7 @@ mod tests {
             123456.789,
         ] {
             let s = fmt_f64(x);
-            assert_eq!(
-                s.parse::<f64>().unwrap().to_bits(),
-                x.to_bits(),
-                "{x} -> {s}"
-            );
+            assert_eq!(s.parse::<f64>().unwrap().to_bits(), x.to_bits(), "{x} -> {s}");
             assert!(s.len() < 30, "{s}");
         }
         assert_eq!(fmt_f64(0.5), "0.5");

@@ -21,10 +21,7 @@ impl PvdWriter {
     /// Creates (or truncates) the collection at `path`, writing an empty but
     /// valid collection immediately.
     pub fn create(path: impl AsRef<Path>) -> Result<Self, OutputError> {
-        let w = Self {
-            path: path.as_ref().to_path_buf(),
-            entries: Vec::new(),
-        };
+        let w = Self { path: path.as_ref().to_path_buf(), entries: Vec::new() };
         w.flush()?;
         Ok(w)
     }
@@ -34,10 +31,7 @@ impl PvdWriter {
     /// collection. A non-finite `time` is refused and nothing changes.
     pub fn add(&mut self, time: f64, vtu_file_name_relative: &str) -> Result<(), OutputError> {
         if !time.is_finite() {
-            return Err(OutputError::NonFinite {
-                field: "time".to_owned(),
-                point: self.entries.len(),
-            });
+            return Err(OutputError::NonFinite { field: "time".to_owned(), point: self.entries.len() });
         }
         self.entries.push((time, vtu_file_name_relative.to_owned()));
         if let Err(e) = self.flush() {
@@ -65,10 +59,7 @@ impl PvdWriter {
     fn flush(&self) -> Result<(), OutputError> {
         write_atomic(&self.path, |w: &mut dyn Write| {
             writeln!(w, r#"<?xml version="1.0"?>"#)?;
-            writeln!(
-                w,
-                r#"<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">"#
-            )?;
+            writeln!(w, r#"<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">"#)?;
             writeln!(w, "  <Collection>")?;
             for (t, file) in &self.entries {
                 writeln!(
@@ -105,10 +96,7 @@ mod tests {
         }
         assert_eq!(lines[lines.len() - 2], "</Collection>");
         assert_eq!(lines[lines.len() - 1], "</VTKFile>");
-        assert_eq!(
-            text.lines().filter(|l| l.contains("<DataSet")).count(),
-            expected_sets
-        );
+        assert_eq!(text.lines().filter(|l| l.contains("<DataSet")).count(), expected_sets);
     }
 
     #[test]
@@ -154,8 +142,6 @@ mod tests {
         let p = dir.path().join("run.pvd");
         let mut w = PvdWriter::create(&p).unwrap();
         w.add(1.0, "a&b.vtu").unwrap();
-        assert!(fs::read_to_string(&p)
-            .unwrap()
-            .contains(r#"file="a&amp;b.vtu""#));
+        assert!(fs::read_to_string(&p).unwrap().contains(r#"file="a&amp;b.vtu""#));
     }
 }

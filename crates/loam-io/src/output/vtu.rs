@@ -25,20 +25,13 @@ fn write_vtu_body(w: &mut dyn Write, c: &PointCloud) -> io::Result<()> {
     let n = c.len();
     let dim = c.dim;
     writeln!(w, r#"<?xml version="1.0"?>"#)?;
-    writeln!(
-        w,
-        r#"<VTKFile type="UnstructuredGrid" version="1.0" byte_order="LittleEndian" header_type="UInt64">"#
-    )?;
+    writeln!(w, r#"<VTKFile type="UnstructuredGrid" version="1.0" byte_order="LittleEndian" header_type="UInt64">"#)?;
     writeln!(w, "  <UnstructuredGrid>")?;
     writeln!(w, r#"    <Piece NumberOfPoints="{n}" NumberOfCells="{n}">"#)?;
 
     // Point data, with the first field of each kind marked active.
     let mut active = String::new();
-    for (attr, fields) in [
-        ("Scalars", &c.scalars),
-        ("Vectors", &c.vectors),
-        ("Tensors", &c.tensors),
-    ] {
+    for (attr, fields) in [("Scalars", &c.scalars), ("Vectors", &c.vectors), ("Tensors", &c.tensors)] {
         if let Some((name, _)) = fields.first() {
             active.push_str(&format!(r#" {attr}="{}""#, xml_escape(name)));
         }
@@ -60,22 +53,13 @@ fn write_vtu_body(w: &mut dyn Write, c: &PointCloud) -> io::Result<()> {
     writeln!(w, "      </Points>")?;
 
     writeln!(w, "      <Cells>")?;
-    writeln!(
-        w,
-        r#"        <DataArray type="Int64" Name="connectivity" format="ascii">"#
-    )?;
+    writeln!(w, r#"        <DataArray type="Int64" Name="connectivity" format="ascii">"#)?;
     int_lines(w, (0..n).map(|i| i.to_string()))?;
     writeln!(w, "        </DataArray>")?;
-    writeln!(
-        w,
-        r#"        <DataArray type="Int64" Name="offsets" format="ascii">"#
-    )?;
+    writeln!(w, r#"        <DataArray type="Int64" Name="offsets" format="ascii">"#)?;
     int_lines(w, (1..=n).map(|i| i.to_string()))?;
     writeln!(w, "        </DataArray>")?;
-    writeln!(
-        w,
-        r#"        <DataArray type="UInt8" Name="types" format="ascii">"#
-    )?;
+    writeln!(w, r#"        <DataArray type="UInt8" Name="types" format="ascii">"#)?;
     int_lines(w, (0..n).map(|_| VTK_VERTEX.to_string()))?;
     writeln!(w, "        </DataArray>")?;
     writeln!(w, "      </Cells>")?;
@@ -96,11 +80,7 @@ fn data_array(
     stride: usize,
     pad_to: usize,
 ) -> io::Result<()> {
-    write!(
-        w,
-        r#"        <DataArray type="Float64" Name="{}""#,
-        xml_escape(name)
-    )?;
+    write!(w, r#"        <DataArray type="Float64" Name="{}""#, xml_escape(name))?;
     if comps > 1 {
         write!(w, r#" NumberOfComponents="{comps}""#)?;
     }
@@ -147,10 +127,8 @@ mod tests {
             -1.1, -2.1, -3.1, 0.6, 0.0, 0.0, //
             -1.2, -2.2, -3.2, 0.7, 0.0, 0.0,
         ];
-        let cloud = PointCloud::new(2, &pos)
-            .with_scalar("pressure", &p)
-            .with_vector("velocity", &v)
-            .with_tensor("stress", &s);
+        let cloud =
+            PointCloud::new(2, &pos).with_scalar("pressure", &p).with_vector("velocity", &v).with_tensor("stress", &s);
         insta::assert_snapshot!(write_and_read(&cloud));
     }
 
@@ -199,11 +177,7 @@ mod tests {
         let short = [1.0];
         let err = write_vtu(&p, &PointCloud::new(2, &pos).with_scalar("mass", &short)).unwrap_err();
         match err {
-            OutputError::Shape {
-                field,
-                expected,
-                found,
-            } => {
+            OutputError::Shape { field, expected, found } => {
                 assert_eq!(field, "mass");
                 assert_eq!(expected, 2);
                 assert_eq!(found, 1);
@@ -247,9 +221,7 @@ mod tests {
         assert!(matches!(err, OutputError::NonFinite { ref field, point: 1 } if field == "p"));
         let bad_pos = [0.0, 0.0, 1.0, f64::NEG_INFINITY];
         let err = write_vtu(&p, &PointCloud::new(2, &bad_pos)).unwrap_err();
-        assert!(
-            matches!(err, OutputError::NonFinite { ref field, point: 1 } if field == "positions")
-        );
+        assert!(matches!(err, OutputError::NonFinite { ref field, point: 1 } if field == "positions"));
         assert!(!p.exists());
         assert_eq!(fs::read_dir(dir.path()).unwrap().count(), 0);
     }
@@ -259,11 +231,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let pos = [f64::NAN, 0.0];
         let s = [1.0, 2.0];
-        let err = write_vtu(
-            &dir.path().join("x.vtu"),
-            &PointCloud::new(2, &pos).with_scalar("s", &s),
-        )
-        .unwrap_err();
+        let err = write_vtu(&dir.path().join("x.vtu"), &PointCloud::new(2, &pos).with_scalar("s", &s)).unwrap_err();
         assert!(matches!(err, OutputError::Shape { .. }));
     }
 
