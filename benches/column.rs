@@ -61,7 +61,7 @@ fn block_iteration(c: &mut Criterion) {
     let p = qs.profile_iteration().unwrap();
     println!(
         "block {n}x{n}, {} points, {} dofs, {} nonzeros, {} threads: connectivity {:.3} s | points+residual {:.3} s | assembly {:.3} s | symbolic {:.3} s | numeric {:.3} s | solve {:.3} s | one iteration {:.3} s",
-        qs.model().points.len(), p.dofs, p.nonzeros, rayon::current_num_threads(),
+        qs.model().points().len(), p.dofs, p.nonzeros, rayon::current_num_threads(),
         p.connectivity.as_secs_f64(), p.points_and_residual.as_secs_f64(), p.assembly.as_secs_f64(),
         p.symbolic.as_secs_f64(), p.numeric.as_secs_f64(), p.solve.as_secs_f64(), p.iteration().as_secs_f64()
     );

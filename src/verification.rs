@@ -358,12 +358,9 @@ impl VibratingBar {
         (grid, constraints, std::sync::Arc::new(law))
     }
 
-    /// The initial velocity v₀ sin(β₁ x) along x on every point.
-    fn set_initial_velocity(&self, points: &mut PointStore<2>) {
-        let k = self.wavenumber();
-        for (v, x) in points.velocity.iter_mut().zip(&points.position) {
-            *v = nalgebra::Vector2::new(self.amplitude * (k * x[0]).sin(), 0.0);
-        }
+    /// The initial velocity v₀ sin(β₁ x) along x at `x`.
+    fn initial_velocity(&self, x: &nalgebra::Vector2<f64>) -> nalgebra::Vector2<f64> {
+        nalgebra::Vector2::new(self.amplitude * (self.wavenumber() * x[0]).sin(), 0.0)
     }
 
     /// The bar as a 2D model: grid from x = 0 over L plus 4 empty cells, one cell high;
@@ -382,7 +379,9 @@ impl VibratingBar {
         let mut points = PointStore::new();
         let shape = Shape::Box { min: Vector2::zeros(), max: Vector2::new(self.length, self.cell_size) };
         points.fill(&grid, &shape, points_per_cell, self.density, 0).expect("bar fits the grid");
-        self.set_initial_velocity(&mut points);
+        for (v, x) in points.velocity.iter_mut().zip(&points.position) {
+            *v = self.initial_velocity(x);
+        }
         Model::new(grid, basis, kinematics, points, vec![law], constraints, Vector2::zeros()).expect("valid bar model")
     }
 
@@ -408,7 +407,8 @@ impl VibratingBar {
             Vector2::zeros(),
         )
         .expect("valid bar FEM model");
-        self.set_initial_velocity(&mut model.points);
+        let velocities: Vec<_> = model.points().position.iter().map(|x| self.initial_velocity(x)).collect();
+        model.velocities_mut().copy_from_slice(&velocities);
         model
     }
 }
@@ -462,8 +462,8 @@ pub struct DynamicRecord {
 impl DynamicRecord {
     pub fn push<const D: usize>(&mut self, time: f64, model: &crate::model::Model<D>) {
         self.time.push(time);
-        self.vcm_x.push(centre_of_mass_velocity(&model.points, 0));
-        self.kinetic.push(model.points.kinetic_energy());
+        self.vcm_x.push(centre_of_mass_velocity(&model.points(), 0));
+        self.kinetic.push(model.points().kinetic_energy());
         self.stored.push(model.stored_energy());
     }
 

@@ -52,7 +52,7 @@ fn ghost_penalty_is_deterministic_across_threads() {
             while !qs.is_finished() {
                 qs.step().unwrap();
             }
-            let p = &qs.model().points;
+            let p = &qs.model().points();
             (p.position.clone(), p.stress.clone())
         })
     };

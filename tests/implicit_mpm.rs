@@ -26,7 +26,7 @@ fn run_column(cells: usize, steps: usize, basis: BasisKind, kin: Kinematics) -> 
 fn gimp_column_matches_the_closed_form() {
     let c = Column::V1C;
     let qs = run_column(32, 160, BasisKind::Gimp, Kinematics::FiniteStrain);
-    let e = column_errors(&qs.model().points, &c, 1, |y| c.hencky_displacement(y));
+    let e = column_errors(&qs.model().points(), &c, 1, |y| c.hencky_displacement(y));
     assert!(e.stress < 1.5e-3, "e_sigma = {}", e.stress);
     // Top displacement within 0.2 % of the Lambert-W solution (measured 3.4e-4).
     assert!(e.top_displacement < 2e-3, "e_u = {}", e.top_displacement);
@@ -40,7 +40,7 @@ fn small_strain_column_is_linear_elastic() {
     let m = column_model::<2>(&c, c.height / 32.0, 32, 2, BasisKind::Gimp, Kinematics::SmallStrain);
     let mut qs = QuasiStatic::new(m, QuasiStaticSettings { load_steps: 1, ..Default::default() });
     qs.step().unwrap();
-    let e = column_errors(&qs.model().points, &c, 1, |y| c.small_strain_displacement(y));
+    let e = column_errors(&qs.model().points(), &c, 1, |y| c.small_strain_displacement(y));
     assert!(e.top_displacement < 1e-3, "e_u = {}", e.top_displacement);
     // Equilibrium at points: linear-in-Y stress is reproduced to the first-order GIMP
     // point-stress error h/(4H) · ½ (measured 7.8e-3 = 1/128 at 32 cells).
@@ -65,7 +65,7 @@ fn bspline_small_strain_column_is_second_order() {
         );
         let mut qs = QuasiStatic::new(m, QuasiStaticSettings { load_steps: 1, ..Default::default() });
         qs.step().unwrap();
-        column_errors(&qs.model().points, &c, 1, |y| c.small_strain_displacement(y))
+        column_errors(&qs.model().points(), &c, 1, |y| c.small_strain_displacement(y))
     };
     let (e16, e32) = (e(16), e(32));
     let rate = (e16.stress / e32.stress).log2();
@@ -81,7 +81,7 @@ fn one_or_many_threads_give_identical_results() {
     let run = |threads| {
         rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap().install(|| {
             let qs = run_column(16, 10, BasisKind::Gimp, Kinematics::FiniteStrain);
-            let p = &qs.model().points;
+            let p = &qs.model().points();
             (p.position.clone(), p.stress.clone())
         })
     };
@@ -96,7 +96,7 @@ fn one_or_many_threads_give_identical_results() {
 fn linear_basis_stagnates_on_the_column() {
     let c = Column::V1C;
     let qs = run_column(32, 40, BasisKind::Linear, Kinematics::FiniteStrain);
-    let e = column_errors(&qs.model().points, &c, 1, |y| c.hencky_displacement(y));
+    let e = column_errors(&qs.model().points(), &c, 1, |y| c.hencky_displacement(y));
     assert!(e.stress > 1e-2, "e_sigma = {}", e.stress);
 }
 
@@ -119,7 +119,7 @@ fn a_failed_step_is_cut_back_and_recovers() {
     let most = r.most_iterations();
     assert!((1..=3).contains(&most) && most * r.substeps >= r.iterations, "{r:?}");
     assert!(*r.hardest_residuals.last().unwrap() <= 1e-9, "{r:?}");
-    let e = column_errors(&qs.model().points, &c, 1, |y| c.hencky_displacement(y));
+    let e = column_errors(&qs.model().points(), &c, 1, |y| c.hencky_displacement(y));
     // 16 cells: e_σ 3.7e-3 in the verify sweep; the path differs, so allow 2x.
     assert!(e.stress < 8e-3, "e_sigma = {}", e.stress);
 }
@@ -133,11 +133,11 @@ fn an_unrecoverable_step_is_reported_not_accepted() {
     let mut settings = QuasiStaticSettings { load_steps: 1, max_cutbacks: 1, ..Default::default() };
     settings.newton.max_iterations = 1;
     let mut qs = QuasiStatic::new(m, settings);
-    let before = qs.model().points.position.clone();
+    let before = qs.model().points().position.clone();
     let err = qs.step().unwrap_err();
     assert!(matches!(err, loam::implicit::StepError::NotConverged { step: 1, .. }), "{err}");
     assert!(err.to_string().contains("did not converge"));
-    assert_eq!(qs.model().points.position, before, "no unconverged state may be committed");
+    assert_eq!(qs.model().points().position, before, "no unconverged state may be committed");
     assert_eq!(qs.load_factor(), 0.0);
 }
 
@@ -162,7 +162,7 @@ fn a_million_fold_stiffness_contrast_converges() {
         r.iterations,
         r.final_residual()
     );
-    let e = column_errors(&qs.model().points, &layered.column, 1, |y| layered.displacement(y));
+    let e = column_errors(&qs.model().points(), &layered.column, 1, |y| layered.displacement(y));
     assert!(e.stress < 1e-2, "e_sigma = {}", e.stress);
     assert!(e.top_displacement < 1e-3, "e_u = {} (u = {})", e.top_displacement, e.top_displacement_value);
 }
@@ -186,7 +186,7 @@ fn geometrically_linear_run_is_linear_in_the_load() {
         qs.into_model()
     };
     let difference = |a: &loam::implicit::Model<2>, b: &loam::implicit::Model<2>| {
-        let (pa, pb) = (&a.points, &b.points);
+        let (pa, pb) = (&a.points(), &b.points());
         let (mut du, mut u, mut ds, mut s) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
         for p in 0..pa.len() {
             let (ua, ub) = (pa.position[p] - pa.position0[p], pb.position[p] - pb.position0[p]);
@@ -200,7 +200,7 @@ fn geometrically_linear_run_is_linear_in_the_load() {
     let (one, ten) = (run(1, true), run(10, true));
     let (eu, es) = difference(&one, &ten);
     assert!(eu < 1e-10 && es < 1e-10, "displacement {eu:e}, stress {es:e}");
-    assert!(ten.points.volume.iter().zip(&ten.points.volume0).all(|(v, v0)| v == v0));
+    assert!(ten.points().volume.iter().zip(&ten.points().volume0).all(|(v, v0)| v == v0));
     let (eu, _) = difference(&run(1, false), &run(10, false));
     assert!(eu > 1e-6, "the updated run should differ from one step: {eu:e}");
 }

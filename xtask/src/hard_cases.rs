@@ -6,7 +6,7 @@
 use crate::{basis_name, Report, Row};
 use anyhow::Result;
 use loam::grid::BasisKind;
-use loam::implicit::{Kinematics, QuasiStatic, QuasiStaticSettings, StepError};
+use loam::implicit::{ConnectError, Kinematics, QuasiStatic, QuasiStaticSettings, StepError};
 use loam::verification::{
     column_errors, column_model, condition_number, softening_specimen, translated_block, Column, LayeredColumn,
 };
@@ -38,7 +38,7 @@ fn softening(cells: usize, margin: f64) -> Softening {
         QuasiStaticSettings { load_steps: 80, ..Default::default() },
     );
     let t = Instant::now();
-    let start = qs.model().points.len();
+    let start = qs.model().points().len();
     let mut out = Softening {
         peak: 0.0,
         last: 0.0,
@@ -51,11 +51,11 @@ fn softening(cells: usize, margin: f64) -> Softening {
         left_grid: false,
         kept_last_state: true,
     };
-    let mut last_state = qs.model().points.position.clone();
+    let mut last_state = qs.model().points().position.clone();
     while !qs.is_finished() {
         match qs.step() {
             Ok(r) => {
-                last_state.clone_from(&qs.model().points.position);
+                last_state.clone_from(&qs.model().points().position);
                 out.last = -r.reactions[0][1];
                 out.peak = out.peak.max(out.last);
                 out.reached = r.load_factor * SHORTENING;
@@ -63,15 +63,15 @@ fn softening(cells: usize, margin: f64) -> Softening {
                 out.cutbacks += r.cutbacks;
             }
             Err(e) => {
-                out.left_grid = matches!(e, StepError::PointOutsideGrid { .. });
-                out.kept_last_state = qs.model().points.position == last_state;
+                out.left_grid = matches!(e, StepError::Connect(ConnectError::PointOutsideGrid { .. }));
+                out.kept_last_state = qs.model().points().position == last_state;
                 out.stop = e.to_string();
                 break;
             }
         }
     }
     out.wall_s = t.elapsed().as_secs_f64();
-    out.points.1 = qs.model().points.len();
+    out.points.1 = qs.model().points().len();
     out
 }
 
@@ -90,7 +90,7 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
             let mut qs =
                 QuasiStatic::new(layered.model(32, basis), QuasiStaticSettings { load_steps: 1, ..Default::default() });
             let r = qs.step()?;
-            let e = column_errors(&qs.model().points, &layered.column, 1, |y| layered.displacement(y));
+            let e = column_errors(&qs.model().points(), &layered.column, 1, |y| layered.displacement(y));
             writeln!(
                 md,
                 "| {} | {contrast:.0e} | {} | {:.1e} | {:.3e} | {:.3e} |",
@@ -139,7 +139,7 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
         settings,
     );
     let r = qs.step()?;
-    let e = column_errors(&qs.model().points, &c, 1, |y| c.hencky_displacement(y));
+    let e = column_errors(&qs.model().points(), &c, 1, |y| c.hencky_displacement(y));
     writeln!(md, "- {} failed attempts (cut-backs), {} converged sub-steps with {} Newton iterations (the sub-step halves on a failure and doubles after two successes); load factor {:.3} reached; e_σ = {:.3e} (3.7e-3 with 40 load steps). run_log.csv records the cut-backs and sub-steps of every step.\n", r.cutbacks, r.substeps, r.iterations, r.load_factor, e.stress)?;
     report.rows.push(Row::info("H3 one-step V1c, 3 iterations max", "cutbacks", r.cutbacks as f64));
 
@@ -169,7 +169,7 @@ fn block_step(overlap: f64, basis: BasisKind, ghost: Option<f64>) -> Result<(f64
     let (pattern, values, constrained) = qs.start_tangent()?;
     let condition = condition_number(&pattern, &values, &constrained);
     let its = qs.step().ok().map(|r| r.iterations);
-    let u = qs.model().points.max_displacement();
+    let u = qs.model().points().max_displacement();
     Ok((condition, its, u))
 }
 

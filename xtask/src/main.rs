@@ -145,13 +145,13 @@ fn run_column(case: &Case, method: Method, cells: usize) -> Result<ColumnRun> {
             let m = method.column::<3>(case, width, cells);
             let mut qs = QuasiStatic::new(m, settings);
             let (its, res) = drive(&mut qs)?;
-            (column_errors(&qs.model().points, &case.column, 1, |y| (case.reference)(&case.column, y)), its, res)
+            (column_errors(&qs.model().points(), &case.column, 1, |y| (case.reference)(&case.column, y)), its, res)
         }
         _ => {
             let m = method.column::<2>(case, width, cells);
             let mut qs = QuasiStatic::new(m, settings);
             let (its, res) = drive(&mut qs)?;
-            (column_errors(&qs.model().points, &case.column, 1, |y| (case.reference)(&case.column, y)), its, res)
+            (column_errors(&qs.model().points(), &case.column, 1, |y| (case.reference)(&case.column, y)), its, res)
         }
     };
     Ok(ColumnRun {

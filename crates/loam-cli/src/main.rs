@@ -88,11 +88,11 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             let (points, dofs) = match loaded.scene.dimension {
                 3 => {
                     let a = loaded.build::<3>()?;
-                    (a.model().points.len(), a.model().grid.num_nodes() * 3)
+                    (a.model().points().len(), a.model().grid().num_nodes() * 3)
                 }
                 _ => {
                     let a = loaded.build::<2>()?;
-                    (a.model().points.len(), a.model().grid.num_nodes() * 2)
+                    (a.model().points().len(), a.model().grid().num_nodes() * 2)
                 }
             };
             println!(

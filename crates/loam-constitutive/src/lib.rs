@@ -81,9 +81,9 @@ pub trait ConstitutiveLaw: Send + Sync + std::fmt::Debug {
     fn symmetric_tangent(&self) -> bool {
         true
     }
-    /// true when the tangent can turn indefinite (softening): symmetric or not, Cholesky
-    /// then fails where LU goes on, so the solver choice needs to know.
-    fn indefinite_tangent(&self) -> bool {
+    /// true when the law's strength can fall as plastic strain accumulates (softening):
+    /// its tangent can then turn indefinite.
+    fn can_soften(&self) -> bool {
         false
     }
     fn update(
@@ -97,15 +97,9 @@ pub trait ConstitutiveLaw: Send + Sync + std::fmt::Debug {
     fn elasticity(&self) -> Option<Elastic> {
         None
     }
-    /// The law with its strength divided by `factor` > 0, for a strength-reduction analysis
-    /// (Griffiths & Lane 1999): c/F and tan φ/F, the dilation capped at the reduced
-    /// friction, yield stresses over F. `None` for a law without a strength (elastic); an
-    /// error where the reduced parameters are invalid.
-    fn with_strength_reduced(
-        &self,
-        factor: f64,
-    ) -> Option<Result<std::sync::Arc<dyn ConstitutiveLaw>, ConstitutiveError>> {
-        let _ = factor;
+    /// The law's strength, if it has one that a strength-reduction analysis can divide
+    /// ([`StrengthReducible`]); `None` for a law without a strength (elastic).
+    fn as_strength_reducible(&self) -> Option<&dyn StrengthReducible> {
         None
     }
     /// P-wave (constrained) modulus λ + 2μ: the stiffness of the explicit CFL condition
@@ -115,6 +109,15 @@ pub trait ConstitutiveLaw: Send + Sync + std::fmt::Debug {
     /// isotropic linear elasticity. With logarithmic strain it is the Hencky energy per unit
     /// reference volume. Energy histories (kinetic + stored − external work) use it.
     fn stored_energy(&self, elastic_strain: &Matrix3<f64>) -> f64;
+}
+
+/// A law whose strength a strength-reduction analysis (Griffiths & Lane 1999) divides by a
+/// factor F: c/F and tan φ/F with the dilation capped at the reduced friction, yield
+/// stresses over F. A law offers it through [`ConstitutiveLaw::as_strength_reducible`].
+pub trait StrengthReducible {
+    /// The law with its strength divided by `factor` > 0; an error where the reduced
+    /// parameters are invalid.
+    fn with_strength_reduced(&self, factor: f64) -> Result<std::sync::Arc<dyn ConstitutiveLaw>, ConstitutiveError>;
 }
 
 pub(crate) fn check_finite(m: &Matrix3<f64>, what: &'static str) -> Result<(), ConstitutiveError> {

@@ -83,7 +83,7 @@
 use nalgebra::{Matrix3, Matrix4, Matrix4x3, Vector3, Vector4};
 
 use crate::tensor::{flatten, spectral, Tensor4};
-use crate::{check_finite, ConstitutiveError, ConstitutiveLaw, Elastic, StressUpdate};
+use crate::{check_finite, ConstitutiveError, ConstitutiveLaw, Elastic, StrengthReducible, StressUpdate};
 
 /// Linear softening of c, φ, ψ to residual values at κ = κ_res (angles in radians).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -886,20 +886,13 @@ fn in_cone(v: &Vector3<f64>, gens: &[Vector3<f64>]) -> bool {
     false
 }
 
-impl ConstitutiveLaw for MohrCoulomb {
-    fn elasticity(&self) -> Option<Elastic> {
-        Some(self.elastic)
-    }
-
+impl StrengthReducible for MohrCoulomb {
     /// c/F, φ_F = atan(tan φ / F), ψ_F = min(ψ, φ_F) (a dilation above the reduced
     /// friction would break ψ ≤ φ), the tension cut-off over F (the apex c cot φ is
     /// unchanged) and the residual values of softening alike.
-    fn with_strength_reduced(
-        &self,
-        factor: f64,
-    ) -> Option<Result<std::sync::Arc<dyn ConstitutiveLaw>, ConstitutiveError>> {
+    fn with_strength_reduced(&self, factor: f64) -> Result<std::sync::Arc<dyn ConstitutiveLaw>, ConstitutiveError> {
         if !(factor.is_finite() && factor > 0.0) {
-            return Some(Err(ConstitutiveError::InvalidParameter { name: "strength reduction factor", value: factor }));
+            return Err(ConstitutiveError::InvalidParameter { name: "strength reduction factor", value: factor });
         }
         let reduce = |phi: f64| (phi.tan() / factor).atan();
         let friction = reduce(self.friction);
@@ -919,7 +912,17 @@ impl ConstitutiveLaw for MohrCoulomb {
                 }
             }),
         };
-        Some(law.validate().map(|()| std::sync::Arc::new(law) as std::sync::Arc<dyn ConstitutiveLaw>))
+        law.validate().map(|()| std::sync::Arc::new(law) as std::sync::Arc<dyn ConstitutiveLaw>)
+    }
+}
+
+impl ConstitutiveLaw for MohrCoulomb {
+    fn elasticity(&self) -> Option<Elastic> {
+        Some(self.elastic)
+    }
+
+    fn as_strength_reducible(&self) -> Option<&dyn StrengthReducible> {
+        Some(self)
     }
 
     fn name(&self) -> &'static str {
@@ -936,7 +939,7 @@ impl ConstitutiveLaw for MohrCoulomb {
         self.dilation == self.friction && !self.softens()
     }
 
-    fn indefinite_tangent(&self) -> bool {
+    fn can_soften(&self) -> bool {
         self.softens()
     }
 
@@ -1016,7 +1019,7 @@ mod tests {
         let gamma = 0.05;
         let eps = Matrix3::new(0.0, gamma / 2.0, 0.0, gamma / 2.0, 0.0, 0.0, 0.0, 0.0, 0.0);
         for factor in [1.0, 1.4, 2.5] {
-            let reduced = law.with_strength_reduced(factor).unwrap().unwrap();
+            let reduced = law.with_strength_reduced(factor).unwrap();
             let mut h = vec![0.0; reduced.history_len()];
             let h0 = h.clone();
             let tau = reduced.update(&eps, &h0, &mut h).unwrap().stress[(0, 1)];
@@ -1026,9 +1029,9 @@ mod tests {
         }
         // Associated flow keeps ψ ≤ φ: ψ_F = φ_F, still associated (symmetric tangent).
         let assoc = MohrCoulomb::from_degrees(el(), 10.0, 30.0, 30.0).unwrap();
-        assert!(assoc.with_strength_reduced(1.5).unwrap().unwrap().symmetric_tangent());
-        assert!(assoc.with_strength_reduced(0.0).unwrap().is_err());
-        assert!(el().with_strength_reduced(1.5).is_none());
+        assert!(assoc.with_strength_reduced(1.5).unwrap().symmetric_tangent());
+        assert!(assoc.with_strength_reduced(0.0).is_err());
+        assert!(el().as_strength_reducible().is_none());
     }
 
     #[test]

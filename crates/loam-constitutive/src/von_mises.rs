@@ -9,7 +9,7 @@
 use nalgebra::Matrix3;
 
 use crate::tensor::{flatten, identity_dyad, sym_identity, Tensor4};
-use crate::{check_finite, ConstitutiveError, ConstitutiveLaw, Elastic, StressUpdate};
+use crate::{check_finite, ConstitutiveError, ConstitutiveLaw, Elastic, StrengthReducible, StressUpdate};
 
 /// Which branch of the return mapping an update took (see [`VonMises::update_with_region`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -154,26 +154,27 @@ impl VonMises {
     }
 }
 
+impl StrengthReducible for VonMises {
+    /// σ_y, H and the residual σ_y over F: the undrained strength c_u = σ_y/√3 over F.
+    fn with_strength_reduced(&self, factor: f64) -> Result<std::sync::Arc<dyn ConstitutiveLaw>, ConstitutiveError> {
+        VonMises::new(self.elastic, self.yield_stress / factor, self.hardening / factor)
+            .and_then(|law| law.with_residual_yield_stress(self.residual_yield_stress / factor))
+            .map(|law| std::sync::Arc::new(law) as std::sync::Arc<dyn ConstitutiveLaw>)
+    }
+}
+
 impl ConstitutiveLaw for VonMises {
     fn elasticity(&self) -> Option<Elastic> {
         Some(self.elastic)
     }
 
     /// Softening (H < 0) makes the algorithmic tangent negative in the flow direction.
-    fn indefinite_tangent(&self) -> bool {
+    fn can_soften(&self) -> bool {
         self.hardening < 0.0
     }
 
-    /// σ_y, H and the residual σ_y over F: the undrained strength c_u = σ_y/√3 over F.
-    fn with_strength_reduced(
-        &self,
-        factor: f64,
-    ) -> Option<Result<std::sync::Arc<dyn ConstitutiveLaw>, ConstitutiveError>> {
-        Some(
-            VonMises::new(self.elastic, self.yield_stress / factor, self.hardening / factor)
-                .and_then(|law| law.with_residual_yield_stress(self.residual_yield_stress / factor))
-                .map(|law| std::sync::Arc::new(law) as std::sync::Arc<dyn ConstitutiveLaw>),
-        )
+    fn as_strength_reducible(&self) -> Option<&dyn StrengthReducible> {
+        Some(self)
     }
 
     fn name(&self) -> &'static str {

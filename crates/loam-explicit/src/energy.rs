@@ -23,14 +23,14 @@ impl<const D: usize> LeapfrogEnergy<D> {
         Self {
             leads: scheme == UpdateScheme::Usf,
             stored: initial.stored_energy(),
-            velocity: initial.points.velocity.clone(),
+            velocity: initial.points().velocity.clone(),
         }
     }
 
     /// Feed the state after a step; returns E of the latest time level it can: this step's
     /// (USF) or the previous step's (MUSL, USL).
     pub fn advance(&mut self, m: &Model<D>) -> f64 {
-        let p = &m.points;
+        let p = &m.points();
         let kinetic = 0.5 * (0..p.len()).map(|i| p.mass[i] * self.velocity[i].dot(&p.velocity[i])).sum::<f64>();
         let stored = m.stored_energy();
         let e = kinetic + if self.leads { stored } else { self.stored };

@@ -1,6 +1,6 @@
 //! Why an explicit step or run stopped.
 
-use loam_grid::PointBasisError;
+use loam_kernels::ConnectError;
 
 /// Errors of an explicit analysis. A step that fails leaves the model's committed state as
 /// it was after the last successful step.
@@ -10,17 +10,14 @@ pub enum ExplicitError {
     InvalidSettings { field: &'static str, value: f64, valid: &'static str },
     #[error(
         "step {step}: the fixed time step {dt:e} exceeds the critical time step {critical:e} \
-         (h / (c_p + |v_p|), THEORY.md §9); use TimeStep::Cfl, a smaller dt, or \
+         (h / (c_p + |v_p|), docs/theory.md §10); use TimeStep::Cfl, a smaller dt, or \
          allow_above_critical to run anyway (it will blow up)"
     )]
     AboveCritical { step: usize, dt: f64, critical: f64 },
-    #[error("step {step}: {source}; the point left the grid (enlarge the grid)")]
-    PointOutsideGrid { step: usize, source: PointBasisError },
-    #[error(
-        "constraint {index} (axis {axis}, node plane {plane}) touches no active node: no material \
-         point has support on that plane"
-    )]
-    ConstraintTouchesNoNode { index: usize, axis: usize, plane: usize },
+    /// The points could not be connected to the background, a point left the grid, or a
+    /// constraint holds no node.
+    #[error(transparent)]
+    Connect(#[from] ConnectError),
     #[error(
         "step {step} (from t = {time:e}): material point {point} became unstable: {reason}; the \
          state of the last completed step is kept. Reduce the time step (TimeStep::Cfl with a \
@@ -40,13 +37,4 @@ pub enum ExplicitError {
     DisplacedConstraint { index: usize },
     #[error("the analysis is already finished ({0} steps)")]
     Finished(usize),
-}
-
-/// A run stopped by the analysis or by the step observer (e.g. an output error).
-#[derive(Debug, thiserror::Error)]
-pub enum ExplicitRunError<E: std::error::Error + 'static> {
-    #[error(transparent)]
-    Step(ExplicitError),
-    #[error(transparent)]
-    Observer(E),
 }

@@ -14,6 +14,8 @@
 //! node to its neighbours through the stiffness of the cells next to it. The caller scales
 //! it by γ times a modulus (`Model::with_ghost_penalty`).
 
+use crate::gauss::GaussLegendre;
+use crate::index::cell_corner;
 use crate::Grid;
 
 /// One ghost face: the nodes of its two cells (grid indices, ascending) and the scalar
@@ -68,7 +70,7 @@ pub fn ghost_faces<const D: usize>(
 
 /// The 2^D corner nodes of the cell at `ijk`.
 fn cell_nodes<const D: usize>(grid: &Grid<D>, ijk: [usize; D]) -> impl Iterator<Item = u32> + '_ {
-    (0..1usize << D).map(move |corner| grid.node_index(std::array::from_fn(|a| ijk[a] + ((corner >> a) & 1))) as u32)
+    (0..1usize << D).map(move |k| grid.node_index(cell_corner(ijk, k)) as u32)
 }
 
 /// The penalty matrix of the face between the cell at `lower` and its neighbour along
@@ -100,7 +102,9 @@ fn face_matrix<const D: usize>(grid: &Grid<D>, lower: [usize; D], axis: usize) -
         d
     };
     let area: f64 = (0..D).filter(|&b| b != axis).map(|b| h[b]).product();
-    let gauss = [0.5 - 0.5 / 3f64.sqrt(), 0.5 + 0.5 / 3f64.sqrt()];
+    // The 2-point rule mapped from [−1, 1] to the cell's [0, 1].
+    let rule = GaussLegendre::new(2).expect("the 2-point rule");
+    let gauss = [0, 1].map(|i| 0.5 + 0.5 * rule.point(i).0);
     let points = 1usize << (D - 1);
     let mut matrix = vec![0.0; n * n];
     let mut jump = vec![0.0; n];

@@ -7,14 +7,19 @@
 //! See `docs/theory.md` §5 for the basis functions (Bardenhagen & Kober 2004; iGIMP of
 //! Charlton, Coombs & Augarde 2017).
 
+mod background;
 mod basis;
 mod connectivity;
+pub mod gauss;
 mod ghost;
+mod index;
 mod mesh;
 
+pub use background::{Background, LocateError};
 pub use basis::{bspline_greville, BasisError, BasisKind};
 pub use connectivity::{ActiveNodes, Connectivity, NodePointAdjacency, PointBasisError, INACTIVE};
 pub use ghost::{ghost_faces, GhostFace, CUT_FILL};
+pub use index::{lexicographic_coords, lexicographic_index};
 pub use mesh::{ElementError, FeMesh, MeshError};
 
 use nalgebra::SVector;
@@ -100,39 +105,25 @@ impl<const D: usize> Grid<D> {
     /// Linear index of the cell with integer coordinates `ijk` (axis 0 fastest, like nodes).
     #[inline]
     pub fn cell_index(&self, ijk: [usize; D]) -> usize {
-        (0..D).rev().fold(0, |idx, a| idx * self.cells[a] + ijk[a])
+        lexicographic_index(ijk, self.cells)
     }
 
     /// Integer coordinates of cell `idx` (the inverse of [`cell_index`](Self::cell_index)).
     #[inline]
-    pub fn cell_ijk(&self, mut idx: usize) -> [usize; D] {
-        std::array::from_fn(|a| {
-            let i = idx % self.cells[a];
-            idx /= self.cells[a];
-            i
-        })
+    pub fn cell_ijk(&self, idx: usize) -> [usize; D] {
+        lexicographic_coords(idx, self.cells)
     }
 
     /// Linear node index of the node with integer coordinates `ijk`.
     #[inline]
     pub fn node_index(&self, ijk: [usize; D]) -> usize {
-        let mut idx = 0;
-        for a in (0..D).rev() {
-            idx = idx * (self.cells[a] + 1) + ijk[a];
-        }
-        idx
+        lexicographic_index(ijk, self.nodes_per_axis())
     }
 
     /// Integer coordinates of node `idx`.
     #[inline]
-    pub fn node_coords(&self, mut idx: usize) -> [usize; D] {
-        let mut ijk = [0; D];
-        for (a, c) in ijk.iter_mut().enumerate() {
-            let n = self.cells[a] + 1;
-            *c = idx % n;
-            idx /= n;
-        }
-        ijk
+    pub fn node_coords(&self, idx: usize) -> [usize; D] {
+        lexicographic_coords(idx, self.nodes_per_axis())
     }
 
     pub fn node_position(&self, idx: usize) -> SVector<f64, D> {

@@ -9,6 +9,9 @@
 //! change with the current node positions. Everything downstream (laws, assembly, Newton,
 //! Newmark) is shared with the MPM through [`Connectivity`](crate::Connectivity).
 
+use crate::gauss::GaussLegendre;
+use crate::index::cell_corner;
+use crate::{lexicographic_coords, lexicographic_index};
 use nalgebra::{Matrix3, SVector};
 
 /// Errors in building or evaluating a mesh.
@@ -29,21 +32,6 @@ pub enum MeshError {
 pub enum ElementError {
     #[error("element {element} is inverted or degenerate at Gauss point {gauss} (det J = {det:.3e})")]
     Inverted { element: usize, gauss: usize, det: f64 },
-}
-
-/// 1D Gauss–Legendre points on [−1, 1] and their weights.
-fn gauss_rule(order: usize) -> (&'static [f64], &'static [f64]) {
-    const P1: [f64; 1] = [0.0];
-    const W1: [f64; 1] = [2.0];
-    const P2: [f64; 2] = [-0.577_350_269_189_625_8, 0.577_350_269_189_625_8];
-    const W2: [f64; 2] = [1.0, 1.0];
-    const P3: [f64; 3] = [-0.774_596_669_241_483_4, 0.0, 0.774_596_669_241_483_4];
-    const W3: [f64; 3] = [5.0 / 9.0, 8.0 / 9.0, 5.0 / 9.0];
-    match order {
-        1 => (&P1, &W1),
-        2 => (&P2, &W2),
-        _ => (&P3, &W3),
-    }
 }
 
 /// A mesh of structured blocks of bilinear / trilinear elements. Node `k` of an element
@@ -82,37 +70,18 @@ impl<const D: usize> FeMesh<D> {
         }
         let nodes_per_axis: [usize; D] = std::array::from_fn(|a| elements[a] + 1);
         let num_nodes: usize = nodes_per_axis.iter().product();
-        let node_index = |ijk: [usize; D]| {
-            let mut idx = 0;
-            let mut stride = 1;
-            for a in 0..D {
-                idx += ijk[a] * stride;
-                stride *= nodes_per_axis[a];
-            }
-            idx
-        };
-        let mut reference = Vec::with_capacity(num_nodes);
-        for n in 0..num_nodes {
-            let mut rest = n;
-            let x = SVector::<f64, D>::from_fn(|a, _| {
-                let i = rest % nodes_per_axis[a];
-                rest /= nodes_per_axis[a];
-                min[a] + (max[a] - min[a]) * i as f64 / elements[a] as f64
-            });
-            reference.push(x);
-        }
+        let reference: Vec<SVector<f64, D>> = (0..num_nodes)
+            .map(|n| {
+                let ijk = lexicographic_coords(n, nodes_per_axis);
+                SVector::from_fn(|a, _| min[a] + (max[a] - min[a]) * ijk[a] as f64 / elements[a] as f64)
+            })
+            .collect();
         let num_elements: usize = elements.iter().product();
         let mut conn = Vec::with_capacity(num_elements * Self::NODES_PER_ELEMENT);
         for e in 0..num_elements {
-            let mut rest = e;
-            let base: [usize; D] = std::array::from_fn(|a| {
-                let i = rest % elements[a];
-                rest /= elements[a];
-                i
-            });
+            let base = lexicographic_coords(e, elements);
             for k in 0..Self::NODES_PER_ELEMENT {
-                let ijk: [usize; D] = std::array::from_fn(|a| base[a] + ((k >> a) & 1));
-                conn.push(node_index(ijk) as u32);
+                conn.push(lexicographic_index(cell_corner(base, k), nodes_per_axis) as u32);
             }
         }
         Ok(Self { position: reference.clone(), reference, elements: conn, block: vec![0; num_elements], gauss_order })
@@ -174,16 +143,16 @@ impl<const D: usize> FeMesh<D> {
         &self.position
     }
 
-    /// Reference coordinates and weight of Gauss point `g` of an element.
+    /// Reference coordinates and weight of Gauss point `g` of an element (the tensor
+    /// product of the 1D rule, axis 0 fastest).
     fn gauss_point(&self, g: usize) -> (SVector<f64, D>, f64) {
-        let (pts, wts) = gauss_rule(self.gauss_order);
-        let mut rest = g;
+        let rule = GaussLegendre::new(self.gauss_order).expect("the block checked the Gauss order");
+        let ijk = lexicographic_coords(g, [self.gauss_order; D]);
         let mut w = 1.0;
-        let xi = SVector::<f64, D>::from_fn(|_, _| {
-            let i = rest % self.gauss_order;
-            rest /= self.gauss_order;
-            w *= wts[i];
-            pts[i]
+        let xi = SVector::<f64, D>::from_fn(|a, _| {
+            let (x, weight) = rule.point(ijk[a]);
+            w *= weight;
+            x
         });
         (xi, w)
     }

@@ -1,16 +1,36 @@
-//! Implicit MPM analyses over the grid, points, constitutive and solver crates: the
-//! updated-Lagrangian step as a Newton system (`step`), and quasi-static load stepping with
-//! cut-back (`quasi_static`), strength reduction on top of it (`strength_reduction`). The formulation is the seed paper's (Wang et al. 2016) with
-//! the finite-strain extension of THEORY.md §2.
+//! Implicit MPM analyses over the grid, points, constitutive and solver crates, after the
+//! seed paper (Wang et al. 2016) with the finite-strain extension of docs/theory.md §2:
+//!
+//! - [`QuasiStatic`]: loads applied in steps, Newton per step, automatic cut-back;
+//!   [`StrengthReduction`] brackets a factor of safety on top of it;
+//! - [`Dynamic`]: Newmark / Bossak time stepping with Newton per step.
+//!
+//! Each analysis's step is one driver over named stages (docs/theory.md §1): connect the
+//! committed points to the background (`engine`), external forces, Newton — update points
+//! (`points`), residual (`residual`), assemble (`tangent`), solve, check — and commit;
+//! cut-back (`cutback`) wraps the attempts. Cell averages (`cell_average`), the ghost
+//! penalty (`ghost`) and inertia (`inertia`) enter the residual and tangent where a model
+//! asks for them.
 
+mod cell_average;
+mod cutback;
 mod dynamic;
 mod engine;
+mod ghost;
+mod inertia;
+mod points;
 mod quasi_static;
-mod step;
+mod report;
+mod residual;
 mod strength_reduction;
+mod tangent;
 
 pub use dynamic::{Dynamic, DynamicSettings, MassMatrix};
+pub use loam_kernels::{ConnectError, RunError};
 pub use loam_model::{AntiLocking, Kinematics, Model, ModelError, PlaneConstraint};
-pub use quasi_static::{IterationProfile, QuasiStatic, QuasiStaticSettings, RunError, StepError, StepReport};
-pub use step::PointUpdateError;
-pub use strength_reduction::{FactorOfSafety, StrengthReduction, StrengthReductionError, StrengthTrial};
+pub use points::PointUpdateError;
+pub use quasi_static::{QuasiStatic, QuasiStaticSettings};
+pub use report::{IterationProfile, StepError, StepReport};
+pub use strength_reduction::{
+    has_strength, reduced_strength, FactorOfSafety, StrengthReduction, StrengthReductionError, StrengthTrial,
+};

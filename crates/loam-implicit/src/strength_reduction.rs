@@ -1,7 +1,7 @@
 //! Strength-reduction analysis (Griffiths & Lane 1999, Géotechnique 49(3)): the factor of
 //! safety F of a slope is the factor by which c and tan φ (σ_y for von Mises) must be
 //! divided for the slope to fail under its own weight. Each trial rebuilds the model with
-//! the reduced strength (`Model::with_strength_reduced`) and applies gravity in
+//! the reduced strength ([`reduced_strength`]) and applies gravity in
 //! quasi-static load steps from zero; a trial whose load cannot be carried — a step that
 //! does not converge after all its cut-backs, or that runs away (points leaving the grid,
 //! an FEM mesh too distorted) — has failed. Bisection between a stable and a
@@ -9,8 +9,11 @@
 //! Lane's (non-convergence of the equilibrium iterations), with Newton and cut-back in
 //! place of their viscoplastic iterations.
 
-use crate::quasi_static::{QuasiStatic, QuasiStaticSettings, StepError};
+use crate::{QuasiStatic, QuasiStaticSettings, StepError};
+use loam_constitutive::ConstitutiveLaw;
+use loam_kernels::ConnectError;
 use loam_model::{Model, ModelError};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// Settings of a strength-reduction analysis.
@@ -66,6 +69,8 @@ pub enum StrengthReductionError {
     FailsAtLower(f64),
     #[error("the slope still holds at the upper bracket factor F = {0}: raise it")]
     HoldsAtUpper(f64),
+    #[error("strength reduction: {0}")]
+    Reduction(String),
     #[error(transparent)]
     Model(#[from] ModelError),
     #[error("trial F = {factor}: {source}")]
@@ -140,7 +145,7 @@ impl StrengthReduction {
         factor: f64,
     ) -> Result<StrengthTrial, StrengthReductionError> {
         let start = Instant::now();
-        let mut qs = QuasiStatic::new(model.with_strength_reduced(factor)?, self.trial.clone());
+        let mut qs = QuasiStatic::new(reduced_strength(model, factor)?, self.trial.clone());
         let (mut iterations, mut cutbacks, mut stable) = (0, 0, true);
         while !qs.is_finished() {
             match qs.step() {
@@ -155,14 +160,14 @@ impl StrengthReduction {
                 }
                 // A trial that runs away (points out of the grid, a mesh too distorted)
                 // has failed too: near collapse the motion is large.
-                Err(StepError::PointOutsideGrid { .. } | StepError::Element { .. }) => {
+                Err(StepError::Connect(ConnectError::PointOutsideGrid { .. } | ConnectError::Element { .. })) => {
                     stable = false;
                     break;
                 }
                 Err(source) => return Err(StrengthReductionError::Trial { factor, source }),
             }
         }
-        let max_displacement = qs.model().points.max_displacement();
+        let max_displacement = qs.model().points().max_displacement();
         Ok(StrengthTrial {
             factor,
             stable,
@@ -173,4 +178,33 @@ impl StrengthReduction {
             wall_time: start.elapsed(),
         })
     }
+}
+
+/// The model with every material's strength divided by `factor` (c/F, tan φ/F, σ_y/F:
+/// [`loam_constitutive::StrengthReducible`]); materials without a strength (elastic) are
+/// kept. A model without any material that has a strength is refused.
+pub fn reduced_strength<const D: usize>(model: &Model<D>, factor: f64) -> Result<Model<D>, StrengthReductionError> {
+    if !(factor.is_finite() && factor > 0.0) {
+        return Err(StrengthReductionError::Reduction(format!("the factor is {factor}; it must be a positive number")));
+    }
+    if !has_strength(model) {
+        return Err(StrengthReductionError::Reduction("no material has a strength to reduce (all are elastic)".into()));
+    }
+    let materials = model
+        .materials()
+        .iter()
+        .enumerate()
+        .map(|(m, law)| match law.as_strength_reducible() {
+            None => Ok(law.clone()),
+            Some(strength) => strength
+                .with_strength_reduced(factor)
+                .map_err(|e| StrengthReductionError::Reduction(format!("material {m} at F = {factor}: {e}"))),
+        })
+        .collect::<Result<Vec<Arc<dyn ConstitutiveLaw>>, _>>()?;
+    Ok(model.with_materials(materials)?)
+}
+
+/// Whether some material of `model` has a strength that strength reduction can divide.
+pub fn has_strength<const D: usize>(model: &Model<D>) -> bool {
+    model.materials().iter().any(|law| law.as_strength_reducible().is_some())
 }

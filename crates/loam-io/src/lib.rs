@@ -1,13 +1,12 @@
 //! Everything that knows a file format: the RON scene schema and its validation
 //! (`scene`), the output writers (`output`: VTU, PVD, CSV) and the runner that ties a scene
 //! to an analysis and its outputs (`runner`), over the three analyses behind one stepping
-//! interface (`analysis`).
+//! interface (`loam_analysis`).
 
-pub mod analysis;
 pub mod output;
 pub mod runner;
 pub mod scene;
 
-pub use analysis::{Analysis, AnalysisError, Progress};
+pub use loam_analysis::{Analysis, AnalysisError, Progress};
 pub use runner::{run_scene, write_points_csv, RunFailure, RunSummary};
 pub use scene::{LoadedScene, Scene, SceneError};

@@ -3,10 +3,10 @@
 //! energies, momentum) and `points_final.csv` after the last step. A run that fails mid-way
 //! keeps every file written so far; the error says which step failed and why.
 
-use crate::analysis::{Analysis, AnalysisError, Progress};
 use crate::output::{write_csv_table, write_vtu, CsvCell, CsvWriter, OutputError, PointCloud, PvdWriter};
 use crate::scene::{AnalysisSpec, LoadedScene, SceneError};
-use loam_implicit::{FactorOfSafety, QuasiStatic, StrengthReduction, StrengthReductionError};
+use loam_analysis::{Analysis, AnalysisError, Progress};
+use loam_implicit::{reduced_strength, FactorOfSafety, QuasiStatic, StrengthReduction, StrengthReductionError};
 use loam_model::{ExternalWork, Model};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -77,7 +77,7 @@ impl<const D: usize> History<D> {
     /// Total energy is kinetic + strain − external work: constant for a conservative
     /// system, falling where the scheme or the material dissipates.
     fn row(&mut self, model: &Model<D>, time: f64) -> Result<(), OutputError> {
-        let kinetic = model.points.kinetic_energy();
+        let kinetic = model.points().kinetic_energy();
         let strain = model.stored_energy();
         let work = self.work.work();
         let mut cells = vec![
@@ -87,7 +87,7 @@ impl<const D: usize> History<D> {
             CsvCell::Float(work),
             CsvCell::Float(kinetic + strain - work),
         ];
-        cells.extend(model.points.momentum().iter().map(|&m| CsvCell::Float(m)));
+        cells.extend(model.points().momentum().iter().map(|&m| CsvCell::Float(m)));
         self.writer.row_mixed(&cells)
     }
 }
@@ -103,7 +103,7 @@ fn run_dim<const D: usize>(
     let factor_of_safety = match (&scene.scene.analysis, &analysis) {
         (AnalysisSpec::QuasiStatic { strength_reduction: Some(spec), .. }, Analysis::QuasiStatic(qs)) => {
             let fos = factor_of_safety(qs, spec.bracket, spec.tolerance, out_dir)?;
-            let reduced = qs.model().with_strength_reduced(fos.stable).map_err(StrengthReductionError::from)?;
+            let reduced = reduced_strength(qs.model(), fos.stable)?;
             analysis = Analysis::QuasiStatic(QuasiStatic::new(reduced, qs.settings().clone()));
             Some(fos)
         }
@@ -116,7 +116,7 @@ fn run_dim<const D: usize>(
     const AXES: [&str; 3] = ["x", "y", "z"];
     let displaced: Vec<(usize, usize, f64)> = analysis
         .model()
-        .constraints
+        .constraints()
         .iter()
         .enumerate()
         .filter(|(_, c)| c.is_displaced())
@@ -200,7 +200,7 @@ fn run_dim<const D: usize>(
     Ok(RunSummary {
         analysis: analysis.name(),
         steps: analysis.steps_done(),
-        points: analysis.model().points.len(),
+        points: analysis.model().points().len(),
         newton_iterations: iterations,
         max_iterations_per_step: max_its,
         cutbacks,
@@ -249,7 +249,7 @@ struct Fields {
 }
 
 fn fields<const D: usize>(model: &Model<D>) -> Fields {
-    let pts = &model.points;
+    let pts = &model.points();
     let flat = |v: &[nalgebra::SVector<f64, D>]| v.iter().flat_map(|x| x.iter().copied()).collect::<Vec<f64>>();
     let position = flat(&pts.position);
     let position0 = flat(&pts.position0);
@@ -267,10 +267,10 @@ fn write_frame<const D: usize>(
     time: f64,
 ) -> Result<(), OutputError> {
     let f = fields(model);
-    let material: Vec<f64> = model.points.material.iter().map(|&m| m as f64).collect();
+    let material: Vec<f64> = model.points().material.iter().map(|&m| m as f64).collect();
     let cloud = PointCloud::new(D, &f.position)
-        .with_scalar("volume", &model.points.volume)
-        .with_scalar("mass", &model.points.mass)
+        .with_scalar("volume", &model.points().volume)
+        .with_scalar("mass", &model.points().mass)
         .with_scalar("material", &material)
         .with_vector("displacement", &f.displacement)
         .with_vector("velocity", &f.velocity)
@@ -283,7 +283,7 @@ fn write_frame<const D: usize>(
 /// `points_final.csv`: one row per point with initial and current position, stress
 /// (xx, yy, zz, xy[, yz, xz]), initial and current volume, and mass.
 pub fn write_points_csv<const D: usize>(model: &Model<D>, path: &Path) -> Result<(), OutputError> {
-    let pts = &model.points;
+    let pts = &model.points();
     let n = pts.len();
     let axes = ["x", "y", "z"];
     let mut header: Vec<String> = Vec::new();

@@ -3,13 +3,13 @@
 //! a scene is checked completely — down to points outside the grid and constraints that
 //! hold no node — before the first step runs.
 
-use crate::analysis::{Analysis, AnalysisError};
+use loam_analysis::Analysis;
 use loam_constitutive::{ConstitutiveLaw, Elastic, MohrCoulomb, VonMises};
 use loam_explicit::{Explicit, ExplicitError, ExplicitSettings, TimeStep, UpdateScheme};
 use loam_grid::{BasisKind, FeMesh, Grid, MeshError};
 use loam_implicit::{
-    AntiLocking, Dynamic, DynamicSettings, Kinematics, MassMatrix, Model, PlaneConstraint, QuasiStatic,
-    QuasiStaticSettings, StepError,
+    has_strength, AntiLocking, ConnectError, Dynamic, DynamicSettings, Kinematics, MassMatrix, Model, PlaneConstraint,
+    QuasiStatic, QuasiStaticSettings, StepError,
 };
 use loam_points::{PointStore, Shape};
 use loam_solve::{LinearSolverKind, NewtonSettings};
@@ -770,15 +770,17 @@ impl LoadedScene {
                 )
                 .map_err(|e| self.error(&[Seg::Key("bodies")], e.to_string()))?;
                 // Initial velocities at the Gauss points of each body's block.
-                let mesh = model.mesh.as_ref().expect("FEM model has a mesh");
+                let mesh = model.background().mesh().expect("FEM model has a mesh");
                 let per = mesh.gauss_per_element();
-                let blocks: Vec<usize> = (0..model.points.len()).map(|p| mesh.element_block(p / per)).collect();
+                let blocks: Vec<usize> = (0..model.points().len()).map(|p| mesh.element_block(p / per)).collect();
+                let positions = model.points().position.clone();
                 for (i, b) in s.bodies.iter().enumerate() {
                     if let Some(v) = &b.velocity {
                         let field = self.velocity_field::<D>(v, i)?;
-                        let pts = &mut model.points;
-                        for p in (0..pts.len()).filter(|&p| blocks[p] == i) {
-                            pts.velocity[p] = field(&pts.position[p]);
+                        for (p, velocity) in
+                            model.velocities_mut().iter_mut().enumerate().filter(|(p, _)| blocks[*p] == i)
+                        {
+                            *velocity = field(&positions[p]);
                         }
                     }
                 }
@@ -842,7 +844,7 @@ impl LoadedScene {
                             ),
                         ));
                     }
-                    if !model.materials.iter().any(|law| law.with_strength_reduced(1.0).is_some()) {
+                    if !has_strength(&model) {
                         return Err(self.error(&[Seg::Key("materials")], "strength reduction needs a material with a strength (VonMises or MohrCoulomb); every material here is elastic"));
                     }
                 }
@@ -910,17 +912,15 @@ impl LoadedScene {
                 }
             }
         };
-        analysis.check().map_err(|e| match e {
-            AnalysisError::Implicit(StepError::ConstraintTouchesNoNode { index, .. })
-            | AnalysisError::Explicit(ExplicitError::ConstraintTouchesNoNode { index, .. }) => {
+        analysis.check().map_err(|e| match e.connect_error() {
+            Some(&ConnectError::ConstraintTouchesNoNode { index, .. }) => {
                 self.error(&[Seg::Key("constraints"), Seg::Index(index)], format!("constraint {index}: {e}"))
             }
-            AnalysisError::Implicit(StepError::PointOutsideGrid { ref source, .. })
-            | AnalysisError::Explicit(ExplicitError::PointOutsideGrid { ref source, .. }) => self.error(
+            Some(ConnectError::PointOutsideGrid { source, .. }) => self.error(
                 &[Seg::Key("bodies")],
                 format!("material point {} at {:?}: its basis reaches outside the grid ({}); enlarge the grid or move the body", source.point, source.position, source.source),
             ),
-            other => self.error(&[], other.to_string()),
+            _ => self.error(&[], e.to_string()),
         })?;
         // A fixed explicit step above the critical one is refused here, before any output.
         if let Analysis::Explicit(e) = &analysis {

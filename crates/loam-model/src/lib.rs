@@ -1,18 +1,31 @@
-//! What a run is made of: the grid and basis, the points and their materials, the
-//! kinematics, the constraints on grid planes and the loads. The implicit and explicit
-//! analyses both take a [`Model`]; quantities that do not depend on the integrator
-//! (constrained dofs, stored energy, external work of dead loads) live here once.
+//! What a run is made of: the background (grid and basis, or the body-fitted mesh of the
+//! FEM reference), the points and their materials, the kinematics, the constraints on
+//! grid planes and the loads. The implicit and explicit analyses both take a [`Model`];
+//! quantities that do not depend on the integrator (constrained dofs, stored energy,
+//! external work of dead loads) live here once.
+//!
+//! A model keeps its invariants: every point's material exists, every constraint lies on
+//! a plane of the grid, point forces match the points. Its fields are private, checked by
+//! the constructors, and the analyses change the points' evolving state only through
+//! [`PointsMut`], which cannot add points or reassign their materials.
 
-use loam_constitutive::tensor::sym_log;
+mod constraint;
+mod energy;
+mod geostatic;
+mod points_mut;
+
+pub use constraint::PlaneConstraint;
+pub use energy::ExternalWork;
+pub use points_mut::PointsMut;
+
 use loam_constitutive::ConstitutiveLaw;
-use loam_grid::{ActiveNodes, BasisKind, Connectivity, FeMesh, Grid};
+use loam_grid::{ActiveNodes, Background, BasisKind, FeMesh, Grid};
 use loam_points::PointStore;
-use loam_solve::Couplings;
 use nalgebra::{Matrix3, SVector};
-use rayon::prelude::*;
 use std::sync::Arc;
 
-/// Kinematics of the step update (THEORY.md §2 and §3): one pipeline, two strain measures.
+/// Kinematics of the step update (docs/theory.md §2 and §3): one pipeline, two strain
+/// measures.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Kinematics {
     /// Linearised strain increments sym(∇Δu) on the start-of-step configuration; stress
@@ -66,49 +79,6 @@ impl AntiLocking {
     }
 }
 
-/// A constraint on the nodes of a grid plane: the listed displacement components are
-/// prescribed — zero (a roller fixes the component normal to the plane, a fixed plane all
-/// of them), or `displacement` at full load, applied in proportion to the load factor
-/// (a footing pushed into the ground). `within` limits it to the nodes of the plane inside
-/// a box (all axes; the plane's own axis is ignored).
-#[derive(Debug, Clone, PartialEq)]
-pub struct PlaneConstraint {
-    /// Axis normal to the plane.
-    pub axis: usize,
-    /// Index of the node plane along `axis`.
-    pub plane: usize,
-    /// Which displacement components are prescribed (first D entries used).
-    pub fixed: [bool; 3],
-    /// Prescribed displacement of the fixed components at full load (zero: held).
-    pub displacement: [f64; 3],
-    /// Only nodes with min ≤ x ≤ max (per axis, to within 1e-9 of a cell), if given.
-    pub within: Option<([f64; 3], [f64; 3])>,
-}
-
-impl PlaneConstraint {
-    /// Hold the `fixed` components of every node of the plane at zero.
-    pub fn new(axis: usize, plane: usize, fixed: [bool; 3]) -> Self {
-        Self { axis, plane, fixed, displacement: [0.0; 3], within: None }
-    }
-
-    /// Prescribe `displacement` (at full load) on the fixed components instead of zero.
-    pub fn displaced(mut self, displacement: [f64; 3]) -> Self {
-        self.displacement = displacement;
-        self
-    }
-
-    /// Only the nodes of the plane inside the box [min, max].
-    pub fn within(mut self, min: [f64; 3], max: [f64; 3]) -> Self {
-        self.within = Some((min, max));
-        self
-    }
-
-    /// Whether the constraint prescribes a non-zero displacement.
-    pub fn is_displaced(&self) -> bool {
-        self.displacement.iter().zip(&self.fixed).any(|(d, &f)| f && *d != 0.0)
-    }
-}
-
 /// Errors in assembling a model.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ModelError {
@@ -116,6 +86,8 @@ pub enum ModelError {
     NoPoints,
     #[error("point {point} uses material {material}, but only {count} materials are defined")]
     MissingMaterial { point: usize, material: u32, count: usize },
+    #[error("constraint {index} is on axis {axis}, but a {dimension}D model has axes 0..{dimension}")]
+    ConstraintAxis { index: usize, axis: usize, dimension: usize },
     #[error("constraint {index} is on plane {plane} of axis {axis}, but that axis has planes 0..={max}")]
     ConstraintPlane { index: usize, axis: usize, plane: usize, max: usize },
     #[error("mesh block {block} has no density or material ({densities} densities, {materials} materials given)")]
@@ -128,8 +100,10 @@ pub enum ModelError {
     Geostatic(String),
     #[error("gravity component {axis} is {value}; it must be finite")]
     Gravity { axis: usize, value: f64 },
-    #[error("strength reduction: {0}")]
-    StrengthReduction(String),
+    #[error("point forces: {0}")]
+    PointForces(String),
+    #[error("materials: {0}")]
+    Materials(String),
     #[error("ghost penalty: {0}")]
     GhostPenalty(String),
     #[error("geometrically linear analysis: {0}")]
@@ -139,32 +113,20 @@ pub enum ModelError {
 /// A complete MPM model. Build it, then hand it to an analysis.
 #[derive(Debug, Clone)]
 pub struct Model<const D: usize> {
-    pub grid: Grid<D>,
-    pub basis: BasisKind,
-    pub kinematics: Kinematics,
-    pub points: PointStore<D>,
-    pub materials: Vec<Arc<dyn ConstitutiveLaw>>,
-    pub constraints: Vec<PlaneConstraint>,
+    background: Background<D>,
+    kinematics: Kinematics,
+    points: PointStore<D>,
+    materials: Vec<Arc<dyn ConstitutiveLaw>>,
+    constraints: Vec<PlaneConstraint>,
     /// Body force per unit mass at full load.
-    pub gravity: SVector<f64, D>,
+    gravity: SVector<f64, D>,
     /// Force on each point at full load (empty: none).
-    pub point_forces: Vec<SVector<f64, D>>,
-    /// The body-fitted mesh of an updated Lagrangian FEM run, whose Gauss points are the
-    /// points; `None` for the MPM (see [`Model::updated_lagrangian_fem`]).
-    pub mesh: Option<FeMesh<D>>,
-    /// Volumetric-locking treatment (set with [`Model::with_anti_locking`]).
-    pub anti_locking: AntiLocking,
-    /// Gravity acts in full from the start (the points carry a geostatic initial stress,
-    /// [`Model::geostatic_stress`]); only point forces and prescribed displacements follow
-    /// the load factor.
-    pub gravity_preloaded: bool,
-    /// Ghost-penalty factor γ (implicit MPM): the faces of cut cells are penalised by γ
-    /// times the largest P-wave modulus (`loam_grid::ghost_faces`); `None` adds nothing.
-    pub ghost_penalty: Option<f64>,
-    /// Small strain on the initial configuration (set with
-    /// [`Model::with_geometrically_linear`]): the mechanics keeps the points' initial
-    /// places and volumes ([`Model::configuration`]).
-    pub geometrically_linear: bool,
+    point_forces: Vec<SVector<f64, D>>,
+    anti_locking: AntiLocking,
+    /// Gravity acts in full from the start (the points carry a geostatic initial stress).
+    gravity_preloaded: bool,
+    ghost_penalty: Option<f64>,
+    geometrically_linear: bool,
 }
 
 impl<const D: usize> Model<D> {
@@ -174,6 +136,18 @@ impl<const D: usize> Model<D> {
         grid: Grid<D>,
         basis: BasisKind,
         kinematics: Kinematics,
+        points: PointStore<D>,
+        materials: Vec<Arc<dyn ConstitutiveLaw>>,
+        constraints: Vec<PlaneConstraint>,
+        gravity: SVector<f64, D>,
+    ) -> Result<Self, ModelError> {
+        Self::on(Background::on_grid(grid, basis), kinematics, points, materials, constraints, gravity)
+    }
+
+    /// The model on any background: every index checked before it is used.
+    fn on(
+        background: Background<D>,
+        kinematics: Kinematics,
         mut points: PointStore<D>,
         materials: Vec<Arc<dyn ConstitutiveLaw>>,
         constraints: Vec<PlaneConstraint>,
@@ -182,15 +156,8 @@ impl<const D: usize> Model<D> {
         if points.is_empty() {
             return Err(ModelError::NoPoints);
         }
-        if let Some((p, &m)) = points.material.iter().enumerate().find(|(_, &m)| m as usize >= materials.len()) {
-            return Err(ModelError::MissingMaterial { point: p, material: m, count: materials.len() });
-        }
-        for (index, c) in constraints.iter().enumerate() {
-            let max = grid.cells()[c.axis];
-            if c.plane > max {
-                return Err(ModelError::ConstraintPlane { index, axis: c.axis, plane: c.plane, max });
-            }
-        }
+        check_materials(&points, &materials)?;
+        check_constraints(background.grid(), &constraints)?;
         if let Some(axis) = (0..D).find(|&a| !gravity[a].is_finite()) {
             return Err(ModelError::Gravity { axis, value: gravity[axis] });
         }
@@ -202,15 +169,13 @@ impl<const D: usize> Model<D> {
         let material = points.material.clone();
         points.init_history(stride, |p, h| materials[material[p] as usize].init_history(h));
         Ok(Self {
-            grid,
-            basis,
+            background,
             kinematics,
             points,
             materials,
             constraints,
             gravity,
             point_forces: Vec::new(),
-            mesh: None,
             anti_locking: AntiLocking::None,
             gravity_preloaded: false,
             ghost_penalty: None,
@@ -247,37 +212,44 @@ impl<const D: usize> Model<D> {
             }
             points.push(x, volume, rho, SVector::zeros(), m);
         }
-        // The element functions are the bilinear (trilinear) tensor products of the linear
-        // basis: same support size, so the connectivity buffers have the right stride.
-        let mut model = Self::new(grid, BasisKind::Linear, kinematics, points, materials, constraints, gravity)?;
-        model.mesh = Some(mesh);
-        Ok(model)
+        Self::on(Background::body_fitted(grid, mesh), kinematics, points, materials, constraints, gravity)
     }
 
-    /// The same model with every material's strength divided by `factor` (c/F, tan φ/F,
-    /// σ_y/F: `ConstitutiveLaw::with_strength_reduced`); elastic materials are kept. A
-    /// model without any material that has a strength is refused.
-    pub fn with_strength_reduced(&self, factor: f64) -> Result<Self, ModelError> {
-        if !(factor.is_finite() && factor > 0.0) {
-            return Err(ModelError::StrengthReduction(format!("the factor is {factor}; it must be a positive number")));
+    /// The same model with other laws for its materials (one per material, each with the
+    /// history length of the one it replaces), the points' state kept: strength
+    /// reduction's reduced strengths.
+    pub fn with_materials(&self, materials: Vec<Arc<dyn ConstitutiveLaw>>) -> Result<Self, ModelError> {
+        if materials.len() != self.materials.len() {
+            return Err(ModelError::Materials(format!(
+                "{} laws given for {} materials",
+                materials.len(),
+                self.materials.len()
+            )));
         }
-        let mut reduced_any = false;
-        let materials = self
-            .materials
-            .iter()
-            .enumerate()
-            .map(|(m, law)| match law.with_strength_reduced(factor) {
-                None => Ok(law.clone()),
-                Some(r) => {
-                    reduced_any = true;
-                    r.map_err(|e| ModelError::StrengthReduction(format!("material {m} at F = {factor}: {e}")))
-                }
-            })
-            .collect::<Result<Vec<_>, _>>()?;
-        if !reduced_any {
-            return Err(ModelError::StrengthReduction("no material has a strength to reduce (all are elastic)".into()));
+        if let Some(m) = (0..materials.len()).find(|&m| materials[m].history_len() != self.materials[m].history_len()) {
+            return Err(ModelError::Materials(format!(
+                "material {m}: the new law keeps {} history values, the old one {}",
+                materials[m].history_len(),
+                self.materials[m].history_len()
+            )));
         }
         Ok(Self { materials, ..self.clone() })
+    }
+
+    /// Dead forces on the points at full load, one per point, following the load factor.
+    pub fn with_point_forces(mut self, forces: Vec<SVector<f64, D>>) -> Result<Self, ModelError> {
+        if forces.len() != self.points.len() {
+            return Err(ModelError::PointForces(format!(
+                "{} forces given for {} points; give one per point",
+                forces.len(),
+                self.points.len()
+            )));
+        }
+        if let Some(p) = forces.iter().position(|f| !f.iter().all(|c| c.is_finite())) {
+            return Err(ModelError::PointForces(format!("the force on point {p} is not finite")));
+        }
+        self.point_forces = forces;
+        Ok(self)
     }
 
     /// Stabilise nearly empty cells by the face ghost penalty with factor γ > 0 (docs/theory.md
@@ -289,10 +261,10 @@ impl<const D: usize> Model<D> {
         if !(gamma.is_finite() && gamma > 0.0) {
             return Err(ModelError::GhostPenalty(format!("the factor is {gamma}; it must be a positive number")));
         }
-        if self.mesh.is_some() {
+        if self.background.moves_with_body() {
             return Err(ModelError::GhostPenalty("a body-fitted FEM mesh has no cut cells to stabilise".into()));
         }
-        if self.basis == BasisKind::QuadraticBSpline {
+        if self.background.basis() == BasisKind::QuadraticBSpline {
             return Err(ModelError::GhostPenalty(
                 "the penalty acts on the grid's bilinear interpolant of the nodal values, which are control values off the nodes for QuadraticBSpline next to a grid face; use Linear or Gimp".into(),
             ));
@@ -336,7 +308,7 @@ impl<const D: usize> Model<D> {
                     "{name} is a small-strain treatment; use kinematics SmallStrain"
                 )));
             }
-            if self.mesh.is_none() && self.basis != BasisKind::Linear {
+            if !self.background.groups_share_nodes() {
                 return Err(ModelError::AntiLocking(format!(
                     "{name} averages over the points of a cell, which share their nodes only with the Linear basis"
                 )));
@@ -346,13 +318,90 @@ impl<const D: usize> Model<D> {
         Ok(self)
     }
 
+    pub fn background(&self) -> &Background<D> {
+        &self.background
+    }
+
+    /// The grid (for the FEM reference, the grid its constraint planes lie on).
+    pub fn grid(&self) -> &Grid<D> {
+        self.background.grid()
+    }
+
+    pub fn basis(&self) -> BasisKind {
+        self.background.basis()
+    }
+
+    pub fn kinematics(&self) -> Kinematics {
+        self.kinematics
+    }
+
+    pub fn points(&self) -> &PointStore<D> {
+        &self.points
+    }
+
+    /// The points' evolving state, for the analyses that advance it.
+    pub fn points_mut(&mut self) -> PointsMut<'_, D> {
+        PointsMut::new(&mut self.points)
+    }
+
+    /// Move the background's nodes by `du(node)` where they move with the body (the mesh
+    /// of the FEM reference, after a converged step); a grid, reset every step, stays.
+    pub fn displace_background(&mut self, du: impl Fn(usize) -> SVector<f64, D>) {
+        self.background.displace(du);
+    }
+
+    /// The points' velocities, to set an initial condition.
+    pub fn velocities_mut(&mut self) -> &mut [SVector<f64, D>] {
+        &mut self.points.velocity
+    }
+
+    pub fn materials(&self) -> &[Arc<dyn ConstitutiveLaw>] {
+        &self.materials
+    }
+
+    /// The law of point `p`'s material.
+    #[inline]
+    pub fn law(&self, p: usize) -> &dyn ConstitutiveLaw {
+        &*self.materials[self.points.material[p] as usize]
+    }
+
+    pub fn constraints(&self) -> &[PlaneConstraint] {
+        &self.constraints
+    }
+
+    /// Body force per unit mass at full load.
+    pub fn gravity(&self) -> &SVector<f64, D> {
+        &self.gravity
+    }
+
+    pub fn anti_locking(&self) -> AntiLocking {
+        self.anti_locking
+    }
+
+    /// Gravity acts in full from the start (the points carry a geostatic initial stress,
+    /// [`Model::geostatic_stress`]); only point forces and prescribed displacements follow
+    /// the load factor.
+    pub fn gravity_preloaded(&self) -> bool {
+        self.gravity_preloaded
+    }
+
+    /// Ghost-penalty factor γ (implicit MPM): the faces of cut cells are penalised by γ
+    /// times the largest P-wave modulus (`loam_grid::ghost_faces`); `None` adds nothing.
+    pub fn ghost_penalty(&self) -> Option<f64> {
+        self.ghost_penalty
+    }
+
+    /// Small strain on the initial configuration ([`Model::with_geometrically_linear`]):
+    /// the mechanics keeps the points' initial places and volumes
+    /// ([`Model::configuration`]).
+    pub fn geometrically_linear(&self) -> bool {
+        self.geometrically_linear
+    }
+
     /// The volume-averaging group of every point for B-bar: its grid cell (the face rule
     /// of the basis: a cell owns [x_i, x_{i+1})), or its element in the FEM reference.
     pub fn averaging_cell(&self, p: usize) -> usize {
-        if let Some(mesh) = &self.mesh {
-            return p / mesh.gauss_per_element();
-        }
-        self.grid.cell_index(self.grid.cell_coords(&self.configuration()[p]))
+        self.background.averaging_group(p, &self.configuration()[p])
     }
 
     /// The point positions the mechanics is written on: the current ones, or the initial
@@ -366,23 +415,9 @@ impl<const D: usize> Model<D> {
         }
     }
 
-    /// Whether node `node` (grid node index in MPM, mesh node index in FEM) lies on the plane
-    /// of constraint `c`: a grid node on that node plane, or a mesh node that started on it
-    /// (within 1e-9 of a cell).
+    /// Whether background node `node` is held by constraint `c`.
     fn node_on_plane(&self, node: usize, c: &PlaneConstraint) -> bool {
-        let h = self.grid.cell_size();
-        let (on_plane, x) = match &self.mesh {
-            None => (self.grid.node_coords(node)[c.axis] == c.plane, self.grid.node_position(node)),
-            Some(mesh) => {
-                let x = mesh.reference_positions()[node];
-                let plane = self.grid.origin()[c.axis] + c.plane as f64 * h[c.axis];
-                ((x[c.axis] - plane).abs() <= 1e-9 * h[c.axis], x)
-            }
-        };
-        on_plane
-            && c.within.is_none_or(|(lo, hi)| {
-                (0..D).all(|a| a == c.axis || (x[a] >= lo[a] - 1e-9 * h[a] && x[a] <= hi[a] + 1e-9 * h[a]))
-            })
+        self.background.node_on_plane(node, c.axis, c.plane, c.within.as_ref())
     }
 
     /// The prescribed displacement increments of a step from load factor `from` to `to`
@@ -405,16 +440,15 @@ impl<const D: usize> Model<D> {
         (0..active.len()).filter(|&a| self.node_on_plane(active.active_to_grid[a] as usize, c)).collect()
     }
 
-    /// Whether every material in use has a symmetric algorithmic tangent (so Cholesky
-    /// applies) — the hyperelastic finite-strain tangent is symmetric as a whole.
+    /// Whether every material in use has a symmetric algorithmic tangent — the
+    /// hyperelastic finite-strain tangent is symmetric as a whole.
     pub fn symmetric_tangent(&self) -> bool {
         self.materials.iter().all(|m| m.symmetric_tangent())
     }
 
-    /// Whether some material softens, so the tangent can turn indefinite and only LU
-    /// factorises it.
-    pub fn indefinite_tangent(&self) -> bool {
-        self.materials.iter().any(|m| m.indefinite_tangent())
+    /// Whether some material softens, so that the tangent can turn indefinite.
+    pub fn can_soften(&self) -> bool {
+        self.materials.iter().any(|m| m.can_soften())
     }
 
     /// Mark the constrained dofs (`active node · D + component`) of the active nodes.
@@ -458,185 +492,32 @@ impl<const D: usize> Model<D> {
             None => f,
         }
     }
+}
 
-    /// Put the points in a geostatic initial stress: the vertical stress is the weight of
-    /// the material above each point in its grid column, σ_v = −|g| Σ m / A (A the column's
-    /// horizontal area; points at the same height count half), the horizontal ones K0 σ_v,
-    /// with the elastic strain that carries it (small strain ε^e = C⁻¹σ, finite strain
-    /// b^e = exp(2 C⁻¹σ)). Gravity then acts in full from the start
-    /// (`gravity_preloaded`). K0 applies to level or layered ground; a slope is brought to
-    /// equilibrium by gravity loading instead. Fails if gravity is not along one axis, a
-    /// law has no isotropic elasticity, or the state lies outside a yield surface.
-    pub fn geostatic_stress(&mut self, k0: f64) -> Result<(), ModelError> {
-        if !(k0.is_finite() && k0 > 0.0) {
-            return Err(ModelError::Geostatic(format!("K0 is {k0}; it must be a positive number")));
+/// Every point's material must exist.
+fn check_materials<const D: usize>(
+    points: &PointStore<D>,
+    materials: &[Arc<dyn ConstitutiveLaw>],
+) -> Result<(), ModelError> {
+    match points.material.iter().enumerate().find(|(_, &m)| m as usize >= materials.len()) {
+        Some((point, &material)) => Err(ModelError::MissingMaterial { point, material, count: materials.len() }),
+        None => Ok(()),
+    }
+}
+
+/// Every constraint must lie on an axis of the model and a node plane of the grid.
+fn check_constraints<const D: usize>(grid: &Grid<D>, constraints: &[PlaneConstraint]) -> Result<(), ModelError> {
+    for (index, c) in constraints.iter().enumerate() {
+        if c.axis >= D {
+            return Err(ModelError::ConstraintAxis { index, axis: c.axis, dimension: D });
         }
-        let vertical = (0..D).max_by(|&a, &b| self.gravity[a].abs().total_cmp(&self.gravity[b].abs())).unwrap_or(0);
-        let g = self.gravity[vertical];
-        if g == 0.0 || (0..D).any(|a| a != vertical && self.gravity[a] != 0.0) {
-            return Err(ModelError::Geostatic("a geostatic stress needs gravity along one axis".into()));
+        let max = grid.cells()[c.axis];
+        if c.plane > max {
+            return Err(ModelError::ConstraintPlane { index, axis: c.axis, plane: c.plane, max });
         }
-        // Down is the direction of gravity; "above" is against it.
-        let up = -g.signum();
-        let h = self.grid.cell_size();
-        let area: f64 = (0..D).filter(|&a| a != vertical).map(|a| h[a]).product();
-        let pts = &self.points;
-        let n = pts.len();
-        // The column of a point: its cell's coordinates across gravity (the vertical one
-        // zeroed), so points sort by column, then from the top down.
-        let column = |p: usize| {
-            let mut ijk = self.grid.cell_coords(&pts.position[p]);
-            ijk[vertical] = 0;
-            ijk
-        };
-        let mut order: Vec<([usize; D], usize)> = (0..n).map(|p| (column(p), p)).collect();
-        order.sort_by(|(ca, a), (cb, b)| {
-            ca.cmp(cb).then((up * pts.position[*b][vertical]).total_cmp(&(up * pts.position[*a][vertical])))
-        });
-        let tol = 1e-9 * h[vertical];
-        let mut sigma_v = vec![0.0; n];
-        for col in order.chunk_by(|a, b| a.0 == b.0) {
-            let mut above = 0.0;
-            // The rows of the column: points at the same height, top down.
-            for row in
-                col.chunk_by(|&(_, a), &(_, b)| (pts.position[a][vertical] - pts.position[b][vertical]).abs() <= tol)
-            {
-                let row_mass: f64 = row.iter().map(|&(_, q)| pts.mass[q]).sum();
-                for &(_, q) in row {
-                    sigma_v[q] = -g.abs() * (above + 0.5 * row_mass) / area;
-                }
-                above += row_mass;
-            }
-        }
-        let hs = pts.history_stride();
-        let mut h_out = vec![0.0; hs];
-        let mut strains = Vec::with_capacity(n);
-        let mut stresses = Vec::with_capacity(n);
-        for (p, &sv) in sigma_v.iter().enumerate() {
-            let law = &self.materials[pts.material[p] as usize];
-            let Some(elastic) = law.elasticity() else {
-                return Err(ModelError::Geostatic(format!(
-                    "material {} ({}) has no isotropic elasticity to carry an initial stress",
-                    pts.material[p],
-                    law.name()
-                )));
-            };
-            let mut sigma = Matrix3::identity() * (k0 * sv);
-            sigma[(vertical, vertical)] = sv;
-            let eps = elastic.strain(&sigma);
-            // Admissible: the law's own update from that elastic strain returns the stress.
-            let upd = law
-                .update(&eps, pts.history(p), &mut h_out)
-                .map_err(|e| ModelError::Geostatic(format!("point {p}: {e}")))?;
-            if (upd.stress - sigma).norm() > 1e-8 * sigma.norm().max(f64::MIN_POSITIVE) {
-                return Err(ModelError::Geostatic(format!(
-                    "point {p} at {:?}: the K0 = {k0} stress (σ_v = {:.4e}) lies outside the yield surface of material {} ({}); use a K0 inside it or gravity loading",
-                    pts.position[p].as_slice(), sv, pts.material[p], law.name()
-                )));
-            }
-            let be = match self.kinematics {
-                Kinematics::SmallStrain => eps,
-                Kinematics::FiniteStrain => loam_constitutive::tensor::sym_exp(&(eps * 2.0))
-                    .map_err(|e| ModelError::Geostatic(format!("point {p}: {e}")))?,
-            };
-            strains.push(be);
-            stresses.push(sigma);
-        }
-        self.points.elastic_strain = strains;
-        self.points.stress = stresses;
-        self.gravity_preloaded = true;
-        Ok(())
     }
-
-    /// Stored elastic energy Σ_p V⁰_p W(ε^e_p): with finite strain ε^e = ½ ln b^e and W
-    /// per unit reference volume (Hencky); with small strain W(ε^e) on the initial volume.
-    pub fn stored_energy(&self) -> f64 {
-        let pts = &self.points;
-        (0..pts.len())
-            .into_par_iter()
-            .map(|p| {
-                let law = &self.materials[pts.material[p] as usize];
-                let eps = match self.kinematics {
-                    Kinematics::SmallStrain => pts.elastic_strain[p],
-                    Kinematics::FiniteStrain => match sym_log(&pts.elastic_strain[p]) {
-                        Ok(l) => l * 0.5,
-                        Err(_) => return f64::NAN,
-                    },
-                };
-                pts.volume0[p] * law.stored_energy(&eps)
-            })
-            .collect::<Vec<_>>()
-            .iter()
-            .sum()
-    }
+    Ok(())
 }
 
-/// Internal force of a point at one support node, v σ ∂N_a, and with B-bar (b̄_a given)
-/// also σ : (⅓ (b̄_a − ∂N_a) ⊗ e_i) I = v (tr σ / 3)(b̄_a − ∂N_a): the one kernel of the
-/// implicit residual, the dynamic start and the explicit grid update.
-#[inline]
-pub fn internal_force<const D: usize>(
-    volume: f64,
-    stress: &Matrix3<f64>,
-    grad: &SVector<f64, D>,
-    bbar: Option<&SVector<f64, D>>,
-) -> SVector<f64, D> {
-    let mut f = SVector::<f64, D>::from_fn(|i, _| volume * (0..D).map(|j| stress[(i, j)] * grad[j]).sum::<f64>());
-    if let Some(b) = bbar {
-        f += (b - grad) * (volume * stress.trace() / 3.0);
-    }
-    f
-}
-
-/// Work of the dead loads (gravity, point forces) on the points' motion, accumulated
-/// step by step with the trapezoidal rule in the load factor: exact for loads held
-/// constant, and for loads ramped linearly with displacement increments of one step.
-#[derive(Debug, Clone, Default)]
-pub struct ExternalWork<const D: usize> {
-    previous: Vec<SVector<f64, D>>,
-    previous_factor: f64,
-    work: f64,
-}
-
-impl<const D: usize> ExternalWork<D> {
-    /// Start at the model's current positions and load factor.
-    pub fn new(model: &Model<D>, load_factor: f64) -> Self {
-        Self { previous: model.points.position.clone(), previous_factor: load_factor, work: 0.0 }
-    }
-
-    /// Add the work done since the last call; the load factor went linearly from the last
-    /// one to `load_factor`. Returns the accumulated work.
-    pub fn advance(&mut self, model: &Model<D>, load_factor: f64) -> f64 {
-        let pts = &model.points;
-        let dw: f64 = (0..pts.len())
-            .map(|p| {
-                let mean = (model.point_load_at(p, self.previous_factor) + model.point_load_at(p, load_factor)) * 0.5;
-                mean.dot(&(pts.position[p] - self.previous[p]))
-            })
-            .sum();
-        self.work += dw;
-        self.previous.copy_from_slice(&pts.position);
-        self.previous_factor = load_factor;
-        self.work
-    }
-
-    pub fn work(&self) -> f64 {
-        self.work
-    }
-}
-
-/// Point–node connectivity seen as the coupling structure of assembly and gathers:
-/// points are the elements.
-pub struct PointCouplings<'a, const D: usize>(pub &'a Connectivity<D>);
-
-impl<const D: usize> Couplings for PointCouplings<'_, D> {
-    fn num_nodes(&self) -> usize {
-        self.0.active_nodes().len()
-    }
-    fn elements_of(&self, node: usize) -> &[(u32, u32)] {
-        self.0.node_points().of(node)
-    }
-    fn nodes_of(&self, element: usize) -> &[u32] {
-        self.0.support_nodes(element)
-    }
-}
+#[cfg(test)]
+mod tests;

@@ -8,5 +8,5 @@ mod newton;
 mod pattern;
 
 pub use linear::{LinearSolveError, LinearSolverKind, LinearSolverTimings, SparseDirectSolver};
-pub use newton::{NewtonError, NewtonProblem, NewtonReport, NewtonSettings, NewtonSolver};
-pub use pattern::{gather_nodal, BlockPattern, Couplings};
+pub use newton::{norm, NewtonControl, NewtonError, NewtonReport, NewtonSettings};
+pub use pattern::{BlockPattern, Couplings};

@@ -1,29 +1,16 @@
-//! Newton's method for a nodal system R(Δu) = 0 (THEORY.md §7).
+//! Newton's method for a nodal system R(Δu) = 0 (docs/theory.md §6), as the control that
+//! the caller's loop consults: the loop itself — update points and residual, assemble,
+//! solve, check — is written out in the implicit step, where it can be read.
 //!
 //! Each iteration solves K δ = −R, adds δ to the increment and re-evaluates. A step is
 //! converged when the relative residual ‖R‖ / ‖reference force‖ and the relative correction
 //! ‖δ‖ / ‖Δu‖ are both below their tolerances, after at least one correction — or, for a
-//! step that starts in equilibrium, when its first correction keeps the residual there. It fails —
-//! and the caller must cut the step back — on a non-finite residual, a residual that grows
-//! past `divergence_factor` times the initial one, a failed factorisation or the iteration
-//! limit. An unconverged step is never reported as converged.
+//! step that starts in equilibrium, when its first correction keeps the residual there. It
+//! fails — and the caller must cut the step back — on a non-finite residual, a residual
+//! that grows past `divergence_factor` times the initial one, a failed factorisation or the
+//! iteration limit. An unconverged step is never reported as converged.
 
-use crate::{BlockPattern, LinearSolveError, SparseDirectSolver};
-
-/// The problem side of Newton's method.
-pub trait NewtonProblem {
-    type Error: std::error::Error + Send + Sync + 'static;
-    /// Number of unknowns.
-    fn num_dofs(&self) -> usize;
-    /// Evaluate the state at increment `du`: write the residual (zero on constrained dofs)
-    /// into `r` and return the reference force norm used to make it relative. Material
-    /// tangents needed by `assemble` are computed here.
-    fn evaluate(&mut self, du: &[f64], r: &mut [f64]) -> Result<f64, Self::Error>;
-    /// Assemble the tangent at the state of the last `evaluate`.
-    fn assemble(&mut self);
-    /// The assembled tangent.
-    fn matrix(&self) -> (&BlockPattern, &[f64]);
-}
+use crate::LinearSolveError;
 
 /// Convergence settings.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -88,97 +75,99 @@ impl<E: std::error::Error + 'static> NewtonError<E> {
     }
 }
 
-fn norm(v: &[f64]) -> f64 {
+/// The Euclidean norm of a vector, summed in index order.
+pub fn norm(v: &[f64]) -> f64 {
     v.iter().map(|x| x * x).sum::<f64>().sqrt()
 }
 
-/// Newton's method with reusable scratch buffers and a reusable linear solver.
-pub struct NewtonSolver {
-    pub settings: NewtonSettings,
-    linear: SparseDirectSolver,
-    residual: Vec<f64>,
-    correction: Vec<f64>,
+/// The control of one Newton solve: its residual history and its convergence, divergence
+/// and iteration-limit tests, consulted by the caller's loop. See the module docs.
+#[derive(Debug, Clone)]
+pub struct NewtonControl {
+    settings: NewtonSettings,
+    report: NewtonReport,
+    /// The relative residual of the starting increment.
+    initial: f64,
 }
 
-impl NewtonSolver {
-    pub fn new(settings: NewtonSettings, linear: SparseDirectSolver) -> Self {
-        Self { settings, linear, residual: Vec::new(), correction: Vec::new() }
-    }
-
-    pub fn linear_solver(&self) -> &SparseDirectSolver {
-        &self.linear
-    }
-
-    /// Replace the linear solver (e.g. when a material's tangent symmetry asks for LU).
-    pub fn set_linear_solver(&mut self, linear: SparseDirectSolver) {
-        self.linear = linear;
-    }
-
-    /// Solve R(du) = 0 starting from `du` (usually zero), which holds the converged
-    /// increment on success.
-    pub fn solve<P: NewtonProblem>(
-        &mut self,
-        problem: &mut P,
-        du: &mut [f64],
-    ) -> Result<NewtonReport, NewtonError<P::Error>> {
-        let n = problem.num_dofs();
-        assert_eq!(du.len(), n);
-        self.residual.resize(n, 0.0);
-        self.correction.resize(n, 0.0);
-        let mut report = NewtonReport::default();
-        let s = self.settings;
-
-        let mut reference = match problem.evaluate(du, &mut self.residual) {
-            Ok(f) => f,
-            Err(source) => return Err(NewtonError::Problem { source, report }),
-        };
-        let relative = |r: f64, reference: f64| if r == 0.0 { 0.0 } else { r / reference.max(f64::MIN_POSITIVE) };
-        let r0 = relative(norm(&self.residual), reference);
-        report.residuals.push(r0);
-        if !r0.is_finite() {
+impl NewtonControl {
+    /// Start a solve whose starting increment left a residual of norm `residual` against
+    /// the reference force norm `reference`; fails if that residual is not finite.
+    pub fn start<E: std::error::Error>(
+        settings: NewtonSettings,
+        residual: f64,
+        reference: f64,
+    ) -> Result<Self, NewtonError<E>> {
+        let initial = relative(residual, reference);
+        let report = NewtonReport { residuals: vec![initial], increments: Vec::new() };
+        if !initial.is_finite() {
             return Err(NewtonError::NonFinite(report));
         }
-        for _ in 0..s.max_iterations {
-            problem.assemble();
-            let (pattern, values) = problem.matrix();
-            if let Err(source) = self.linear.factorize(pattern, values) {
-                return Err(NewtonError::Linear { source, report });
-            }
-            for (c, r) in self.correction.iter_mut().zip(&self.residual) {
-                *c = -r;
-            }
-            if let Err(source) = self.linear.solve_in_place(&mut self.correction) {
-                return Err(NewtonError::Linear { source, report });
-            }
-            for (u, c) in du.iter_mut().zip(&self.correction) {
-                *u += c;
-            }
-            let dnorm = norm(&self.correction);
-            let unorm = norm(du);
-            report.increments.push(relative(dnorm, unorm));
-            reference = match problem.evaluate(du, &mut self.residual) {
-                Ok(f) => f,
-                Err(source) => return Err(NewtonError::Problem { source, report }),
-            };
-            let rk = relative(norm(&self.residual), reference);
-            report.residuals.push(rk);
-            tracing::debug!(iteration = report.iterations(), residual = rk, correction = dnorm, "newton");
-            if !rk.is_finite() {
-                return Err(NewtonError::NonFinite(report));
-            }
-            if rk > s.divergence_factor * r0.max(s.residual_tolerance) {
-                return Err(NewtonError::Diverged(report));
-            }
-            // The relative correction means nothing when the step started in equilibrium
-            // (a geostatic state, a load step that adds nothing): Δu is then round-off
-            // itself, and ‖δ‖/‖Δu‖ ≈ 1 for ever. Such a step is converged when its one
-            // correction kept the residual within tolerance.
-            let inc = *report.increments.last().unwrap();
-            if rk <= s.residual_tolerance && (inc <= s.increment_tolerance || r0 <= s.residual_tolerance) {
-                return Ok(report);
-            }
+        Ok(Self { settings, report, initial })
+    }
+
+    /// Make room for one more correction: fails once `max_iterations` corrections have not
+    /// converged.
+    pub fn next_iteration<E: std::error::Error>(&self) -> Result<(), NewtonError<E>> {
+        if self.report.iterations() >= self.settings.max_iterations {
+            return Err(NewtonError::IterationLimit(self.report.clone()));
         }
-        Err(NewtonError::IterationLimit(report))
+        Ok(())
+    }
+
+    /// Record a correction of norm `correction` that left an increment of norm `increment`.
+    pub fn corrected(&mut self, correction: f64, increment: f64) {
+        self.report.increments.push(relative(correction, increment));
+    }
+
+    /// Check the residual after the last correction: `Ok(true)` when converged, `Ok(false)`
+    /// when another correction is needed, an error when the residual is not finite or has
+    /// diverged.
+    pub fn converged<E: std::error::Error>(&mut self, residual: f64, reference: f64) -> Result<bool, NewtonError<E>> {
+        let s = self.settings;
+        let rk = relative(residual, reference);
+        self.report.residuals.push(rk);
+        tracing::debug!(iteration = self.report.iterations(), residual = rk, "newton");
+        if !rk.is_finite() {
+            return Err(NewtonError::NonFinite(self.report.clone()));
+        }
+        if rk > s.divergence_factor * self.initial.max(s.residual_tolerance) {
+            return Err(NewtonError::Diverged(self.report.clone()));
+        }
+        // The relative correction means nothing when the step started in equilibrium
+        // (a geostatic state, a load step that adds nothing): Δu is then round-off
+        // itself, and ‖δ‖/‖Δu‖ ≈ 1 for ever. Such a step is converged when its one
+        // correction kept the residual within tolerance.
+        let inc = self.report.increments.last().copied().unwrap_or(f64::INFINITY);
+        Ok(rk <= s.residual_tolerance && (inc <= s.increment_tolerance || self.initial <= s.residual_tolerance))
+    }
+
+    /// The failure of a linear solve, with the history so far.
+    pub fn linear_failure<E: std::error::Error>(&self, source: LinearSolveError) -> NewtonError<E> {
+        NewtonError::Linear { source, report: self.report.clone() }
+    }
+
+    /// The failure of the problem's own evaluation (a point's update), with the history so
+    /// far.
+    pub fn problem_failure<E: std::error::Error>(&self, source: E) -> NewtonError<E> {
+        NewtonError::Problem { source, report: self.report.clone() }
+    }
+
+    pub fn report(&self) -> &NewtonReport {
+        &self.report
+    }
+
+    pub fn into_report(self) -> NewtonReport {
+        self.report
+    }
+}
+
+/// `r / reference`, 0 for a zero residual whatever the reference.
+fn relative(r: f64, reference: f64) -> f64 {
+    if r == 0.0 {
+        0.0
+    } else {
+        r / reference.max(f64::MIN_POSITIVE)
     }
 }
 
@@ -186,7 +175,7 @@ impl NewtonSolver {
 mod tests {
     use super::*;
     use crate::pattern::tests::Chain;
-    use crate::{Couplings, LinearSolverKind};
+    use crate::{BlockPattern, LinearSolverKind, SparseDirectSolver};
 
     /// A chain of nonlinear springs, force k (e + e³) for elongation e, node 0 fixed,
     /// load P at the last node: each spring carries P, so e solves e + e³ = P / k.
@@ -203,12 +192,9 @@ mod tests {
     #[error("never")]
     struct Never;
 
-    impl NewtonProblem for Springs {
-        type Error = Never;
-        fn num_dofs(&self) -> usize {
-            self.chain.num_nodes()
-        }
-        fn evaluate(&mut self, du: &[f64], r: &mut [f64]) -> Result<f64, Never> {
+    impl Springs {
+        /// The residual at `du` (zero on fixed dofs), into `r`; the reference force is the load.
+        fn residual(&mut self, du: &[f64], r: &mut [f64]) -> f64 {
             self.u.copy_from_slice(du);
             r.iter_mut().for_each(|v| *v = 0.0);
             for (e, nodes) in self.chain.elems.iter().enumerate() {
@@ -226,8 +212,9 @@ mod tests {
                     *ri = 0.0;
                 }
             }
-            Ok(self.load.abs())
+            self.load.abs()
         }
+
         fn assemble(&mut self) {
             let u = self.u.clone();
             let elems = self.chain.elems.clone();
@@ -238,8 +225,27 @@ mod tests {
                 out[0] += if a == b { k } else { -k };
             });
         }
-        fn matrix(&self) -> (&BlockPattern, &[f64]) {
-            (&self.pattern, &self.values)
+
+        /// Newton's loop as the implicit step writes it: residual, then until converged
+        /// assemble, solve, correct, residual, check.
+        fn solve(&mut self, settings: NewtonSettings, du: &mut [f64]) -> Result<NewtonReport, NewtonError<Never>> {
+            let mut linear = SparseDirectSolver::new(LinearSolverKind::Cholesky);
+            let mut r = vec![0.0; du.len()];
+            let reference = self.residual(du, &mut r);
+            let mut newton = NewtonControl::start(settings, norm(&r), reference)?;
+            loop {
+                newton.next_iteration()?;
+                self.assemble();
+                linear.factorize(&self.pattern, &self.values).map_err(|e| newton.linear_failure(e))?;
+                let mut delta: Vec<f64> = r.iter().map(|v| -v).collect();
+                linear.solve_in_place(&mut delta).map_err(|e| newton.linear_failure(e))?;
+                du.iter_mut().zip(&delta).for_each(|(u, d)| *u += d);
+                newton.corrected(norm(&delta), norm(du));
+                let reference = self.residual(du, &mut r);
+                if newton.converged(norm(&r), reference)? {
+                    return Ok(newton.into_report());
+                }
+            }
         }
     }
 
@@ -251,12 +257,9 @@ mod tests {
         let mut fixed = vec![false; 4];
         fixed[0] = true;
         let mut p = Springs { chain, pattern, values: vec![], u: vec![0.0; 4], load: 2.0, fixed };
-        let mut newton = NewtonSolver::new(
-            NewtonSettings { residual_tolerance: 1e-12, increment_tolerance: 1e-10, ..Default::default() },
-            SparseDirectSolver::new(LinearSolverKind::Cholesky),
-        );
+        let settings = NewtonSettings { residual_tolerance: 1e-12, increment_tolerance: 1e-10, ..Default::default() };
         let mut du = vec![0.0; 4];
-        let report = newton.solve(&mut p, &mut du).unwrap();
+        let report = p.solve(settings, &mut du).unwrap();
         // Closed form: e_k solves e + e³ = P / k (Cardano via Newton on the scalar is not
         // independent, so check the defining equation itself to rounding).
         let mut x = 0.0;
@@ -283,12 +286,8 @@ mod tests {
         let mut fixed = vec![false; 4];
         fixed[0] = true;
         let mut p = Springs { chain, pattern, values: vec![], u: vec![0.0; 4], load: 50.0, fixed };
-        let mut newton = NewtonSolver::new(
-            NewtonSettings { max_iterations: 2, ..Default::default() },
-            SparseDirectSolver::new(LinearSolverKind::Cholesky),
-        );
         let mut du = vec![0.0; 4];
-        let err = newton.solve(&mut p, &mut du).unwrap_err();
+        let err = p.solve(NewtonSettings { max_iterations: 2, ..Default::default() }, &mut du).unwrap_err();
         assert!(matches!(err, NewtonError::IterationLimit(_)), "{err}");
         assert_eq!(err.report().iterations(), 2);
     }

@@ -8,7 +8,7 @@
 //! Assembly *gathers*: each node's columns are owned by one task, which adds the blocks of
 //! the elements touching it in ascending element order. No two tasks write the same value
 //! and the summation order is fixed, so the result is bitwise identical for any number of
-//! threads (DESIGN.md, "Parallelism and determinism").
+//! threads (docs/theory.md §7).
 
 use rayon::prelude::*;
 
@@ -243,22 +243,6 @@ impl BlockPattern {
             0.0
         }
     }
-}
-
-/// Gather a nodal vector: for every node (in parallel), `contrib(element, a, out)` adds the
-/// contribution of local node `a` of each element touching it into the node's `d` entries,
-/// in ascending element order (deterministic).
-pub fn gather_nodal<C, F>(couplings: &C, d: usize, out: &mut [f64], contrib: F)
-where
-    C: Couplings,
-    F: Fn(usize, usize, &mut [f64]) + Sync,
-{
-    out.par_chunks_mut(d).enumerate().for_each(|(j, o)| {
-        o.iter_mut().for_each(|v| *v = 0.0);
-        for &(e, a) in couplings.elements_of(j) {
-            contrib(e as usize, a as usize, o);
-        }
-    });
 }
 
 #[cfg(test)]

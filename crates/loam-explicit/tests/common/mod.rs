@@ -33,12 +33,29 @@ pub fn scene(
     basis: BasisKind,
     kinematics: Kinematics,
 ) -> Model<2> {
+    scene_with(cell, cells, shapes, ppc, density, law, basis, kinematics, vec![], Vector2::zeros())
+}
+
+/// [`scene`] with constraints and gravity.
+#[allow(clippy::too_many_arguments)]
+pub fn scene_with(
+    cell: f64,
+    cells: [usize; 2],
+    shapes: &[Shape<2>],
+    ppc: usize,
+    density: f64,
+    law: Arc<dyn ConstitutiveLaw>,
+    basis: BasisKind,
+    kinematics: Kinematics,
+    constraints: Vec<PlaneConstraint>,
+    gravity: Vector2<f64>,
+) -> Model<2> {
     let grid = Grid::new(Vector2::zeros(), Vector2::repeat(cell), cells).unwrap();
     let mut points = PointStore::new();
     for s in shapes {
         points.fill(&grid, s, ppc, density, 0).unwrap();
     }
-    Model::new(grid, basis, kinematics, points, vec![law], vec![], Vector2::zeros()).unwrap()
+    Model::new(grid, basis, kinematics, points, vec![law], constraints, gravity).unwrap()
 }
 
 pub fn rect(x0: f64, y0: f64, x1: f64, y1: f64) -> Shape<2> {
@@ -57,7 +74,7 @@ pub fn moving_block(basis: BasisKind, v: Vector2<f64>) -> Model<2> {
         basis,
         Kinematics::FiniteStrain,
     );
-    m.points.velocity.iter_mut().for_each(|x| *x = v);
+    m.velocities_mut().iter_mut().for_each(|x| *x = v);
     m
 }
 
@@ -88,7 +105,7 @@ pub mod bar {
 /// x = 0, rollers (y fixed) on the bottom and top node planes, so the motion is 1D;
 /// v(x, 0) = v₀ sin(β₁ x), no stress, ν = 0.
 pub fn vibrating_bar(basis: BasisKind) -> Model<2> {
-    let mut m = scene(
+    let mut m = scene_with(
         1.0,
         [27, 1],
         &[rect(0.0, 0.0, bar::L, 1.0)],
@@ -97,11 +114,13 @@ pub fn vibrating_bar(basis: BasisKind) -> Model<2> {
         elastic(bar::E, 0.0),
         basis,
         Kinematics::FiniteStrain,
+        vec![roller(0, 0), roller(1, 0), roller(1, 1)],
+        Vector2::zeros(),
     );
-    for p in 0..m.points.len() {
-        m.points.velocity[p] = Vector2::new(bar::V0 * (bar::beta() * m.points.position[p].x).sin(), 0.0);
+    let x: Vec<f64> = m.points().position.iter().map(|x| x.x).collect();
+    for (v, x) in m.velocities_mut().iter_mut().zip(x) {
+        *v = Vector2::new(bar::V0 * (bar::beta() * x).sin(), 0.0);
     }
-    m.constraints = vec![roller(0, 0), roller(1, 0), roller(1, 1)];
     m
 }
 
@@ -118,7 +137,7 @@ pub mod column {
 /// cells above.
 pub fn self_weight_column(cells: usize, basis: BasisKind, kinematics: Kinematics) -> Model<2> {
     let h = column::H / cells as f64;
-    let mut m = scene(
+    scene_with(
         h,
         [1, cells + 2],
         &[rect(0.0, 0.0, h, column::H)],
@@ -127,10 +146,9 @@ pub fn self_weight_column(cells: usize, basis: BasisKind, kinematics: Kinematics
         elastic(column::E, 0.0),
         basis,
         kinematics,
-    );
-    m.constraints = vec![roller(0, 0), roller(0, 1), roller(1, 0)];
-    m.gravity = Vector2::new(0.0, -column::G);
-    m
+        vec![roller(0, 0), roller(0, 1), roller(1, 0)],
+        Vector2::new(0.0, -column::G),
+    )
 }
 
 /// VERIFICATION.md V1 error norm: e_σ = Σ|σ_yy,p − σ_yy(Y_p)| V⁰_p / (Σ V⁰_p ρ g H), with
@@ -169,16 +187,16 @@ pub fn polygon_area_ratio(sides: usize) -> f64 {
 pub fn colliding_disks(sides: usize, basis: BasisKind) -> Model<2> {
     let shapes = [disk(Vector2::new(0.2, 0.2), 0.2, sides), disk(Vector2::new(0.8, 0.8), 0.2, sides)];
     let mut m = scene(0.05, [20, 20], &shapes, 2, 1000.0, elastic(1000.0, 0.3), basis, Kinematics::FiniteStrain);
-    for p in 0..m.points.len() {
-        let s = if m.points.position[p].x < 0.5 { 1.0 } else { -1.0 };
-        m.points.velocity[p] = Vector2::new(0.1, 0.1) * s;
+    let x: Vec<f64> = m.points().position.iter().map(|x| x.x).collect();
+    for (v, x) in m.velocities_mut().iter_mut().zip(x) {
+        *v = Vector2::new(0.1, 0.1) * if x < 0.5 { 1.0 } else { -1.0 };
     }
     m
 }
 
 /// Kinetic plus stored elastic energy.
 pub fn total_energy(m: &Model<2>) -> f64 {
-    m.points.kinetic_energy() + m.stored_energy()
+    m.points().kinetic_energy() + m.stored_energy()
 }
 
 pub use loam_explicit::LeapfrogEnergy;
@@ -198,7 +216,7 @@ pub fn settings(duration: f64) -> ExplicitSettings {
 
 /// Every committed point field is finite.
 pub fn assert_finite(m: &Model<2>) {
-    let p = &m.points;
+    let p = &m.points();
     let v2 = |v: &Vec<Vector2<f64>>| v.iter().all(|x| x.iter().all(|c| c.is_finite()));
     let m3 = |v: &Vec<nalgebra::Matrix3<f64>>| v.iter().all(|x| x.iter().all(|c| c.is_finite()));
     assert!(v2(&p.position) && v2(&p.velocity) && v2(&p.half_length), "non-finite position, velocity or domain");
@@ -209,7 +227,7 @@ pub fn assert_finite(m: &Model<2>) {
 
 /// The committed point state of `a` and `b` is bitwise the same.
 pub fn assert_same_state(a: &Model<2>, b: &Model<2>) {
-    let (p, q) = (&a.points, &b.points);
+    let (p, q) = (&a.points(), &b.points());
     assert!(p.position == q.position, "positions differ");
     assert!(p.velocity == q.velocity, "velocities differ");
     assert!(p.stress == q.stress, "stresses differ");

@@ -1,8 +1,11 @@
-//! The analysis a scene asks for, behind one stepping interface for the runner and the
-//! CLI: quasi-static load stepping, implicit Newmark dynamics or explicit MPM.
+//! One stepping interface over the three analyses — quasi-static load stepping, implicit
+//! Newmark dynamics and explicit MPM — for a program that runs whichever a problem asks
+//! for (the scene runner, the CLI) without knowing a file format.
 
 use loam_explicit::{Explicit, ExplicitError};
-use loam_implicit::{Dynamic, Model, QuasiStatic, StepError, StepReport};
+use loam_implicit::{Dynamic, QuasiStatic, StepError, StepReport};
+use loam_kernels::ConnectError;
+use loam_model::Model;
 use std::time::Duration;
 
 /// One of the three analyses.
@@ -20,6 +23,19 @@ pub enum AnalysisError {
     Implicit(#[from] StepError),
     #[error(transparent)]
     Explicit(#[from] ExplicitError),
+}
+
+impl AnalysisError {
+    /// The failure to connect the points to the background (a point outside the grid, a
+    /// constraint that holds no node), whichever analysis met it.
+    pub fn connect_error(&self) -> Option<&ConnectError> {
+        match self {
+            AnalysisError::Implicit(StepError::Connect(e)) | AnalysisError::Explicit(ExplicitError::Connect(e)) => {
+                Some(e)
+            }
+            _ => None,
+        }
+    }
 }
 
 /// What one step did, whatever the analysis.

@@ -1,0 +1,202 @@
+//! Automatic cut-back of an implicit step (docs/theory.md §6), the one rule of quasi-static
+//! and dynamic analyses: try the whole increment; halve it after a failed attempt, and
+//! double it again after two converged sub-steps in a row, so that one hard stretch does
+//! not hold the rest of the step at the smallest size. An attempt that fails at
+//! `max_cutbacks` halvings stops the run with the step, the load factor and the residual
+//! history. An unconverged state is never committed: the caller only commits a converged
+//! attempt.
+
+use crate::{StepError, StepReport};
+use loam_solve::NewtonReport;
+use std::time::Instant;
+
+/// The sub-step control of one step, from the committed position (load factor or time) to
+/// its target. The caller asks [`next`](Self::next) for the size of its next attempt and
+/// reports each attempt's outcome.
+#[derive(Debug)]
+pub(crate) struct CutBack {
+    /// The step's whole increment.
+    full: f64,
+    target: f64,
+    /// Round-off allowance on reaching the target (1 for load factors, Δt for time).
+    scale: f64,
+    max_cutbacks: usize,
+    /// Halvings of the current sub-step, and converged sub-steps since the last change.
+    depth: usize,
+    streak: usize,
+    done: Advanced,
+}
+
+/// What advancing to one step's target took.
+#[derive(Debug, Default)]
+struct Advanced {
+    substeps: usize,
+    cutbacks: usize,
+    iterations: usize,
+    /// Relative residuals of the last sub-step.
+    residuals: Vec<f64>,
+    /// Relative residuals of the converged sub-step with the most corrections.
+    hardest_residuals: Vec<f64>,
+    active_nodes: usize,
+}
+
+impl CutBack {
+    /// Control a step from `position` to `target`.
+    pub fn new(position: f64, target: f64, scale: f64, max_cutbacks: usize) -> Self {
+        Self { full: target - position, target, scale, max_cutbacks, depth: 0, streak: 0, done: Advanced::default() }
+    }
+
+    /// The size of the next attempt from `position`, or `None` once the target is reached.
+    pub fn next(&self, position: f64) -> Option<f64> {
+        let reached = position >= self.target - 1e-12 * self.target.abs().max(self.scale);
+        (!reached).then(|| self.full * 0.5f64.powi(self.depth as i32))
+    }
+
+    /// An attempt on `active_nodes` active nodes converged with `report`.
+    pub fn converged(&mut self, report: NewtonReport, active_nodes: usize) {
+        let done = &mut self.done;
+        done.substeps += 1;
+        done.iterations += report.iterations();
+        if report.residuals.len() > done.hardest_residuals.len() {
+            done.hardest_residuals.clone_from(&report.residuals);
+        }
+        done.residuals = report.residuals;
+        done.active_nodes = active_nodes;
+        self.streak += 1;
+        if self.depth > 0 && self.streak >= 2 {
+            self.depth -= 1;
+            self.streak = 0;
+        }
+    }
+
+    /// An attempt of step `step` from `position` to `load_factor` failed for `reason`
+    /// with the residual history `residuals`: cut the step back, or stop with
+    /// `NotConverged` once it was already at its smallest size.
+    pub fn failed(
+        &mut self,
+        step: usize,
+        position: f64,
+        load_factor: f64,
+        reason: String,
+        residuals: &[f64],
+    ) -> Result<(), StepError> {
+        self.done.cutbacks += 1;
+        self.streak = 0;
+        // A cut-back is the step control doing its job (the run log and the progress
+        // count them; strength reduction fails trials on purpose), so it is information,
+        // not a warning; a run that cannot go on returns an error.
+        let increment = self.full * 0.5f64.powi(self.depth as i32);
+        tracing::info!(step, position, increment, error = %reason, "Newton failed; cutting the step back");
+        if self.depth >= self.max_cutbacks {
+            return Err(StepError::NotConverged {
+                step,
+                load_factor,
+                cutbacks: self.done.cutbacks - 1,
+                reason,
+                residuals: residuals.to_vec(),
+            });
+        }
+        self.depth += 1;
+        Ok(())
+    }
+
+    /// The report of step `step`, which reached `load_factor` and `time` with `reactions`,
+    /// started at `start`.
+    pub fn into_report(
+        self,
+        step: usize,
+        load_factor: f64,
+        time: f64,
+        reactions: Vec<[f64; 3]>,
+        dofs_per_node: usize,
+        start: Instant,
+    ) -> StepReport {
+        let done = self.done;
+        StepReport {
+            step,
+            load_factor,
+            time,
+            substeps: done.substeps,
+            cutbacks: done.cutbacks,
+            iterations: done.iterations,
+            residuals: done.residuals,
+            hardest_residuals: done.hardest_residuals,
+            active_nodes: done.active_nodes,
+            dofs: done.active_nodes * dofs_per_node,
+            reactions,
+            wall_time: start.elapsed(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn converged(iterations: usize) -> NewtonReport {
+        NewtonReport { residuals: vec![1.0; iterations + 1], increments: vec![1.0; iterations] }
+    }
+
+    /// Drive the control over a step from 0 to 1 whose attempts succeed when `holds(size)`:
+    /// the sizes tried, in order, and the outcome.
+    fn drive(holds: impl Fn(f64) -> bool, max_cutbacks: usize) -> (Vec<f64>, Result<StepReport, StepError>) {
+        let mut control = CutBack::new(0.0, 1.0, 1.0, max_cutbacks);
+        let (mut position, mut tried) = (0.0, Vec::new());
+        while let Some(size) = control.next(position) {
+            tried.push(size);
+            let to = (position + size).min(1.0);
+            if holds(size) {
+                position = to;
+                control.converged(converged(3), 10);
+            } else if let Err(e) = control.failed(1, position, to, "too big".into(), &[1.0, 2.0]) {
+                return (tried, Err(e));
+            }
+        }
+        (tried, Ok(control.into_report(1, position, position, vec![], 2, Instant::now())))
+    }
+
+    /// A step that holds at once is one sub-step.
+    #[test]
+    fn a_step_that_converges_is_one_substep() {
+        let (tried, report) = drive(|_| true, 8);
+        assert_eq!(tried, vec![1.0]);
+        let report = report.unwrap();
+        assert_eq!((report.substeps, report.cutbacks, report.iterations, report.dofs), (1, 0, 3, 20));
+    }
+
+    /// Sizes above ¼ fail: the step halves twice, then after two converged quarters the
+    /// sub-step doubles back to ½, which fails, and the last quarter is taken at ¼.
+    #[test]
+    fn failures_halve_and_two_successes_double() {
+        let (tried, report) = drive(|size| size <= 0.25, 8);
+        assert_eq!(tried, vec![1.0, 0.5, 0.25, 0.25, 0.5, 0.25, 0.25]);
+        let report = report.unwrap();
+        assert_eq!((report.substeps, report.cutbacks, report.iterations), (4, 3, 12));
+        assert_eq!(report.load_factor, 1.0);
+    }
+
+    /// An attempt that fails at the smallest size stops the step with its residuals and
+    /// the cut-backs made before it; nothing is reported converged.
+    #[test]
+    fn failing_at_the_smallest_size_stops_the_step() {
+        let (tried, report) = drive(|_| false, 2);
+        assert_eq!(tried, vec![1.0, 0.5, 0.25]);
+        match report {
+            Err(StepError::NotConverged { step: 1, load_factor, cutbacks: 2, residuals, .. }) => {
+                assert_eq!(load_factor, 0.25);
+                assert_eq!(residuals, vec![1.0, 2.0]);
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+
+    /// The target is reached within round-off of the scale, without a sliver sub-step.
+    #[test]
+    fn the_target_is_reached_within_round_off() {
+        let control = CutBack::new(0.0, 1.0, 1.0, 8);
+        assert_eq!(control.next(1.0 - 1e-13), None);
+        assert_eq!(control.next(1.0 - 1e-11), Some(1.0));
+        let time = CutBack::new(0.0, 1e-3, 1e-3, 8);
+        assert_eq!(time.next(1e-3 - 1e-16), None);
+    }
+}

@@ -1,0 +1,257 @@
+//! Stage "update points" of a Newton iteration (docs/theory.md §1): every point's trial
+//! state — ΔF, stress, elastic strain, history, volume, tangent and spatial gradients —
+//! recomputed from its *committed* state and the current increment Δu, so iterations never
+//! compound. The law is driven by the shared point kernel ([`loam_kernels::update_point`]);
+//! what is implicit here is the strain operator (B-bar and assumed strain, docs/theory.md
+//! §13) and the tangent the assembly needs.
+
+use crate::cell_average::CellAverage;
+use loam_constitutive::{ConstitutiveError, Tensor4};
+use loam_grid::Connectivity;
+use loam_kernels::{embed, update_point};
+use loam_model::{Kinematics, Model};
+use nalgebra::{Matrix3, SMatrix, SVector};
+use rayon::prelude::*;
+
+/// A material point whose update failed inside a Newton iteration.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("material point {point}: {source}")]
+pub struct PointUpdateError {
+    pub point: usize,
+    pub source: ConstitutiveError,
+}
+
+/// Trial state of every point for the current Newton iterate. Reused across iterations and
+/// steps; the committed state in the model only changes when a step converges.
+#[derive(Debug, Default)]
+pub(crate) struct TrialState<const D: usize> {
+    pub delta_f: Vec<Matrix3<f64>>,
+    pub stress: Vec<Matrix3<f64>>,
+    pub elastic_strain: Vec<Matrix3<f64>>,
+    pub history: Vec<f64>,
+    pub volume: Vec<f64>,
+    /// v_p times the in-plane part of the tangent, (i·D + j, k·D + l) = v a_ijkl.
+    pub tangent: Vec<SMatrix<f64, 9, 9>>,
+    /// Spatial gradients ∂N/∂x (strain gradients c_a with cell averages), `stride` per point.
+    pub grad_x: Vec<SVector<f64, D>>,
+    /// Cell averages only: v (I : D) and v (D : I) as 3×3, the volumetric contractions of
+    /// the point's tangent that the averaged dilatation couples through (v I : D : I is
+    /// the trace of the first).
+    pub volumetric: Vec<(Matrix3<f64>, Matrix3<f64>)>,
+}
+
+impl<const D: usize> TrialState<D> {
+    pub fn resize(&mut self, n_points: usize, stride: usize, history_stride: usize) {
+        self.delta_f.resize(n_points, Matrix3::identity());
+        self.stress.resize(n_points, Matrix3::zeros());
+        self.elastic_strain.resize(n_points, Matrix3::zeros());
+        // At least one slot per point so that every point gets its own chunk.
+        self.history.resize(n_points * history_stride.max(1), 0.0);
+        self.volume.resize(n_points, 0.0);
+        self.tangent.resize(n_points, SMatrix::zeros());
+        self.grad_x.resize(n_points * stride, SVector::zeros());
+        self.volumetric.resize(n_points, (Matrix3::zeros(), Matrix3::zeros()));
+    }
+}
+
+/// One point's slots in the trial state.
+struct TrialSlot<'a, const D: usize> {
+    delta_f: &'a mut Matrix3<f64>,
+    stress: &'a mut Matrix3<f64>,
+    elastic_strain: &'a mut Matrix3<f64>,
+    volume: &'a mut f64,
+    tangent: &'a mut SMatrix<f64, 9, 9>,
+    grad_x: &'a mut [SVector<f64, D>],
+    volumetric: &'a mut (Matrix3<f64>, Matrix3<f64>),
+    history: &'a mut [f64],
+}
+
+/// What every point's update reads: the model's committed state, the step's connectivity,
+/// its cell averages and the increment.
+#[derive(Clone, Copy)]
+pub(crate) struct PointInputs<'a, const D: usize> {
+    pub model: &'a Model<D>,
+    pub conn: &'a Connectivity<D>,
+    pub average: Option<CellAverage<'a, D>>,
+    pub du: &'a [f64],
+}
+
+/// Update every point's trial state for the increment `inputs.du`; the first failing point
+/// (lowest index) is reported.
+pub(crate) fn update_points<const D: usize>(
+    inputs: PointInputs<'_, D>,
+    trial: &mut TrialState<D>,
+) -> Result<(), PointUpdateError> {
+    let stride = inputs.conn.stride();
+    let hs = inputs.model.points().history_stride();
+    let t = trial;
+    let first_error = (
+        t.delta_f.par_iter_mut(),
+        t.stress.par_iter_mut(),
+        t.elastic_strain.par_iter_mut(),
+        t.volume.par_iter_mut(),
+        t.tangent.par_iter_mut(),
+        t.grad_x.par_chunks_mut(stride),
+    )
+        .into_par_iter()
+        .zip(t.history.par_chunks_mut(hs.max(1)).zip(t.volumetric.par_iter_mut()))
+        .enumerate()
+        .filter_map(|(p, ((delta_f, stress, elastic_strain, volume, tangent, grad_x), (history, volumetric)))| {
+            let slot = TrialSlot {
+                delta_f,
+                stress,
+                elastic_strain,
+                volume,
+                tangent,
+                grad_x,
+                volumetric,
+                history: &mut history[..hs],
+            };
+            update_trial_point(inputs, p, slot).err()
+        })
+        .min_by_key(|e| e.point);
+    first_error.map_or(Ok(()), Err)
+}
+
+/// Point `p`'s trial state: its increment gradient Σ_a Δu_a ⊗ c_a over its strain
+/// gradients, the law driven in finite or small strain, and the tangent and gradients the
+/// assembly needs.
+fn update_trial_point<const D: usize>(
+    inputs: PointInputs<'_, D>,
+    p: usize,
+    slot: TrialSlot<'_, D>,
+) -> Result<(), PointUpdateError> {
+    let PointInputs { model, conn, average, du } = inputs;
+    let nodes = conn.support_nodes(p);
+    let grads = conn.support_gradients(p);
+    let first = p * conn.stride();
+    // With cell averaging (small strain only, Model::with_anti_locking) the strain
+    // gradients c_a go to grad_x now, and the increment gradient is Σ Δu_a ⊗ c_a.
+    let strain_grads: &[SVector<f64, D>] = match average {
+        Some(avg) => {
+            for (a, c) in slot.grad_x[..nodes.len()].iter_mut().enumerate() {
+                *c = avg.strain_gradient(first + a, &grads[a]);
+            }
+            &slot.grad_x[..nodes.len()]
+        }
+        None => grads,
+    };
+    let mut g = SMatrix::<f64, D, D>::zeros();
+    for (a, &node) in nodes.iter().enumerate() {
+        let u = SVector::<f64, D>::from_fn(|i, _| du[node as usize * D + i]);
+        g += u * strain_grads[a].transpose();
+    }
+    let failed = |source| PointUpdateError { point: p, source };
+    match model.kinematics() {
+        Kinematics::FiniteStrain => finite_strain_point(model, p, &g, grads, slot).map_err(failed),
+        Kinematics::SmallStrain => {
+            let theta_bar = average.map(|avg| averaged_dilatation(&avg, nodes, first, du));
+            small_strain_point(model, p, &g, theta_bar, grads, slot).map_err(failed)
+        }
+    }
+}
+
+/// Finite strain (docs/theory.md §2): ΔF = I + g on the point's current volume, the
+/// spatial gradients ∂N/∂x = ΔF⁻ᵀ ∂N/∂x_n of the step's start, the volume det ΔF v_n.
+fn finite_strain_point<const D: usize>(
+    model: &Model<D>,
+    p: usize,
+    g: &SMatrix<f64, D, D>,
+    grads: &[SVector<f64, D>],
+    slot: TrialSlot<'_, D>,
+) -> Result<(), ConstitutiveError> {
+    let pts = model.points();
+    let upd = update_point(
+        Kinematics::FiniteStrain,
+        model.law(p),
+        &embed(g),
+        &pts.deformation_gradient[p],
+        &pts.elastic_strain[p],
+        pts.history(p),
+        slot.history,
+    )?;
+    let det_df = upd.delta_f.determinant();
+    // det ΔF > 0 was checked by the update, so ΔF is invertible unless it is numerically
+    // singular, which is an error like a negative Jacobian, not a case to paper over.
+    let inv = (SMatrix::<f64, D, D>::identity() + g)
+        .try_inverse()
+        .ok_or(ConstitutiveError::NonPositiveJacobian { j: det_df })?;
+    for (x, grad) in slot.grad_x.iter_mut().zip(grads) {
+        *x = inv.transpose() * grad;
+    }
+    *slot.delta_f = upd.delta_f;
+    *slot.stress = upd.stress;
+    *slot.elastic_strain = upd.elastic_strain;
+    *slot.volume = det_df * pts.volume[p];
+    *slot.tangent = in_plane::<D>(&upd.tangent, *slot.volume);
+    Ok(())
+}
+
+/// θ̄ = Σ_a Δu_a · b̄_a: the cell's averaged dilatation (Hughes 1980).
+fn averaged_dilatation<const D: usize>(avg: &CellAverage<'_, D>, nodes: &[u32], first: usize, du: &[f64]) -> f64 {
+    nodes
+        .iter()
+        .enumerate()
+        .map(|(a, &node)| (0..D).map(|i| du[node as usize * D + i] * avg.average(first + a)[i]).sum::<f64>())
+        .sum()
+}
+
+/// Small strain (docs/theory.md §3) on the start-of-step volume, with the cell's averaged
+/// dilatation θ̄ in place of the point's own when given: ε̄ = ε + (θ̄ − θ)/3 I.
+fn small_strain_point<const D: usize>(
+    model: &Model<D>,
+    p: usize,
+    g: &SMatrix<f64, D, D>,
+    theta_bar: Option<f64>,
+    grads: &[SVector<f64, D>],
+    slot: TrialSlot<'_, D>,
+) -> Result<(), ConstitutiveError> {
+    let pts = model.points();
+    let mut g3 = embed(g);
+    if let Some(theta_bar) = theta_bar {
+        g3 += Matrix3::identity() * ((theta_bar - g.trace()) / 3.0);
+    }
+    let upd = update_point(
+        Kinematics::SmallStrain,
+        model.law(p),
+        &g3,
+        &pts.deformation_gradient[p],
+        &pts.elastic_strain[p],
+        pts.history(p),
+        slot.history,
+    )?;
+    if theta_bar.is_none() {
+        slot.grad_x[..grads.len()].copy_from_slice(grads);
+    }
+    *slot.delta_f = upd.delta_f;
+    *slot.stress = upd.stress;
+    *slot.elastic_strain = upd.elastic_strain;
+    *slot.volume = pts.volume[p];
+    *slot.tangent = in_plane::<D>(&upd.tangent, *slot.volume);
+    if theta_bar.is_some() {
+        let (a, v) = (&upd.tangent, *slot.volume);
+        let id = Matrix3::from_fn(|k, l| v * (0..3).map(|m| a[(4 * m, 3 * k + l)]).sum::<f64>());
+        let di = Matrix3::from_fn(|i, j| v * (0..3).map(|m| a[(3 * i + j, 4 * m)]).sum::<f64>());
+        *slot.volumetric = (id, di);
+    }
+    Ok(())
+}
+
+/// In-plane block (i·D + j, k·D + l) of a full 9×9 tensor, scaled; unused entries zero.
+#[inline]
+fn in_plane<const D: usize>(a: &Tensor4, scale: f64) -> SMatrix<f64, 9, 9> {
+    if D == 3 {
+        return a * scale;
+    }
+    let mut out = SMatrix::<f64, 9, 9>::zeros();
+    for i in 0..D {
+        for j in 0..D {
+            for k in 0..D {
+                for l in 0..D {
+                    out[(i * D + j, k * D + l)] = scale * a[(3 * i + j, 3 * k + l)];
+                }
+            }
+        }
+    }
+    out
+}

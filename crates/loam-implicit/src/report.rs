@@ -1,0 +1,84 @@
+//! What an implicit step reports, and why one stops.
+
+use loam_kernels::ConnectError;
+use std::time::Duration;
+
+/// What one load or time step did.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StepReport {
+    /// 1-based step number.
+    pub step: usize,
+    pub load_factor: f64,
+    /// Time reached (dynamics); in quasi-static analysis the pseudo-time, equal to the load
+    /// factor.
+    pub time: f64,
+    /// Sub-steps the step needed (1 without cut-back).
+    pub substeps: usize,
+    /// Failed attempts that were cut back.
+    pub cutbacks: usize,
+    /// Newton corrections over all converged sub-steps.
+    pub iterations: usize,
+    /// Relative residuals of the last sub-step, before the first and after each correction.
+    pub residuals: Vec<f64>,
+    /// Relative residuals of the converged sub-step with the most corrections (the first
+    /// such sub-step on a tie); see [`most_iterations`](Self::most_iterations).
+    pub hardest_residuals: Vec<f64>,
+    pub active_nodes: usize,
+    pub dofs: usize,
+    /// Per constraint (scene order), the support reaction Σ (f_int − f_ext) over its nodes
+    /// on its prescribed components: the force the support exerts is its negative. A
+    /// footing pushed down reads negative here; the load it carries is −reaction.
+    pub reactions: Vec<[f64; 3]>,
+    pub wall_time: Duration,
+}
+
+impl StepReport {
+    pub fn final_residual(&self) -> f64 {
+        self.residuals.last().copied().unwrap_or(f64::NAN)
+    }
+
+    /// The most corrections one converged sub-step needed (its residual history holds the
+    /// one before the first correction and one after each).
+    pub fn most_iterations(&self) -> usize {
+        self.hardest_residuals.len().saturating_sub(1)
+    }
+}
+
+/// Why a step, and with it the run, stopped.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum StepError {
+    /// The points could not be connected to the background, or a constraint holds no node.
+    #[error(transparent)]
+    Connect(#[from] ConnectError),
+    #[error("step {step} did not converge at load factor {load_factor:.6} after {cutbacks} cut-backs: {reason}")]
+    NotConverged { step: usize, load_factor: f64, cutbacks: usize, reason: String, residuals: Vec<f64> },
+    #[error("invalid analysis setting {field} = {value}: valid is {valid}")]
+    InvalidSettings { field: &'static str, value: f64, valid: &'static str },
+    #[error("constraint {index} prescribes a non-zero displacement; displacements follow the load factor of a quasi-static analysis and are not applied in dynamics")]
+    DisplacementInDynamics { index: usize },
+    #[error("the analysis is already finished ({0} steps)")]
+    Finished(usize),
+}
+
+/// Wall time of the phases of one Newton iteration (see `QuasiStatic::profile_iteration`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct IterationProfile {
+    pub dofs: usize,
+    pub nonzeros: usize,
+    /// Basis evaluation, active nodes, adjacency, sparsity pattern.
+    pub connectivity: Duration,
+    /// Point kinematics, stress update and tangent, internal force gather.
+    pub points_and_residual: Duration,
+    /// Global tangent assembly.
+    pub assembly: Duration,
+    pub symbolic: Duration,
+    pub numeric: Duration,
+    pub solve: Duration,
+}
+
+impl IterationProfile {
+    /// Assembly (points, residual, tangent) plus factorisation and solve: one iteration.
+    pub fn iteration(&self) -> Duration {
+        self.points_and_residual + self.assembly + self.symbolic + self.numeric + self.solve
+    }
+}

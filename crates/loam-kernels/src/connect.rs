@@ -1,0 +1,31 @@
+//! Stage 1 of every step: connect the points to the background.
+
+use crate::ConnectError;
+use loam_grid::Connectivity;
+use loam_model::Model;
+
+/// Connect the points of `model` at the configuration the mechanics is written on to its
+/// background (basis values and gradients, active nodes, node → point adjacency) and mark
+/// the constrained dofs of the active nodes. `step` names the step in an error.
+pub fn connect<const D: usize>(
+    model: &Model<D>,
+    conn: &mut Connectivity<D>,
+    constrained: &mut Vec<bool>,
+    step: usize,
+) -> Result<(), ConnectError> {
+    model
+        .background()
+        .connect(conn, model.configuration(), &model.points().half_length)
+        .map_err(|e| ConnectError::locate(step, e))?;
+    model.constrained_dofs(conn.active_nodes(), constrained);
+    Ok(())
+}
+
+/// Every constraint must hold at least one active node: one that holds none would
+/// silently constrain nothing.
+pub fn check_constraints<const D: usize>(model: &Model<D>, conn: &Connectivity<D>) -> Result<(), ConnectError> {
+    match model.constraint_without_nodes(conn.active_nodes()) {
+        Some((index, c)) => Err(ConnectError::ConstraintTouchesNoNode { index, axis: c.axis, plane: c.plane }),
+        None => Ok(()),
+    }
+}

@@ -1,0 +1,36 @@
+//! The errors both integrators share: connecting the points to the background, and a run
+//! stopped by its step observer.
+
+use loam_grid::{ElementError, LocateError, PointBasisError};
+
+/// Why the points could not be connected to the background at the start of a step, or
+/// why a constraint holds nothing.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ConnectError {
+    #[error("step {step}: {source}; the point left the grid (enlarge the grid)")]
+    PointOutsideGrid { step: usize, source: PointBasisError },
+    #[error("step {step}: {source} (updated Lagrangian FEM: the mesh is too distorted to go on)")]
+    Element { step: usize, source: ElementError },
+    #[error("constraint {index} (axis {axis}, node plane {plane}) touches no active node: no material point has support on that plane")]
+    ConstraintTouchesNoNode { index: usize, axis: usize, plane: usize },
+}
+
+impl ConnectError {
+    /// The error of step `step` for a background that could not locate the points.
+    pub fn locate(step: usize, error: LocateError) -> Self {
+        match error {
+            LocateError::OutsideGrid(source) => ConnectError::PointOutsideGrid { step, source },
+            LocateError::Element(source) => ConnectError::Element { step, source },
+        }
+    }
+}
+
+/// A run stopped by the analysis's step error `S` or by its step observer's error `E`
+/// (an output that could not be written, say).
+#[derive(Debug, thiserror::Error)]
+pub enum RunError<S: std::error::Error + 'static, E: std::error::Error + 'static> {
+    #[error(transparent)]
+    Step(S),
+    #[error(transparent)]
+    Observer(E),
+}

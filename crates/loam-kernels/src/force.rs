@@ -1,0 +1,37 @@
+//! The internal force f_int,I = Σ_p v_p σ_p ∂N_I/∂x (docs/theory.md §1): one kernel for the
+//! implicit residual, the dynamic start and the explicit grid update.
+
+use crate::gather_nodal;
+use loam_grid::Connectivity;
+use nalgebra::{Matrix3, SVector};
+
+/// Internal force of a point at one support node, v σ ∂N_a, and with B-bar (b̄_a given)
+/// also σ : (⅓ (b̄_a − ∂N_a) ⊗ e_i) I = v (tr σ / 3)(b̄_a − ∂N_a).
+#[inline]
+pub fn internal_force<const D: usize>(
+    volume: f64,
+    stress: &Matrix3<f64>,
+    grad: &SVector<f64, D>,
+    bbar: Option<&SVector<f64, D>>,
+) -> SVector<f64, D> {
+    let mut f = SVector::<f64, D>::from_fn(|i, _| volume * (0..D).map(|j| stress[(i, j)] * grad[j]).sum::<f64>());
+    if let Some(b) = bbar {
+        f += (b - grad) * (volume * stress.trace() / 3.0);
+    }
+    f
+}
+
+/// Gather f_int,I into `out` (D values per active node), where `force(point, slot)` is the
+/// point's internal force at the node in its support slot (see [`internal_force`]).
+pub fn gather_internal_force<const D: usize>(
+    conn: &Connectivity<D>,
+    out: &mut [f64],
+    force: impl Fn(usize, usize) -> SVector<f64, D> + Sync,
+) {
+    gather_nodal(conn, D, out, |p, slot, node| {
+        let f = force(p, slot);
+        for i in 0..D {
+            node[i] += f[i];
+        }
+    });
+}

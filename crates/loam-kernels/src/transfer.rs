@@ -1,0 +1,77 @@
+//! Transfers between points and nodes over one step's connectivity.
+//!
+//! Point → node is a *gather*: every active node (in parallel) sums the contributions of
+//! the points touching it in ascending point order, so no two tasks write one value and
+//! the summation order is fixed — bitwise identical results on any number of threads
+//! (docs/theory.md §7). Node → point is an interpolation Σ_I N_I(x_p) u_I, independent
+//! per point.
+
+use loam_grid::Connectivity;
+use nalgebra::SVector;
+use rayon::prelude::*;
+
+/// Gather a nodal field of `width` values per active node into `out`: for every node,
+/// `contrib(point, slot, node_values)` adds the contribution of each point touching it
+/// (`slot` the node's place in the point's support), points ascending.
+pub fn gather_nodal<const D: usize, F>(conn: &Connectivity<D>, width: usize, out: &mut [f64], contrib: F)
+where
+    F: Fn(usize, usize, &mut [f64]) + Sync,
+{
+    let adjacency = conn.node_points();
+    out.par_chunks_mut(width).enumerate().for_each(|(node, values)| {
+        values.iter_mut().for_each(|v| *v = 0.0);
+        for &(p, slot) in adjacency.of(node) {
+            contrib(p as usize, slot as usize, values);
+        }
+    });
+}
+
+/// Add Σ_I N_I(x_p) u_I to `out`, term by term in support order, for the nodal field `field`
+/// (D values per active node).
+#[inline]
+pub fn interpolate_add<const D: usize>(conn: &Connectivity<D>, p: usize, field: &[f64], out: &mut SVector<f64, D>) {
+    for (&node, &n) in conn.support_nodes(p).iter().zip(conn.support_values(p)) {
+        for i in 0..D {
+            out[i] += n * field[node as usize * D + i];
+        }
+    }
+}
+
+/// Σ_I N_I(x_p) u_I at point `p` of the nodal field `field` (D values per active node).
+#[inline]
+pub fn interpolate<const D: usize>(conn: &Connectivity<D>, p: usize, field: &[f64]) -> SVector<f64, D> {
+    let mut out = SVector::zeros();
+    interpolate_add(conn, p, field, &mut out);
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use loam_grid::{BasisKind, Grid};
+    use nalgebra::Vector2;
+
+    /// The linear basis reproduces a linear nodal field at any point, and the gather of the
+    /// basis values over the points is each node's share of them (partition of unity:
+    /// the shares sum to the number of points).
+    #[test]
+    fn interpolation_reproduces_linear_fields_and_gathers_partition_unity() {
+        let grid = Grid::new(Vector2::zeros(), Vector2::new(0.5, 1.0), [4, 3]).unwrap();
+        let positions = [Vector2::new(0.3, 0.4), Vector2::new(1.1, 2.7), Vector2::new(1.9, 1.0)];
+        let mut conn = Connectivity::new(BasisKind::Linear);
+        conn.compute(&grid, &positions, &[Vector2::zeros(); 3]).unwrap();
+        let u = |x: Vector2<f64>| Vector2::new(1.0 + 2.0 * x[0] - x[1], 0.5 * x[1]);
+        let field: Vec<f64> = conn
+            .active_nodes()
+            .active_to_grid
+            .iter()
+            .flat_map(|&g| u(grid.node_position(g as usize)).iter().copied().collect::<Vec<_>>())
+            .collect();
+        for (p, x) in positions.iter().enumerate() {
+            assert!((interpolate(&conn, p, &field) - u(*x)).norm() < 1e-14);
+        }
+        let mut shares = vec![0.0; conn.active_nodes().len()];
+        gather_nodal(&conn, 1, &mut shares, |p, slot, out| out[0] += conn.support_values(p)[slot]);
+        assert!((shares.iter().sum::<f64>() - 3.0).abs() < 1e-14);
+    }
+}

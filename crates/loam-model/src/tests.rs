@@ -1,0 +1,191 @@
+//! The model's checks: every constructor refuses what it would otherwise index out of
+//! range or run with silently wrong.
+
+use super::*;
+use loam_constitutive::{Elastic, VonMises};
+use loam_points::Shape;
+use nalgebra::Vector2;
+
+fn elastic() -> Arc<dyn ConstitutiveLaw> {
+    Arc::new(Elastic::new(1e5, 0.3).unwrap())
+}
+
+fn grid() -> Grid<2> {
+    Grid::new(Vector2::zeros(), Vector2::new(1.0, 1.0), [4, 3]).unwrap()
+}
+
+/// A 2 × 2-cell block of 2 × 2 points per cell, all of material `material`.
+fn points(material: u32) -> PointStore<2> {
+    let mut points = PointStore::new();
+    let shape = Shape::Box { min: Vector2::zeros(), max: Vector2::new(2.0, 2.0) };
+    points.fill(&grid(), &shape, 2, 1000.0, material).unwrap();
+    points
+}
+
+fn model_with(constraints: Vec<PlaneConstraint>) -> Result<Model<2>, ModelError> {
+    Model::new(
+        grid(),
+        BasisKind::Linear,
+        Kinematics::SmallStrain,
+        points(0),
+        vec![elastic()],
+        constraints,
+        Vector2::zeros(),
+    )
+}
+
+#[test]
+fn a_constraint_on_an_axis_the_model_lacks_is_refused_not_indexed() {
+    let e = model_with(vec![PlaneConstraint::new(2, 0, [true; 3])]).unwrap_err();
+    assert_eq!(e, ModelError::ConstraintAxis { index: 0, axis: 2, dimension: 2 });
+    let e = model_with(vec![PlaneConstraint::new(1, 0, [true; 3]), PlaneConstraint::new(0, 5, [true; 3])]).unwrap_err();
+    assert_eq!(e, ModelError::ConstraintPlane { index: 1, axis: 0, plane: 5, max: 4 });
+    assert!(model_with(vec![PlaneConstraint::new(0, 4, [true; 3])]).is_ok());
+}
+
+#[test]
+fn a_point_of_a_material_that_does_not_exist_is_refused() {
+    let e = Model::new(
+        grid(),
+        BasisKind::Linear,
+        Kinematics::SmallStrain,
+        points(1),
+        vec![elastic()],
+        vec![],
+        Vector2::zeros(),
+    )
+    .unwrap_err();
+    assert_eq!(e, ModelError::MissingMaterial { point: 0, material: 1, count: 1 });
+    let e = Model::new(
+        grid(),
+        BasisKind::Linear,
+        Kinematics::SmallStrain,
+        PointStore::new(),
+        vec![elastic()],
+        vec![],
+        Vector2::zeros(),
+    )
+    .unwrap_err();
+    assert_eq!(e, ModelError::NoPoints);
+}
+
+#[test]
+fn gravity_must_be_finite() {
+    let e = Model::new(
+        grid(),
+        BasisKind::Linear,
+        Kinematics::SmallStrain,
+        points(0),
+        vec![elastic()],
+        vec![],
+        Vector2::new(0.0, f64::NAN),
+    )
+    .unwrap_err();
+    assert!(matches!(e, ModelError::Gravity { axis: 1, .. }), "{e}");
+}
+
+#[test]
+fn point_forces_need_one_finite_force_per_point() {
+    let model = model_with(vec![]).unwrap();
+    let n = model.points().len();
+    assert!(matches!(model.clone().with_point_forces(vec![Vector2::zeros(); n - 1]), Err(ModelError::PointForces(_))));
+    let mut forces = vec![Vector2::zeros(); n];
+    forces[3] = Vector2::new(f64::INFINITY, 0.0);
+    let e = model.clone().with_point_forces(forces).unwrap_err();
+    assert_eq!(e, ModelError::PointForces("the force on point 3 is not finite".into()));
+    let loaded = model.with_point_forces(vec![Vector2::new(1.0, 2.0); n]).unwrap();
+    // Half the force at half the load, no gravity.
+    assert_eq!(loaded.point_load_at(0, 0.5), Vector2::new(0.5, 1.0));
+}
+
+#[test]
+fn replaced_materials_keep_count_and_history_layout() {
+    let model = model_with(vec![]).unwrap();
+    let plastic: Arc<dyn ConstitutiveLaw> =
+        Arc::new(VonMises::new(Elastic::new(1e5, 0.3).unwrap(), 10.0, 0.0).unwrap());
+    assert!(matches!(model.with_materials(vec![elastic(), elastic()]), Err(ModelError::Materials(_))));
+    // Von Mises keeps one history value, elasticity none: the points' history would not fit.
+    assert!(matches!(model.with_materials(vec![plastic]), Err(ModelError::Materials(_))));
+    let softer: Arc<dyn ConstitutiveLaw> = Arc::new(Elastic::new(1e3, 0.3).unwrap());
+    let replaced = model.with_materials(vec![softer]).unwrap();
+    assert_eq!(replaced.materials()[0].p_wave_modulus(), Elastic::new(1e3, 0.3).unwrap().p_wave_modulus());
+}
+
+#[test]
+fn treatments_are_refused_where_they_do_not_apply() {
+    let gimp = Model::new(
+        grid(),
+        BasisKind::Gimp,
+        Kinematics::SmallStrain,
+        points(0),
+        vec![elastic()],
+        vec![],
+        Vector2::zeros(),
+    )
+    .unwrap();
+    assert!(matches!(gimp.clone().with_anti_locking(AntiLocking::BBar), Err(ModelError::AntiLocking(_))));
+    let linear = model_with(vec![]).unwrap();
+    let bad = AntiLocking::AssumedStrain { stabilization: 0.0 };
+    assert!(matches!(linear.clone().with_anti_locking(bad), Err(ModelError::AntiLocking(_))));
+    assert!(linear.clone().with_anti_locking(AntiLocking::BBar).is_ok());
+    let spline = Model::new(
+        grid(),
+        BasisKind::QuadraticBSpline,
+        Kinematics::SmallStrain,
+        points(0),
+        vec![elastic()],
+        vec![],
+        Vector2::zeros(),
+    )
+    .unwrap();
+    assert!(matches!(spline.with_ghost_penalty(0.1), Err(ModelError::GhostPenalty(_))));
+    assert!(matches!(gimp.clone().with_ghost_penalty(-1.0), Err(ModelError::GhostPenalty(_))));
+    let finite = Model::new(
+        grid(),
+        BasisKind::Gimp,
+        Kinematics::FiniteStrain,
+        points(0),
+        vec![elastic()],
+        vec![],
+        Vector2::zeros(),
+    )
+    .unwrap();
+    assert!(matches!(finite.with_geometrically_linear(), Err(ModelError::GeometricallyLinear(_))));
+}
+
+#[test]
+fn the_fem_reference_refuses_a_ghost_penalty_and_blocks_without_density() {
+    let mesh = FeMesh::block(Vector2::zeros(), Vector2::new(2.0, 2.0), [2, 2], 2).unwrap();
+    let fem = |density: &[f64]| {
+        Model::updated_lagrangian_fem(
+            grid(),
+            Kinematics::SmallStrain,
+            mesh.clone(),
+            density,
+            &[0],
+            vec![elastic()],
+            vec![],
+            Vector2::zeros(),
+        )
+    };
+    assert!(matches!(fem(&[]), Err(ModelError::MeshBlock { block: 0, .. })));
+    assert!(matches!(fem(&[-1.0]), Err(ModelError::Density { block: 0, .. })));
+    let model = fem(&[1000.0]).unwrap();
+    assert_eq!(model.points().len(), 16);
+    assert!(model.background().moves_with_body());
+    assert!(matches!(model.with_ghost_penalty(0.1), Err(ModelError::GhostPenalty(_))));
+}
+
+/// The evolving state can be written, but the view has no way to add a point or change
+/// one's material: the model's invariant holds whatever an analysis does through it.
+#[test]
+fn the_mutable_view_writes_state_and_keeps_the_points() {
+    let mut model = model_with(vec![]).unwrap();
+    let n = model.points().len();
+    let view = model.points_mut();
+    assert_eq!(view.len(), n);
+    view.stress[0] = Matrix3::identity();
+    view.velocity.iter_mut().for_each(|v| *v = Vector2::new(1.0, 0.0));
+    assert_eq!(model.points().stress[0], Matrix3::identity());
+    assert_eq!(model.points().momentum(), Vector2::new(model.points().total_mass(), 0.0));
+}
