@@ -96,17 +96,19 @@ impl<T: Ranged<ValueType = f64> + ValueFormatter<f64>> Axis for T {}
 /// The chart being drawn.
 type Chart<'a, 'b, X, Y> = ChartContext<'a, SVGBackend<'b>, Cartesian2d<X, Y>>;
 
-/// Values beyond this magnitude are skipped on linear axes (their spans would overflow).
-const LINEAR_LIMIT: f64 = 1e300;
+/// Values beyond this magnitude (or, on log axes, below its inverse) are skipped: the axis
+/// range around them would overflow, and plotters' log-axis tick search never ends on an
+/// infinite range.
+const LIMIT: f64 = 1e300;
 
 /// Converts a data value to axis units (`log10` on log axes); `None` when it cannot be shown.
 fn to_axis(v: f64, log: bool) -> Option<f64> {
     if !v.is_finite() {
         None
     } else if log {
-        (v > 0.0).then(|| v.log10())
+        (1.0 / LIMIT..=LIMIT).contains(&v).then(|| v.log10())
     } else {
-        (v.abs() <= LINEAR_LIMIT).then_some(v)
+        (v.abs() <= LIMIT).then_some(v)
     }
 }
 
@@ -134,7 +136,7 @@ fn axis_range(values: impl Iterator<Item = f64>, log: bool) -> (f64, f64) {
     }
 }
 
-/// Labels at decades on log axes (axis labels are only asked for there).
+/// A tick label on a log axis: `1e-3` at a decade, `3e-3` between decades.
 fn decade_label(v: &f64) -> String {
     let k = v.log10().round();
     if (v / 10f64.powf(k) - 1.0).abs() < 1e-6 {
@@ -205,9 +207,8 @@ fn distance_to_lines(p: (f64, f64), lines: &[Vec<(f64, f64)>]) -> f64 {
     d
 }
 
-/// A reference triangle in pixels, of width `w` and height `h`, its right angle at the
-/// bottom, placed at `(x0, y0)` (bottom of the left edge): its three corners and the anchor of
-/// its label beside the vertical leg (right of it when `up`, left when falling).
+/// A reference triangle in pixels: its corners, and the anchor of its label beside the
+/// vertical leg (right of it when the slope is `up`, left when falling).
 struct Triangle {
     corners: [(f64, f64); 3],
     label_at: (f64, f64),
@@ -216,6 +217,8 @@ struct Triangle {
 }
 
 impl Triangle {
+    /// The triangle `w` wide and `h` high with its right angle at the bottom and the bottom of
+    /// its left edge at `(x0, y0)`; its label `label_room` pixels long.
     fn at(x0: f64, y0: f64, w: f64, h: f64, up: bool, label_room: f64) -> Self {
         let (corners, label_at) = if up {
             ([(x0, y0), (x0 + w, y0 - h), (x0 + w, y0)], (x0 + w + 5.0, y0 - h / 2.0))
@@ -536,7 +539,10 @@ mod tests {
         // Linear axes with NaN/inf values, and a plot with no usable data.
         p.log_x = false;
         p.log_y = false;
-        p.series.push(Series::new("huge", vec![(f64::INFINITY, 1.0), (1.0, f64::NEG_INFINITY)]));
+        p.series.push(Series::new("huge", vec![(f64::INFINITY, 1.0), (1.0, f64::NEG_INFINITY), (f64::MAX, 1.0)]));
+        finite_svg(&p);
+        p.log_x = true;
+        p.log_y = true;
         finite_svg(&p);
         let empty = Plot {
             log_x: true,
