@@ -9,6 +9,7 @@ use crate::{Report, Row};
 use anyhow::Result;
 use loam::constitutive::{ConstitutiveLaw, Elastic, MohrCoulomb, VonMises};
 use loam::implicit::{AntiLocking, QuasiStatic, QuasiStaticSettings};
+use loam::io::output::{CsvCell, CsvWriter};
 use loam::verification::{footing_model, prandtl_nc};
 use std::fmt::Write as _;
 use std::sync::Arc;
@@ -149,7 +150,10 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
         ));
     }
     let (mut residuals, mut verdicts) = (Vec::new(), Vec::new());
-    let mut csv = String::from("law,treatment,cells_per_b,settlement_over_b,q_over_c\n");
+    let mut csv = CsvWriter::create(
+        report.out.join("footing_curves.csv"),
+        &["law", "treatment", "cells_per_b", "settlement_over_b", "q_over_c"],
+    )?;
     let mut plot = crate::svg::Plot::new(
         "V3 strip footing: load–settlement, assumed strain, finest mesh",
         "settlement / B",
@@ -174,7 +178,13 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
                     writeln!(md, "\n{name}, {treatment}, {cells} cells per b stopped: {f}\n")?;
                 }
                 for &(s, q) in &r.curve {
-                    writeln!(csv, "\"{name}\",{treatment},{cells},{s:e},{q:e}")?;
+                    csv.row_mixed(&[
+                        CsvCell::Text(name),
+                        CsvCell::Text(treatment),
+                        CsvCell::Int(cells as i64),
+                        CsvCell::Float(s),
+                        CsvCell::Float(q),
+                    ])?;
                 }
                 let case = format!("V3 {name} {treatment} {cells}/b");
                 report.rows.push(Row::info(&case, "qu_over_q_ref_minus_1", ratio));
@@ -244,7 +254,6 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
         ));
     }
     plot.series.push(crate::svg::Series::new("Prandtl", vec![(0.0, 1.0), (SETTLEMENT / 2.0, 1.0)]).dashed());
-    std::fs::write(report.out.join("footing_curves.csv"), csv)?;
     plot.write(&report.out.join("footing_curves.svg"))?;
     let md = &mut report.md;
     writeln!(md, "\n![V3 load–settlement curves](footing_curves.svg)\n")?;

@@ -15,6 +15,7 @@ use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
 use loam::grid::BasisKind;
 use loam::implicit::{Kinematics, QuasiStatic, QuasiStaticSettings};
+use loam::io::output::{CsvCell, CsvWriter};
 use loam::verification::{column_errors, column_fem_model, column_model, Column};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -400,7 +401,7 @@ fn verify(quick: bool, out: &Path) -> Result<()> {
     hard_cases::verify(quick, &mut report)?;
     let Report { mut md, rows, .. } = report;
     writeln!(md, "## Bounds\n\n| case | quantity | value | bound | pass |\n|---|---|---:|---:|---|")?;
-    let mut csv = String::from("case,quantity,value,bound,pass\n");
+    let mut csv = CsvWriter::create(out.join("summary.csv"), &["case", "quantity", "value", "bound", "pass"])?;
     let mut failed = Vec::new();
     for r in &rows {
         let (bound_s, pass_s) = match (r.bound, r.pass()) {
@@ -412,14 +413,19 @@ fn verify(quick: bool, out: &Path) -> Result<()> {
         if pass_s == "FAIL" {
             failed.push(format!("{} {} = {:.4e} (bound {bound_s})", r.case, r.quantity, r.value));
         }
-        writeln!(csv, "{},{},{:e},{},{}", r.case, r.quantity, r.value, bound_s, pass_s)?;
+        csv.row_mixed(&[
+            CsvCell::Text(&r.case),
+            CsvCell::Text(&r.quantity),
+            CsvCell::Float(r.value),
+            CsvCell::Text(&bound_s),
+            CsvCell::Text(pass_s),
+        ])?;
         if r.bound.is_some() {
             writeln!(md, "| {} | {} | {:.4e} | {bound_s} | {pass_s} |", r.case, r.quantity, r.value)?;
         }
     }
     writeln!(md, "\nThe linear (standard MPM) basis carries no bound: it is known not to converge on this problem (cell-crossing error), and the tables above show its stagnation.")?;
     std::fs::write(out.join("report.md"), md)?;
-    std::fs::write(out.join("summary.csv"), csv)?;
     plot.write(&out.join("convergence.svg"))?;
     eprintln!("verify: wrote {}/report.md, summary.csv, convergence.svg", out.display());
     if !failed.is_empty() {

@@ -17,6 +17,7 @@ use anyhow::{Context, Result};
 use loam::explicit::{ExplicitSettings, TimeStep};
 use loam::grid::BasisKind;
 use loam::implicit::{Kinematics, QuasiStatic, QuasiStaticSettings};
+use loam::io::output::{CsvCell, CsvWriter};
 use loam::verification::{column_errors, column_fem_model, column_model, Column, VibratingBar};
 use std::fmt::Write as _;
 use std::path::Path;
@@ -38,7 +39,10 @@ pub fn run(quick: bool, out: &Path) -> Result<()> {
     let bar = VibratingBar::REFERENCE;
     let dt_c = bar.critical_time_step();
     let mut md = String::new();
-    let mut csv = String::from("problem,scheme,dt_or_steps,steps,error,second_error,wall_s,outcome\n");
+    let mut csv = CsvWriter::create(
+        out.join("steps.csv"),
+        &["problem", "scheme", "dt_or_steps", "steps", "error", "second_error", "wall_s", "outcome"],
+    )?;
     writeln!(md, "# Implicit vs explicit step sizes\n\nMode: {}. Wall time: the steps alone, on this machine, one run each (noisy; compare ratios, not absolute values).\n", if quick { "quick" } else { "full" })?;
 
     // ---------------------------------------------------------------- V2
@@ -108,17 +112,16 @@ pub fn run(quick: bool, out: &Path) -> Result<()> {
             p.wall_s,
             p.outcome
         )?;
-        writeln!(
-            csv,
-            "V2,{},{},{},{:e},{:e},{:e},\"{}\"",
-            p.scheme,
-            p.dt,
-            p.steps,
-            p.period_error,
-            p.vcm_error,
-            p.wall_s,
-            p.outcome.replace('"', "'")
-        )?;
+        csv.row_mixed(&[
+            CsvCell::Text("V2"),
+            CsvCell::Text(p.scheme),
+            CsvCell::Float(p.dt),
+            CsvCell::Int(p.steps as i64),
+            CsvCell::Float(p.period_error),
+            CsvCell::Float(p.vcm_error),
+            CsvCell::Float(p.wall_s),
+            CsvCell::Text(&p.outcome),
+        ])?;
     }
     let stable = |p: &&Point| p.outcome == "ran to the end";
     let largest_explicit =
@@ -227,7 +230,16 @@ pub fn run(quick: bool, out: &Path) -> Result<()> {
             match failed {
                 None => {
                     writeln!(md, "| {scheme} | {steps} | {steps} | {e:.3e} | {wall:.4} |")?;
-                    writeln!(csv, "V1c,{scheme},{steps},{steps},{e:e},,{wall:e},ok")?;
+                    csv.row_mixed(&[
+                        CsvCell::Text("V1c"),
+                        CsvCell::Text(scheme),
+                        CsvCell::Int(steps as i64),
+                        CsvCell::Int(steps as i64),
+                        CsvCell::Float(e),
+                        CsvCell::Text(""),
+                        CsvCell::Float(wall),
+                        CsvCell::Text("ok"),
+                    ])?;
                     pts.push((wall, e, steps));
                 }
                 Some(f) => writeln!(md, "| {scheme} | {steps} | – | failed: {f} | {wall:.4} |")?,
@@ -257,11 +269,16 @@ pub fn run(quick: bool, out: &Path) -> Result<()> {
         let e_final = column_errors(&last.points(), &col, 1, reference).stress;
         let outcome = run.failure.clone().unwrap_or_else(|| "ok".into());
         writeln!(md, "| explicit | α = {damping} | {} | {e_final:.3e} | {:.4} |", run.steps, run.wall_s)?;
-        writeln!(
-            csv,
-            "V1c,explicit damping {damping},{damping},{},{e_final:e},,{:e},\"{outcome}\"",
-            run.steps, run.wall_s
-        )?;
+        csv.row_mixed(&[
+            CsvCell::Text("V1c"),
+            CsvCell::Text(&format!("explicit damping {damping}")),
+            CsvCell::Float(damping),
+            CsvCell::Int(run.steps as i64),
+            CsvCell::Float(e_final),
+            CsvCell::Text(""),
+            CsvCell::Float(run.wall_s),
+            CsvCell::Text(&outcome),
+        ])?;
         if run.failure.is_none() {
             // Wall time at which the run first came within 5 % of its final error.
             let reach = curve.iter().find(|(_, e)| *e <= 1.05 * e_final).map(|p| p.0).unwrap_or(run.wall_s);
@@ -298,7 +315,6 @@ pub fn run(quick: bool, out: &Path) -> Result<()> {
     plot.write(&out.join("column_error_vs_wall.svg"))?;
     writeln!(md, "![column](column_error_vs_wall.svg)\n")?;
     std::fs::write(out.join("steps.md"), &md)?;
-    std::fs::write(out.join("steps.csv"), &csv)?;
     println!("{md}");
     eprintln!("steps: wrote {}/steps.md, steps.csv and SVG plots", out.display());
     Ok(())

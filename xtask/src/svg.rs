@@ -1,15 +1,23 @@
-//! A tiny dependency-free SVG line plot, for verification and convergence
-//! figures.
+//! Line plots for the verification and convergence figures, drawn with plotters' SVG backend.
 //!
-//! Linear or logarithmic axes (ticks at decades, labelled like `1e-3`, on log
-//! axes; 1-2-5 "nice" ticks on linear axes), a legend, a distinct colour and
-//! marker per series, optional dashed lines, and optional reference slope
-//! triangles for convergence plots. Values that cannot be shown (NaN,
-//! infinities, non-positive values on a log axis) are skipped, so the SVG
-//! never contains NaN coordinates.
+//! Linear or logarithmic axes (labelled decades, like `1e-3`, on log axes), a title, axis
+//! labels, a legend beside the plot, a distinct colour and marker per series, optional dashed
+//! lines, and optional reference-slope triangles for convergence plots. plotters has no such
+//! triangles, so they are placed here, in pixels, where they keep furthest from the data.
+//! Values that cannot be shown (NaN, infinities, non-positive values on a log axis) are
+//! dropped before plotting, so the SVG never contains NaN coordinates.
+//!
+//! plotters is built without its `ttf` feature: text stays SVG `<text>` that the viewer sets in
+//! its own sans-serif font, and plotters' width estimate is enough to lay the chart out. So
+//! the build needs no font file and no system library.
 
-use loam::io::output::xml_escape;
-use std::fmt::Write as _;
+use plotters::coord::ranged1d::{AsRangedCoord, Ranged, ValueFormatter};
+use plotters::coord::CoordTranslate;
+use plotters::coord::Shift;
+use plotters::element::DashedPathElement;
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+use std::error::Error;
 use std::path::Path;
 
 /// One line of the plot.
@@ -57,208 +65,109 @@ pub struct Plot {
     pub reference_slopes: Vec<(f64, String)>,
 }
 
-const WIDTH: f64 = 760.0;
-const HEIGHT: f64 = 480.0;
-const LEFT: f64 = 80.0;
-const TOP: f64 = 40.0;
-const RIGHT: f64 = 570.0;
-const BOTTOM: f64 = 420.0;
-const LEGEND_X: f64 = 585.0;
+/// Width of the chart (axes and plot area); the legend is added to its right.
+const CHART_WIDTH: u32 = 580;
+const MIN_HEIGHT: u32 = 480;
+/// Vertical pitch of the legend rows, pixels.
+const LEGEND_ROW: u32 = 20;
+/// At most this many markers per series (energy histories have thousands of points).
 const MAX_MARKERS: usize = 30;
+const FONT: &str = "sans-serif";
+/// plotters' font sizes are 1.24 times the SVG `font-size`: this is 12 px.
+const TEXT_SIZE: f64 = 15.0;
+const GREY: RGBColor = RGBColor(0x44, 0x44, 0x44);
+const COLOURS: [RGBColor; 10] = [
+    RGBColor(0x1f, 0x77, 0xb4),
+    RGBColor(0xd6, 0x27, 0x28),
+    RGBColor(0x2c, 0xa0, 0x2c),
+    RGBColor(0xff, 0x7f, 0x0e),
+    RGBColor(0x94, 0x67, 0xbd),
+    RGBColor(0x8c, 0x56, 0x4b),
+    RGBColor(0xe3, 0x77, 0xc2),
+    RGBColor(0x17, 0xbe, 0xcf),
+    RGBColor(0x7f, 0x7f, 0x7f),
+    RGBColor(0xbc, 0xbd, 0x22),
+];
 
-const COLOURS: [&str; 10] =
-    ["#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf", "#7f7f7f", "#bcbd22"];
+/// A plotters axis of `f64` values, linear or logarithmic.
+trait Axis: Ranged<ValueType = f64> + ValueFormatter<f64> {}
+impl<T: Ranged<ValueType = f64> + ValueFormatter<f64>> Axis for T {}
 
-/// Values beyond this magnitude are skipped on linear axes (their spans
-/// would overflow).
-const LINEAR_LIMIT: f64 = 1e300;
+/// The chart being drawn.
+type Chart<'a, 'b, X, Y> = ChartContext<'a, SVGBackend<'b>, Cartesian2d<X, Y>>;
 
-/// Converts a data value to axis space (`log10` on log axes); `None` when it
-/// cannot be shown.
+/// Values beyond this magnitude (or, on log axes, below its inverse) are skipped: the axis
+/// range around them would overflow, and plotters' log-axis tick search never ends on an
+/// infinite range.
+const LIMIT: f64 = 1e300;
+
+/// Converts a data value to axis units (`log10` on log axes); `None` when it cannot be shown.
 fn to_axis(v: f64, log: bool) -> Option<f64> {
     if !v.is_finite() {
         None
     } else if log {
-        (v > 0.0).then(|| v.log10())
+        (1.0 / LIMIT..=LIMIT).contains(&v).then(|| v.log10())
     } else {
-        (v.abs() <= LINEAR_LIMIT).then_some(v)
+        (v.abs() <= LIMIT).then_some(v)
     }
 }
 
-/// An axis in axis space: `[lo, hi]`, major ticks with labels, minor ticks.
-#[derive(Debug, Clone, PartialEq)]
-struct Axis {
-    lo: f64,
-    hi: f64,
-    ticks: Vec<(f64, String)>,
-    minor: Vec<f64>,
-}
-
-impl Axis {
-    fn new(values: impl Iterator<Item = f64>, log: bool) -> Self {
-        let (mut min, mut max) = (f64::INFINITY, f64::NEG_INFINITY);
-        for v in values {
-            min = min.min(v);
-            max = max.max(v);
-        }
-        if min > max {
-            // No data: a default range.
-            (min, max) = (0.0, 1.0);
-        }
-        if log {
-            log_axis(min, max)
-        } else {
-            linear_axis(min, max)
-        }
-    }
-
-    /// Fraction of the way from `lo` to `hi`.
-    fn frac(&self, t: f64) -> f64 {
-        (t - self.lo) / (self.hi - self.lo)
-    }
-}
-
-/// Decade exponents spanning `[lo_t, hi_t]` (log10 values): the axis range
-/// `(lo, hi)` in whole decades and the labelled decade exponents.
-fn log_decades(lo_t: f64, hi_t: f64) -> (i32, i32, Vec<i32>) {
-    let mut lo = lo_t.floor() as i32;
-    let mut hi = hi_t.ceil() as i32;
-    if hi <= lo {
-        lo -= 1;
-        hi += 1;
-    }
-    // At most ~10 labelled decades.
-    let step = ((hi - lo) as f64 / 10.0).ceil().max(1.0) as i32;
-    let ticks = (lo..=hi).filter(|k| k.rem_euclid(step) == 0).collect();
-    (lo, hi, ticks)
-}
-
-fn log_axis(lo_t: f64, hi_t: f64) -> Axis {
-    let (lo, hi, decades) = log_decades(lo_t, hi_t);
-    let ticks = decades.iter().map(|&k| (k as f64, format!("1e{k}"))).collect();
-    let mut minor = Vec::new();
-    if hi - lo <= 6 {
-        for k in lo..hi {
-            for m in 2..=9 {
-                minor.push(k as f64 + (m as f64).log10());
-            }
-        }
-    }
-    Axis { lo: lo as f64, hi: hi as f64, ticks, minor }
-}
-
-/// The 1-2-5 step nearest (geometrically) to `raw`.
-fn nice_step(raw: f64) -> f64 {
-    let mag = 10f64.powf(raw.log10().floor());
-    let f = raw / mag;
-    let nice = if f < 2f64.sqrt() {
-        1.0
-    } else if f < 10f64.sqrt() {
-        2.0
-    } else if f < 50f64.sqrt() {
-        5.0
+fn from_axis(t: f64, log: bool) -> f64 {
+    if log {
+        10f64.powf(t)
     } else {
-        10.0
-    };
-    nice * mag
+        t
+    }
 }
 
-fn linear_axis(mut min: f64, mut max: f64) -> Axis {
-    if max - min <= 0.0 {
-        let pad = if min != 0.0 { min.abs() * 0.1 } else { 1.0 };
-        min -= pad;
-        max += pad;
-    }
-    let step = nice_step((max - min) / 5.0);
-    let i_lo = (min / step).floor();
-    let i_hi = (max / step).ceil();
-    let (lo, hi) = (i_lo * step, i_hi * step);
-    let max_abs = lo.abs().max(hi.abs());
-    let ticks = (i_lo as i64..=i_hi as i64)
-        .map(|i| {
-            let v = i as f64 * step;
-            (v, tick_label(if i == 0 { 0.0 } else { v }, step, max_abs))
-        })
-        .collect();
-    Axis { lo, hi, ticks, minor: Vec::new() }
-}
-
-/// Label for a linear tick `v` on an axis with tick spacing `step` whose
-/// largest magnitude is `max_abs`: just enough digits to tell ticks apart.
-fn tick_label(v: f64, step: f64, max_abs: f64) -> String {
-    if v == 0.0 {
-        return "0".to_owned();
-    }
-    let step_mag = step.log10().floor() as i32;
-    if !(1e-3..1e5).contains(&max_abs) {
-        let digits = (max_abs.log10().floor() as i32 - step_mag).clamp(0, 12) as usize;
-        let s = format!("{v:.digits$e}");
-        // Drop trailing zeros of the mantissa: 2.50e6 -> 2.5e6, 2.0e6 -> 2e6.
-        match s.split_once('e') {
-            Some((mant, exp)) if mant.contains('.') => {
-                let mant = mant.trim_end_matches('0').trim_end_matches('.');
-                format!("{mant}e{exp}")
-            }
-            _ => s,
-        }
+/// The plotted range in axis units: whole decades on log axes (a little wider, so that
+/// plotters' decade search, which steps by multiplying, still finds both end decades), the
+/// data and a margin on linear ones.
+fn axis_range(values: impl Iterator<Item = f64>, log: bool) -> (f64, f64) {
+    let (min, max) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)));
+    let (min, max) = if min > max { (0.0, 1.0) } else { (min, max) };
+    if log {
+        let (lo, hi) = (min.floor(), max.ceil());
+        let (lo, hi) = if hi > lo { (lo, hi) } else { (lo - 1.0, hi + 1.0) };
+        (lo - 0.02, hi + 0.02)
     } else {
-        let decimals = (-step_mag).max(0) as usize;
-        format!("{v:.decimals$}")
+        let pad = if max > min { 0.03 * (max - min) } else { 0.1 * min.abs().max(1.0) };
+        (min - pad, max + pad)
     }
 }
 
-/// Pixel coordinate, or `None` if it would not be finite.
-fn px(v: f64) -> Option<String> {
-    v.is_finite().then(|| format!("{v:.2}"))
+/// A tick label on a log axis: `1e-3` at a decade, `3e-3` between decades.
+fn decade_label(v: &f64) -> String {
+    let k = v.log10().round();
+    if (v / 10f64.powf(k) - 1.0).abs() < 1e-6 {
+        format!("1e{k}")
+    } else {
+        format!("{v:.0e}")
+    }
 }
 
-/// Draws marker number `kind` centred at `(x, y)`.
-fn marker(out: &mut String, kind: usize, x: f64, y: f64, colour: &str) {
-    let r = 3.5;
-    let (Some(_), Some(_)) = (px(x), px(y)) else {
-        return;
-    };
-    let poly = |pts: &[(f64, f64)]| {
-        pts.iter().map(|(dx, dy)| format!("{:.2},{:.2}", x + dx, y + dy)).collect::<Vec<_>>().join(" ")
-    };
-    let _ = match kind % 6 {
-        0 => writeln!(out, r#"<circle cx="{x:.2}" cy="{y:.2}" r="{r}" fill="{colour}"/>"#),
-        1 => writeln!(
-            out,
-            r#"<rect x="{:.2}" y="{:.2}" width="{:.2}" height="{:.2}" fill="{colour}"/>"#,
-            x - r,
-            y - r,
-            2.0 * r,
-            2.0 * r
-        ),
-        2 => writeln!(
-            out,
-            r#"<polygon points="{}" fill="{colour}"/>"#,
-            poly(&[(0.0, -1.2 * r), (1.1 * r, 0.9 * r), (-1.1 * r, 0.9 * r)])
-        ),
-        3 => writeln!(
-            out,
-            r#"<polygon points="{}" fill="{colour}"/>"#,
-            poly(&[(0.0, -1.3 * r), (1.3 * r, 0.0), (0.0, 1.3 * r), (-1.3 * r, 0.0)])
-        ),
-        4 => writeln!(
-            out,
-            r#"<polygon points="{}" fill="{colour}"/>"#,
-            poly(&[(0.0, 1.2 * r), (1.1 * r, -0.9 * r), (-1.1 * r, -0.9 * r)])
-        ),
-        _ => writeln!(
-            out,
-            r#"<path d="M{:.2},{:.2}L{:.2},{:.2}M{:.2},{:.2}L{:.2},{:.2}" stroke="{colour}" stroke-width="2"/>"#,
-            x - r,
-            y - r,
-            x + r,
-            y + r,
-            x - r,
-            y + r,
-            x + r,
-            y - r
-        ),
-    };
+/// Draws marker number `kind` (circle, square, triangle, diamond, inverted triangle, cross)
+/// at `at`, in `area`'s coordinates.
+fn draw_marker<CT: CoordTranslate>(
+    area: &DrawingArea<SVGBackend, CT>,
+    kind: usize,
+    at: CT::From,
+    colour: RGBColor,
+) -> Result<(), Box<dyn Error>>
+where
+    CT::From: Clone + 'static,
+{
+    let fill = colour.filled();
+    let base = EmptyElement::at(at);
+    match kind % 6 {
+        0 => area.draw(&(base + Circle::new((0, 0), 4, fill)))?,
+        1 => area.draw(&(base + Rectangle::new([(-3, -3), (3, 3)], fill)))?,
+        2 => area.draw(&(base + Polygon::new(vec![(0, -5), (4, 3), (-4, 3)], fill)))?,
+        3 => area.draw(&(base + Polygon::new(vec![(0, -5), (5, 0), (0, 5), (-5, 0)], fill)))?,
+        4 => area.draw(&(base + Polygon::new(vec![(0, 5), (4, -3), (-4, -3)], fill)))?,
+        _ => area.draw(&(base + Cross::new((0, 0), 4, colour.stroke_width(2))))?,
+    }
+    Ok(())
 }
 
 /// Points along the closed outline of a triangle, 8 per edge.
@@ -298,13 +207,101 @@ fn distance_to_lines(p: (f64, f64), lines: &[Vec<(f64, f64)>]) -> f64 {
     d
 }
 
+/// A reference triangle in pixels: its corners, and the anchor of its label beside the
+/// vertical leg (right of it when the slope is `up`, left when falling).
+struct Triangle {
+    corners: [(f64, f64); 3],
+    label_at: (f64, f64),
+    up: bool,
+    label_room: f64,
+}
+
+impl Triangle {
+    /// The triangle `w` wide and `h` high with its right angle at the bottom and the bottom of
+    /// its left edge at `(x0, y0)`; its label `label_room` pixels long.
+    fn at(x0: f64, y0: f64, w: f64, h: f64, up: bool, label_room: f64) -> Self {
+        let (corners, label_at) = if up {
+            ([(x0, y0), (x0 + w, y0 - h), (x0 + w, y0)], (x0 + w + 5.0, y0 - h / 2.0))
+        } else {
+            ([(x0, y0 - h), (x0 + w, y0), (x0, y0)], (x0 - 5.0, y0 - h / 2.0))
+        };
+        Self { corners, label_at, up, label_room }
+    }
+
+    /// The segment its label covers, roughly.
+    fn label_line(&self) -> Vec<(f64, f64)> {
+        let dir = if self.up { 1.0 } else { -1.0 };
+        (0..4).map(|k| (self.label_at.0 + dir * self.label_room * k as f64 / 3.0, self.label_at.1)).collect()
+    }
+
+    /// Its clearance: the distance from its outline and label to the nearest obstacle.
+    fn clearance(&self, obstacles: &[Vec<(f64, f64)>]) -> f64 {
+        let mut samples = edge_samples(&self.corners);
+        samples.extend(self.label_line());
+        samples.iter().map(|&p| distance_to_lines(p, obstacles)).fold(f64::INFINITY, f64::min)
+    }
+}
+
+/// The plot area in pixels, `(x_left, x_right, y_top, y_bottom)`, and pixels per axis unit
+/// in x and y: where the reference triangles may go, and how steep they are.
+struct Frame {
+    area: (f64, f64, f64, f64),
+    scale: (f64, f64),
+}
+
+impl Frame {
+    /// The clearest place for a triangle of `slope` labelled `label`, away from `obstacles`
+    /// (screen polylines); `None` where the plot area has no room for it.
+    fn place_triangle(&self, slope: f64, label: &str, obstacles: &[Vec<(f64, f64)>]) -> Option<Triangle> {
+        let (left, right, top, bottom) = self.area;
+        let (pw, ph) = (right - left, bottom - top);
+        if !(slope.is_finite() && self.scale.0.is_finite() && self.scale.1.is_finite()) {
+            return None;
+        }
+        // Screen size: width 20% of the plot, height at most 30% of it.
+        let mut w = 0.2 * pw;
+        let mut h = slope.abs() * self.scale.1 / self.scale.0 * w;
+        if h > 0.3 * ph {
+            w *= 0.3 * ph / h;
+            h = 0.3 * ph;
+        }
+        let label_room = 7.0 * label.chars().count() as f64 + 8.0;
+        let up = slope >= 0.0;
+        // Left edge range, leaving room for the label beside the vertical leg.
+        let (x_min, x_max) = if up {
+            (left + 10.0, right - 10.0 - w - label_room)
+        } else {
+            (left + 10.0 + label_room, right - 10.0 - w)
+        };
+        let (y_min, y_max) = (top + 10.0 + h, bottom - 10.0);
+        if x_max < x_min || y_max < y_min || !h.is_finite() {
+            return None;
+        }
+        let n = 12;
+        let mut best: Option<(Triangle, f64)> = None;
+        for i in 0..=n {
+            for j in (0..=n).rev() {
+                let x0 = x_min + (x_max - x_min) * i as f64 / n as f64;
+                let y0 = y_min + (y_max - y_min) * j as f64 / n as f64;
+                let tri = Triangle::at(x0, y0, w, h, up, label_room);
+                let score = tri.clearance(obstacles);
+                // Prefer the clearest spot; on ties, the lowest, left-most one.
+                if best.as_ref().is_none_or(|b| score > b.1 + 1e-9) {
+                    best = Some((tri, score));
+                }
+            }
+        }
+        best.map(|b| b.0)
+    }
+}
+
 impl Plot {
     /// An empty plot with linear axes.
     pub fn new(title: impl Into<String>, x_label: impl Into<String>, y_label: impl Into<String>) -> Self {
         Self { title: title.into(), x_label: x_label.into(), y_label: y_label.into(), ..Self::default() }
     }
 
-    /// The visible points of each series, in axis space.
+    /// The visible points of each series, in axis units.
     fn axis_points(&self) -> Vec<Vec<(f64, f64)>> {
         self.series
             .iter()
@@ -315,221 +312,173 @@ impl Plot {
     }
 
     /// Renders the plot as a standalone SVG document.
-    pub fn to_svg(&self) -> String {
+    pub fn to_svg(&self) -> Result<String, Box<dyn Error>> {
+        let mut svg = String::new();
+        self.render(&mut svg)?;
+        Ok(svg)
+    }
+
+    fn render(&self, svg: &mut String) -> Result<(), Box<dyn Error>> {
         let data = self.axis_points();
-        let xa = Axis::new(data.iter().flatten().map(|p| p.0), self.log_x);
-        let ya = Axis::new(data.iter().flatten().map(|p| p.1), self.log_y);
-        let sx = |t: f64| LEFT + xa.frac(t) * (RIGHT - LEFT);
-        let sy = |t: f64| BOTTOM - ya.frac(t) * (BOTTOM - TOP);
+        let longest = self.series.iter().map(|s| s.label.chars().count()).max().unwrap_or(0);
+        // About 6.5 px per character of 12 px sans-serif, and the line and marker before it.
+        let legend_width = 60 + (6.5 * longest as f64) as u32;
+        let height = MIN_HEIGHT.max(60 + LEGEND_ROW * self.series.len() as u32);
+        let root = SVGBackend::with_string(svg, (CHART_WIDTH + legend_width, height)).into_drawing_area();
+        root.fill(&WHITE)?;
+        let (chart_area, legend_area) = root.split_horizontally(CHART_WIDTH);
+        let x = axis_range(data.iter().flatten().map(|p| p.0), self.log_x);
+        let y = axis_range(data.iter().flatten().map(|p| p.1), self.log_y);
+        let (xr, yr) = (
+            from_axis(x.0, self.log_x)..from_axis(x.1, self.log_x),
+            from_axis(y.0, self.log_y)..from_axis(y.1, self.log_y),
+        );
+        match (self.log_x, self.log_y) {
+            (false, false) => self.chart(&chart_area, &data, (x, y), xr, yr)?,
+            (true, false) => self.chart(&chart_area, &data, (x, y), xr.log_scale(), yr)?,
+            (false, true) => self.chart(&chart_area, &data, (x, y), xr, yr.log_scale())?,
+            (true, true) => self.chart(&chart_area, &data, (x, y), xr.log_scale(), yr.log_scale())?,
+        }
+        self.legend(&legend_area)?;
+        root.present()?;
+        Ok(())
+    }
 
-        let mut o = String::new();
-        let _ = writeln!(
-            o,
-            r#"<svg xmlns="http://www.w3.org/2000/svg" width="{WIDTH}" height="{HEIGHT}" viewBox="0 0 {WIDTH} {HEIGHT}" font-family="sans-serif" font-size="12">"#
-        );
-        let _ = writeln!(o, r#"<rect x="0" y="0" width="{WIDTH}" height="{HEIGHT}" fill="white"/>"#);
-        let _ = writeln!(
-            o,
-            r#"<defs><clipPath id="plot-area"><rect x="{}" y="{}" width="{}" height="{}"/></clipPath></defs>"#,
-            LEFT - 5.0,
-            TOP - 5.0,
-            RIGHT - LEFT + 10.0,
-            BOTTOM - TOP + 10.0
-        );
+    /// Draws axes, data and reference triangles on `area`; `ranges` are the axes' ranges in
+    /// axis units, `x` and `y` the same as plotters coordinates.
+    fn chart<X, Y>(
+        &self,
+        area: &DrawingArea<SVGBackend, Shift>,
+        data: &[Vec<(f64, f64)>],
+        ranges: ((f64, f64), (f64, f64)),
+        x: X,
+        y: Y,
+    ) -> Result<(), Box<dyn Error>>
+    where
+        X: AsRangedCoord<Value = f64>,
+        Y: AsRangedCoord<Value = f64>,
+        X::CoordDescType: Axis,
+        Y::CoordDescType: Axis,
+    {
+        let mut chart = ChartBuilder::on(area)
+            .caption(&self.title, (FONT, 1.25 * TEXT_SIZE))
+            .margin(15)
+            .x_label_area_size(45)
+            .y_label_area_size(70)
+            .build_cartesian_2d(x, y)?;
+        self.axes(&mut chart, ranges)?;
+        self.lines(&mut chart, data)?;
+        let screen: Vec<Vec<(f64, f64)>> = data
+            .iter()
+            .map(|pts| {
+                let pixels = pts.iter().map(|p| chart.backend_coord(&self.to_data(p)));
+                pixels.map(|(x, y)| (x as f64, y as f64)).collect()
+            })
+            .collect();
+        let (px, py) = chart.plotting_area().get_pixel_range();
+        let ((x0, x1), (y0, y1)) = ranges;
+        let frame = Frame {
+            area: (px.start as f64, px.end as f64, py.start as f64, py.end as f64),
+            scale: ((px.end - px.start) as f64 / (x1 - x0), (py.end - py.start) as f64 / (y1 - y0)),
+        };
+        self.reference_triangles(area, &frame, screen)
+    }
 
-        // Grid, ticks and tick labels.
-        let _ = writeln!(o, r##"<g stroke="#dddddd" stroke-width="1">"##);
-        for (t, _) in &xa.ticks {
-            let x = sx(*t);
-            let _ = writeln!(o, r#"<line x1="{x:.2}" y1="{TOP}" x2="{x:.2}" y2="{BOTTOM}"/>"#);
-        }
-        for (t, _) in &ya.ticks {
-            let y = sy(*t);
-            let _ = writeln!(o, r#"<line x1="{LEFT}" y1="{y:.2}" x2="{RIGHT}" y2="{y:.2}"/>"#);
-        }
-        let _ = writeln!(o, "</g>");
-        let _ = writeln!(o, r#"<g stroke="black" stroke-width="1">"#);
-        for (t, len) in xa.ticks.iter().map(|(t, _)| (*t, 6.0)).chain(xa.minor.iter().map(|t| (*t, 3.0))) {
-            let x = sx(t);
-            let _ = writeln!(o, r#"<line x1="{x:.2}" y1="{BOTTOM}" x2="{x:.2}" y2="{:.2}"/>"#, BOTTOM + len);
-        }
-        for (t, len) in ya.ticks.iter().map(|(t, _)| (*t, 6.0)).chain(ya.minor.iter().map(|t| (*t, 3.0))) {
-            let y = sy(t);
-            let _ = writeln!(o, r#"<line x1="{:.2}" y1="{y:.2}" x2="{LEFT}" y2="{y:.2}"/>"#, LEFT - len);
-        }
-        let _ = writeln!(o, "</g>");
-        let _ = writeln!(
-            o,
-            r#"<rect x="{LEFT}" y="{TOP}" width="{}" height="{}" fill="none" stroke="black"/>"#,
-            RIGHT - LEFT,
-            BOTTOM - TOP
-        );
-        for (t, label) in &xa.ticks {
-            let _ = writeln!(
-                o,
-                r#"<text x="{:.2}" y="{:.2}" text-anchor="middle">{}</text>"#,
-                sx(*t),
-                BOTTOM + 20.0,
-                xml_escape(label)
-            );
-        }
-        for (t, label) in &ya.ticks {
-            let _ = writeln!(
-                o,
-                r#"<text x="{:.2}" y="{:.2}" text-anchor="end">{}</text>"#,
-                LEFT - 9.0,
-                sy(*t) + 4.0,
-                xml_escape(label)
-            );
-        }
+    /// A point in axis units back in data units.
+    fn to_data(&self, &(x, y): &(f64, f64)) -> (f64, f64) {
+        (from_axis(x, self.log_x), from_axis(y, self.log_y))
+    }
 
-        // Title and axis labels.
-        let _ = writeln!(
-            o,
-            r#"<text x="{:.2}" y="{:.2}" text-anchor="middle" font-size="15">{}</text>"#,
-            (LEFT + RIGHT) / 2.0,
-            TOP - 15.0,
-            xml_escape(&self.title)
-        );
-        let _ = writeln!(
-            o,
-            r#"<text x="{:.2}" y="{:.2}" text-anchor="middle">{}</text>"#,
-            (LEFT + RIGHT) / 2.0,
-            BOTTOM + 45.0,
-            xml_escape(&self.x_label)
-        );
-        let (yl_x, yl_y) = (20.0, (TOP + BOTTOM) / 2.0);
-        let _ = writeln!(
-            o,
-            r#"<text x="{yl_x}" y="{yl_y}" text-anchor="middle" transform="rotate(-90 {yl_x} {yl_y})">{}</text>"#,
-            xml_escape(&self.y_label)
-        );
+    /// Grid, ticks, tick labels and axis labels.
+    fn axes<X: Axis, Y: Axis>(
+        &self,
+        chart: &mut Chart<X, Y>,
+        ranges: ((f64, f64), (f64, f64)),
+    ) -> Result<(), Box<dyn Error>> {
+        let mut mesh = chart.configure_mesh();
+        mesh.x_desc(&self.x_label)
+            .y_desc(&self.y_label)
+            .label_style((FONT, TEXT_SIZE))
+            .axis_desc_style((FONT, TEXT_SIZE))
+            .bold_line_style(RGBColor(0xdd, 0xdd, 0xdd))
+            .light_line_style(RGBColor(0xf2, 0xf2, 0xf2));
+        // On log axes: a label at every decade (one in n when there are many), light lines at
+        // 2..9 times each. On linear axes: the grid at the labels only.
+        let decades = |(lo, hi): (f64, f64)| ((hi - lo).round() as usize + 1).min(11);
+        if self.log_x {
+            mesh.x_labels(decades(ranges.0)).x_label_formatter(&decade_label);
+        } else {
+            mesh.x_max_light_lines(0);
+        }
+        if self.log_y {
+            mesh.y_labels(decades(ranges.1)).y_label_formatter(&decade_label);
+        } else {
+            mesh.y_max_light_lines(0);
+        }
+        mesh.draw()?;
+        Ok(())
+    }
 
-        // Data.
-        let _ = writeln!(o, r#"<g clip-path="url(#plot-area)">"#);
-        let mut screen_lines = Vec::with_capacity(data.len());
-        for (i, (s, pts)) in self.series.iter().zip(&data).enumerate() {
+    /// The series' lines and markers; `data` in axis units.
+    fn lines<X: Axis, Y: Axis>(&self, chart: &mut Chart<X, Y>, data: &[Vec<(f64, f64)>]) -> Result<(), Box<dyn Error>> {
+        for (i, (s, pts)) in self.series.iter().zip(data).enumerate() {
             let colour = COLOURS[i % COLOURS.len()];
-            let screen: Vec<(f64, f64)> =
-                pts.iter().map(|&(x, y)| (sx(x), sy(y))).filter(|(x, y)| x.is_finite() && y.is_finite()).collect();
-            let coords: Vec<String> = screen.iter().map(|(x, y)| format!("{x:.2},{y:.2}")).collect();
-            let dash = if s.dashed { r#" stroke-dasharray="7,4""# } else { "" };
-            let _ = writeln!(
-                o,
-                r#"<polyline points="{}" fill="none" stroke="{colour}" stroke-width="1.8"{dash}/>"#,
-                coords.join(" ")
-            );
-            let every = screen.len().div_ceil(MAX_MARKERS).max(1);
-            for (x, y) in screen.iter().step_by(every) {
-                marker(&mut o, i, *x, *y, colour);
+            let line = pts.iter().map(|p| self.to_data(p));
+            if s.dashed {
+                chart.draw_series(DashedLineSeries::new(line, 7, 4, colour.stroke_width(2)))?;
+            } else {
+                chart.draw_series(LineSeries::new(line, colour.stroke_width(2)))?;
             }
-            screen_lines.push(screen);
+            let every = pts.len().div_ceil(MAX_MARKERS).max(1);
+            for p in pts.iter().step_by(every) {
+                draw_marker(chart.plotting_area(), i, self.to_data(p), colour)?;
+            }
         }
-        self.reference_triangles(&mut o, &screen_lines, &xa, &ya);
-        let _ = writeln!(o, "</g>");
+        Ok(())
+    }
 
-        // Legend.
+    /// Draws the reference triangles where they keep furthest from `obstacles`, the data lines
+    /// in screen pixels (and from each other), inside the plot area. `area` starts at the SVG's
+    /// origin, so its coordinates are screen pixels.
+    fn reference_triangles(
+        &self,
+        area: &DrawingArea<SVGBackend, Shift>,
+        frame: &Frame,
+        mut obstacles: Vec<Vec<(f64, f64)>>,
+    ) -> Result<(), Box<dyn Error>> {
+        let px = |(x, y): (f64, f64)| (x.round() as i32, y.round() as i32);
+        for (slope, label) in &self.reference_slopes {
+            let Some(tri) = frame.place_triangle(*slope, label, &obstacles) else { continue };
+            let mut outline: Vec<(f64, f64)> = tri.corners.to_vec();
+            outline.push(tri.corners[0]);
+            area.draw(&DashedPathElement::new(outline.iter().map(|&p| px(p)), 3, 2, GREY.stroke_width(1)))?;
+            let anchor = Pos::new(if tri.up { HPos::Left } else { HPos::Right }, VPos::Center);
+            let style = (FONT, TEXT_SIZE).into_font().color(&GREY).pos(anchor);
+            area.draw(&Text::new(label.as_str(), px(tri.label_at), style))?;
+            obstacles.push(outline);
+            obstacles.push(tri.label_line());
+        }
+        Ok(())
+    }
+
+    /// The legend: a row per series with its line, marker and label.
+    fn legend(&self, area: &DrawingArea<SVGBackend, Shift>) -> Result<(), Box<dyn Error>> {
         for (i, s) in self.series.iter().enumerate() {
             let colour = COLOURS[i % COLOURS.len()];
-            let y = TOP + 10.0 + 20.0 * i as f64;
-            let dash = if s.dashed { r#" stroke-dasharray="7,4""# } else { "" };
-            let _ = writeln!(
-                o,
-                r#"<line x1="{LEGEND_X}" y1="{y:.2}" x2="{:.2}" y2="{y:.2}" stroke="{colour}" stroke-width="1.8"{dash}/>"#,
-                LEGEND_X + 30.0
-            );
-            marker(&mut o, i, LEGEND_X + 15.0, y, colour);
-            let _ =
-                writeln!(o, r#"<text x="{:.2}" y="{:.2}">{}</text>"#, LEGEND_X + 38.0, y + 4.0, xml_escape(&s.label));
+            let y = 50 + (LEGEND_ROW as usize * i) as i32;
+            let line = [(5, y), (35, y)];
+            if s.dashed {
+                area.draw(&DashedPathElement::new(line, 7, 4, colour.stroke_width(2)))?;
+            } else {
+                area.draw(&PathElement::new(line, colour.stroke_width(2)))?;
+            }
+            draw_marker(area, i, (20, y), colour)?;
+            let style = (FONT, TEXT_SIZE).into_font().color(&BLACK).pos(Pos::new(HPos::Left, VPos::Center));
+            area.draw(&Text::new(s.label.as_str(), (43, y), style))?;
         }
-        let _ = writeln!(o, "</svg>");
-        o
+        Ok(())
     }
 
-    /// Draws the reference slope triangles where they keep furthest from
-    /// the data lines (and from each other), inside the plot area.
-    fn reference_triangles(&self, o: &mut String, lines: &[Vec<(f64, f64)>], xa: &Axis, ya: &Axis) {
-        let (pw, ph) = (RIGHT - LEFT, BOTTOM - TOP);
-        // Pixels per axis unit.
-        let kx = pw / (xa.hi - xa.lo);
-        let ky = ph / (ya.hi - ya.lo);
-        let mut obstacles: Vec<Vec<(f64, f64)>> = lines.to_vec();
-        for (slope, label) in &self.reference_slopes {
-            if !(slope.is_finite() && kx.is_finite() && ky.is_finite()) {
-                continue;
-            }
-            // Screen size: width 20% of the plot, height at most 30% of it.
-            let mut w = 0.2 * pw;
-            let mut h = slope.abs() * ky / kx * w;
-            if h > 0.3 * ph {
-                w *= 0.3 * ph / h;
-                h = 0.3 * ph;
-            }
-            let label_room = 7.0 * label.chars().count() as f64 + 8.0;
-            let up = *slope >= 0.0;
-            // Left edge range, leaving room for the label beside the
-            // vertical leg (right of it when rising, left when falling).
-            let (x_min, x_max) = if up {
-                (LEFT + 10.0, RIGHT - 10.0 - w - label_room)
-            } else {
-                (LEFT + 10.0 + label_room, RIGHT - 10.0 - w)
-            };
-            let (y_min, y_max) = (TOP + 10.0 + h, BOTTOM - 10.0);
-            if x_max < x_min || y_max < y_min {
-                continue;
-            }
-            let shape = |x0: f64, y0: f64| {
-                // Vertices: start and end of the hypotenuse, right-angle
-                // corner (always at the bottom), label anchor.
-                if up {
-                    ([(x0, y0), (x0 + w, y0 - h), (x0 + w, y0)], (x0 + w + 5.0, y0 - h / 2.0))
-                } else {
-                    ([(x0, y0 - h), (x0 + w, y0), (x0, y0)], (x0 - 5.0, y0 - h / 2.0))
-                }
-            };
-            let n = 12;
-            let mut best: Option<(f64, f64, f64)> = None;
-            for i in 0..=n {
-                for j in (0..=n).rev() {
-                    let x0 = x_min + (x_max - x_min) * i as f64 / n as f64;
-                    let y0 = y_min + (y_max - y_min) * j as f64 / n as f64;
-                    let (tri, lab) = shape(x0, y0);
-                    let mut samples = edge_samples(&tri);
-                    let dir = if up { 1.0 } else { -1.0 };
-                    samples.extend((0..4).map(|k| (lab.0 + dir * label_room * k as f64 / 3.0, lab.1)));
-                    let score = samples.iter().map(|&p| distance_to_lines(p, &obstacles)).fold(f64::INFINITY, f64::min);
-                    // Prefer the clearest spot; on ties, the lowest, left-most one.
-                    if best.is_none_or(|b| score > b.2 + 1e-9) {
-                        best = Some((x0, y0, score));
-                    }
-                }
-            }
-            let Some((x0, y0, _)) = best else { continue };
-            let (tri, lab) = shape(x0, y0);
-            if tri.iter().chain([&lab]).any(|(x, y)| !x.is_finite() || !y.is_finite()) {
-                continue;
-            }
-            let coords: Vec<String> = tri.iter().map(|(x, y)| format!("{x:.2},{y:.2}")).collect();
-            let _ = writeln!(
-                o,
-                r##"<polygon points="{}" fill="none" stroke="#444444" stroke-width="1" stroke-dasharray="3,2"/>"##,
-                coords.join(" ")
-            );
-            let _ = writeln!(
-                o,
-                r##"<text x="{:.2}" y="{:.2}" text-anchor="{}" fill="#444444">{}</text>"##,
-                lab.0,
-                lab.1 + 4.0,
-                if up { "start" } else { "end" },
-                xml_escape(label)
-            );
-            let mut closed = tri.to_vec();
-            closed.push(tri[0]);
-            obstacles.push(closed);
-            let dir = if up { 1.0 } else { -1.0 };
-            obstacles.push(vec![lab, (lab.0 + dir * label_room, lab.1)]);
-        }
-    }
     /// Writes the SVG to `path`, creating its parent folder if needed.
     pub fn write(&self, path: &Path) -> std::io::Result<()> {
         if let Some(parent) = path.parent() {
@@ -537,7 +486,8 @@ impl Plot {
                 std::fs::create_dir_all(parent)?;
             }
         }
-        std::fs::write(path, self.to_svg())
+        let svg = self.to_svg().map_err(|e| std::io::Error::other(e.to_string()))?;
+        std::fs::write(path, svg)
     }
 }
 
@@ -562,28 +512,38 @@ mod tests {
         }
     }
 
+    /// The SVG of `plot`, checked to hold no NaN or infinite coordinate.
+    fn finite_svg(plot: &Plot) -> String {
+        let svg = plot.to_svg().unwrap();
+        assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+        assert!(!svg.contains("NaN") && !svg.contains("inf"), "{svg}");
+        svg
+    }
+
     #[test]
-    fn one_polyline_per_series() {
-        let svg = convergence_plot().to_svg();
-        assert_eq!(svg.matches("<polyline").count(), 3);
-        assert!(svg.starts_with("<svg"));
-        assert!(svg.trim_end().ends_with("</svg>"));
-        assert!(svg.contains("stroke-dasharray=\"7,4\""));
-        assert!(svg.contains("rate 2") && svg.contains("rate 1"));
+    fn title_legend_and_reference_slopes() {
+        let svg = finite_svg(&convergence_plot());
         assert!(svg.contains("Convergence &lt;L2&gt;"));
+        for text in ["u", "p", "bad", "h", "error", "rate 2", "rate 1"] {
+            assert!(svg.contains(&format!("\n{text}\n</text>")), "missing {text}");
+        }
+        // "u" solid: one polyline in the chart and one in the legend; "p" dashed: one per dash.
+        assert_eq!(svg.matches("stroke=\"#1F77B4\" stroke-width=\"2\" points").count(), 1 + 1);
+        assert!(svg.matches("stroke=\"#D62728\" stroke-width=\"2\" points").count() > 3);
     }
 
     #[test]
     fn no_nan_or_inf_text() {
         let mut p = convergence_plot();
-        let svg = p.to_svg();
-        assert!(!svg.contains("NaN") && !svg.contains("inf"), "{svg}");
+        finite_svg(&p);
         // Linear axes with NaN/inf values, and a plot with no usable data.
         p.log_x = false;
         p.log_y = false;
-        p.series.push(Series::new("huge", vec![(f64::INFINITY, 1.0), (1.0, f64::NEG_INFINITY)]));
-        let svg = p.to_svg();
-        assert!(!svg.contains("NaN") && !svg.contains("inf"));
+        p.series.push(Series::new("huge", vec![(f64::INFINITY, 1.0), (1.0, f64::NEG_INFINITY), (f64::MAX, 1.0)]));
+        finite_svg(&p);
+        p.log_x = true;
+        p.log_y = true;
+        finite_svg(&p);
         let empty = Plot {
             log_x: true,
             log_y: true,
@@ -591,55 +551,30 @@ mod tests {
             reference_slopes: vec![(2.0, "r".into())],
             ..Plot::default()
         };
-        let svg = empty.to_svg();
-        assert!(!svg.contains("NaN") && !svg.contains("inf"));
-        assert_eq!(svg.matches("<polyline").count(), 1);
+        finite_svg(&empty);
         // Constant data on linear axes.
-        let flat = Plot { series: vec![Series::new("c", vec![(1.0, 5.0), (1.0, 5.0)])], ..Plot::default() };
-        assert!(!flat.to_svg().contains("NaN"));
+        finite_svg(&Plot { series: vec![Series::new("c", vec![(1.0, 5.0), (1.0, 5.0)])], ..Plot::default() });
     }
 
     #[test]
     fn log_ticks_at_decades() {
-        let (lo, hi, ticks) = log_decades(2e-3f64.log10(), 50f64.log10());
-        assert_eq!((lo, hi), (-3, 2));
-        assert_eq!(ticks, vec![-3, -2, -1, 0, 1, 2]);
-        let svg = Plot {
+        let (lo, hi) = axis_range([2e-3f64.log10(), 50f64.log10()].into_iter(), true);
+        assert_eq!((lo.round(), hi.round()), (-3.0, 2.0));
+        let svg = finite_svg(&Plot {
             log_x: true,
             log_y: true,
             series: vec![Series::new("s", vec![(2e-3, 1.0), (50.0, 10.0)])],
             ..Plot::default()
-        }
-        .to_svg();
+        });
         for label in ["1e-3", "1e-2", "1e-1", "1e0", "1e1", "1e2"] {
-            assert!(svg.contains(&format!(">{label}</text>")), "missing {label}");
+            assert!(svg.contains(&format!("\n{label}\n</text>")), "missing {label}");
         }
-        // Exactly one decade of data still spans at least one decade.
-        let (lo, hi, _) = log_decades(0.0, 0.0);
-        assert!(hi > lo);
-        // Many decades are thinned to at most ~10 labels, still at decades.
-        let (_, _, ticks) = log_decades(-30.0, 10.0);
-        assert!(ticks.len() <= 11);
-        assert!(ticks.windows(2).all(|w| w[1] - w[0] == ticks[1] - ticks[0]));
-    }
-
-    #[test]
-    fn nice_linear_ticks() {
-        let a = linear_axis(0.03, 0.97);
-        assert_eq!((a.lo, a.hi), (0.0, 1.0));
-        let labels: Vec<&str> = a.ticks.iter().map(|(_, l)| l.as_str()).collect();
-        assert_eq!(labels, ["0", "0.2", "0.4", "0.6", "0.8", "1.0"]);
-        let a = linear_axis(-13.0, 42.0);
-        let labels: Vec<&str> = a.ticks.iter().map(|(_, l)| l.as_str()).collect();
-        assert_eq!(labels, ["-20", "-10", "0", "10", "20", "30", "40", "50"]);
-        let a = linear_axis(0.0, 2.5e6);
-        assert!(a.ticks.iter().any(|(_, l)| l == "1e6"), "{:?}", a.ticks);
-        let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * b.abs();
-        assert!(close(nice_step(0.8), 1.0));
-        assert!(close(nice_step(3.0), 2.0));
-        assert!(close(nice_step(4.0), 5.0));
-        assert!(close(nice_step(0.013), 0.01));
-        assert!(close(nice_step(170.0), 200.0));
+        // A single value still spans decades.
+        let (lo, hi) = axis_range(std::iter::once(0.0), true);
+        assert!(hi - lo > 1.0);
+        assert_eq!(decade_label(&1e-7), "1e-7");
+        assert_eq!(decade_label(&1.0), "1e0");
+        assert_eq!(decade_label(&3e4), "3e4");
     }
 
     #[test]
