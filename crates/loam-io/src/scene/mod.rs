@@ -2,7 +2,14 @@
 //! validation. Every error names the file, the line and column, and what would be valid;
 //! a scene is checked completely — down to points outside the grid and constraints that
 //! hold no node — before the first step runs.
+//!
+//! The schema's enums (`BasisSpec`, `KinematicsSpec`, `AntiLockingSpec`, `LinearSpec`,
+//! `MassSpec`, `SchemeSpec`, `TimeStepSpec`) mirror domain enums instead of deserialising
+//! them because the file format is a public contract that must not change when a Rust API
+//! is renamed, and the lower crates must not know a file format; `convert` holds the one
+//! `From` impl of each.
 
+mod convert;
 mod locate;
 mod schema;
 
@@ -11,14 +18,11 @@ pub use schema::*;
 
 use crate::analysis::{Analysis, AnalysisError};
 use loam_constitutive::{ConstitutiveLaw, Elastic, MohrCoulomb, VonMises};
-use loam_explicit::{Explicit, ExplicitError, ExplicitSettings, TimeStep, UpdateScheme};
-use loam_grid::{BasisKind, FeMesh, Grid, MeshError};
-use loam_implicit::{
-    AntiLocking, Dynamic, DynamicSettings, Kinematics, MassMatrix, Model, PlaneConstraint, QuasiStatic,
-    QuasiStaticSettings, StepError,
-};
+use loam_explicit::{Explicit, ExplicitError, ExplicitSettings, TimeStep};
+use loam_grid::{FeMesh, Grid, MeshError};
+use loam_implicit::{Dynamic, DynamicSettings, Model, PlaneConstraint, QuasiStatic, QuasiStaticSettings, StepError};
 use loam_points::{PointStore, Shape};
-use loam_solve::{LinearSolverKind, NewtonSettings};
+use loam_solve::NewtonSettings;
 use locate::{locate, Seg};
 use nalgebra::{SVector, Vector2};
 use std::path::{Path, PathBuf};
@@ -306,19 +310,9 @@ impl LoadedScene {
             max_iterations: sv.max_iterations,
             ..NewtonSettings::default()
         };
-        let linear_solver = sv.linear.map(|l| match l {
-            LinearSpec::Cholesky => LinearSolverKind::Cholesky,
-            LinearSpec::Lu => LinearSolverKind::Lu,
-        });
-        let basis = match s.basis {
-            BasisSpec::Linear => BasisKind::Linear,
-            BasisSpec::Gimp => BasisKind::Gimp,
-            BasisSpec::QuadraticBSpline => BasisKind::QuadraticBSpline,
-        };
-        let kinematics = match s.kinematics {
-            KinematicsSpec::SmallStrain => Kinematics::SmallStrain,
-            KinematicsSpec::FiniteStrain => Kinematics::FiniteStrain,
-        };
+        let linear_solver = sv.linear.map(Into::into);
+        let basis = s.basis.into();
+        let kinematics = s.kinematics.into();
         let model = match mesh {
             None => Model::new(grid, basis, kinematics, points, laws, constraints, gravity)
                 .map_err(|e| self.error(&[Seg::Key("bodies")], e.to_string()))?,
@@ -351,11 +345,7 @@ impl LoadedScene {
             }
         };
         let model = model
-            .with_anti_locking(match s.anti_locking {
-                AntiLockingSpec::None => AntiLocking::None,
-                AntiLockingSpec::BBar => AntiLocking::BBar,
-                AntiLockingSpec::AssumedStrain { stabilization } => AntiLocking::AssumedStrain { stabilization },
-            })
+            .with_anti_locking(s.anti_locking.into())
             .map_err(|e| self.error(&[Seg::Key("anti_locking")], e.to_string()))?;
         let model = match s.geometrically_linear {
             false => model,
@@ -429,10 +419,7 @@ impl LoadedScene {
                     beta,
                     gamma,
                     bossak_alpha,
-                    mass: match mass {
-                        MassSpec::Lumped => MassMatrix::Lumped,
-                        MassSpec::Consistent => MassMatrix::Consistent,
-                    },
+                    mass: mass.into(),
                     newton,
                     max_cutbacks,
                     linear_solver,
@@ -446,22 +433,8 @@ impl LoadedScene {
                 }
             }
             AnalysisSpec::Explicit { duration, ref time_step, scheme, flip, damping } => {
-                let settings = ExplicitSettings {
-                    scheme: match scheme {
-                        SchemeSpec::Usf => UpdateScheme::Usf,
-                        SchemeSpec::Usl => UpdateScheme::Usl,
-                        SchemeSpec::Musl => UpdateScheme::Musl,
-                    },
-                    flip,
-                    time_step: match *time_step {
-                        TimeStepSpec::Cfl(safety) => TimeStep::Cfl { safety },
-                        TimeStepSpec::Fixed { dt, allow_above_critical } => {
-                            TimeStep::Fixed { dt, allow_above_critical }
-                        }
-                    },
-                    damping,
-                    duration,
-                };
+                let settings =
+                    ExplicitSettings { scheme: scheme.into(), flip, time_step: time_step.into(), damping, duration };
                 if fem {
                     return Err(self.error(&[Seg::Key("method")], "method UpdatedLagrangianFem runs with the implicit analyses (QuasiStatic, ImplicitDynamic) only; use method: Mpm for Explicit"));
                 }
