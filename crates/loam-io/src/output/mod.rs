@@ -1,10 +1,11 @@
 //! Output writers: VTK XML point clouds (`.vtu`), ParaView collections
 //! (`.pvd`) and CSV tables/logs.
 //!
-//! Everything here is plain `std` text output. Whole-file writes (VTU, PVD,
-//! whole CSV tables) go to a temporary file in the destination folder which is
-//! then renamed over the destination, so a crash never leaves a half-written
-//! file behind. Append-only CSV logs flush after every row instead.
+//! Everything here is plain text output. Whole-file writes (VTU, PVD, whole CSV
+//! tables) go to a temporary file in the destination folder (`tempfile`) which
+//! is then renamed over the destination, so a reader never sees a half-written
+//! file and a failed write leaves the destination untouched. Append-only CSV
+//! logs flush after every row instead.
 
 mod csv;
 mod pvd;
@@ -14,10 +15,10 @@ pub use csv::{write_csv_table, CsvCell, CsvWriter};
 pub use pvd::PvdWriter;
 pub use vtu::write_vtu;
 
-use std::fs::{self, File};
+use std::ffi::{OsStr, OsString};
 use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
+use tempfile::NamedTempFile;
 
 /// A borrowed view of the point fields to write, struct-of-arrays.
 ///
@@ -183,11 +184,10 @@ pub(crate) fn fmt_f64(x: f64) -> String {
     }
 }
 
-static TMP_COUNTER: AtomicU64 = AtomicU64::new(0);
-
 /// Writes a file atomically: `fill` writes into a temporary file in the same
-/// folder as `path`, which is synced and then renamed over `path`. On error
-/// the temporary file is removed and `path` is untouched.
+/// folder as `path`, which is synced and then renamed over `path`, so a reader
+/// sees the old file or the whole new one. On error the temporary file is
+/// removed and `path` is untouched.
 pub(crate) fn write_atomic<F>(path: &Path, fill: F) -> Result<(), OutputError>
 where
     F: FnOnce(&mut dyn Write) -> io::Result<()>,
@@ -196,33 +196,42 @@ where
         path: path.to_path_buf(),
         source: io::Error::new(io::ErrorKind::InvalidInput, "path has no file name"),
     })?;
+    // The same folder, so that the rename stays on one file system and is atomic.
     let dir = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
     };
-    let mut tmp_name = std::ffi::OsString::from(".");
-    tmp_name.push(file_name);
-    tmp_name.push(format!(".tmp-{}-{}", std::process::id(), TMP_COUNTER.fetch_add(1, Ordering::Relaxed)));
-    let tmp = dir.join(tmp_name);
-
     let result = (|| -> io::Result<()> {
-        let file = File::create(&tmp)?;
-        let mut w = BufWriter::new(file);
+        // Dropped on any error below, the temporary file deletes itself.
+        let mut tmp = temp_file_in(dir, file_name)?;
+        let mut w = BufWriter::new(tmp.as_file_mut());
         fill(&mut w)?;
-        let file = w.into_inner().map_err(|e| e.into_error())?;
-        file.sync_all()?;
-        drop(file);
-        fs::rename(&tmp, path)
+        w.into_inner().map_err(|e| e.into_error())?.sync_all()?;
+        tmp.persist(path).map_err(|e| e.error)?;
+        Ok(())
     })();
-    if let Err(source) = result {
-        let _ = fs::remove_file(&tmp);
-        return Err(OutputError::Io { path: path.to_path_buf(), source });
+    result.map_err(io_err(path))
+}
+
+/// A temporary file in `dir` named after the file it will replace (`.name.XXXXXX.tmp`,
+/// so that one left by a killed run says whose it is), created with the permissions
+/// `File::create` gives: tempfile's default, owner-only, would carry over to the output.
+fn temp_file_in(dir: &Path, file_name: &OsStr) -> io::Result<NamedTempFile> {
+    let mut prefix = OsString::from(".");
+    prefix.push(file_name);
+    prefix.push(".");
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(&prefix).suffix(".tmp");
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        builder.permissions(std::fs::Permissions::from_mode(0o666));
     }
-    Ok(())
+    builder.tempfile_in(dir)
 }
 
 /// Escapes a string for use inside an XML attribute value or text node.
-pub fn xml_escape(s: &str) -> String {
+pub(crate) fn xml_escape(s: &str) -> String {
     let mut out = String::with_capacity(s.len());
     for c in s.chars() {
         match c {
@@ -240,6 +249,7 @@ pub fn xml_escape(s: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::fs;
 
     #[test]
     fn fmt_f64_round_trips() {
@@ -290,6 +300,32 @@ mod tests {
         assert_eq!(fs::read_to_string(&p).unwrap(), "two");
         let names: Vec<_> = fs::read_dir(dir.path()).unwrap().collect();
         assert_eq!(names.len(), 1);
+    }
+
+    /// An output gets the permissions of any file the user creates, not the
+    /// owner-only ones of a temporary file.
+    #[cfg(unix)]
+    #[test]
+    fn atomic_write_keeps_the_usual_permissions() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().unwrap();
+        let mode = |p: &Path| fs::metadata(p).unwrap().permissions().mode();
+        let (atomic, plain) = (dir.path().join("a.txt"), dir.path().join("b.txt"));
+        write_atomic(&atomic, |w| w.write_all(b"a")).unwrap();
+        fs::File::create(&plain).unwrap();
+        assert_eq!(mode(&atomic), mode(&plain));
+    }
+
+    #[test]
+    fn a_path_without_a_file_name_is_refused() {
+        let err = write_atomic(Path::new("/"), |w| w.write_all(b"x")).unwrap_err();
+        match err {
+            OutputError::Io { path, source } => {
+                assert_eq!(path, Path::new("/"));
+                assert_eq!(source.kind(), io::ErrorKind::InvalidInput);
+            }
+            e => panic!("{e:?}"),
+        }
     }
 
     #[test]

@@ -1,0 +1,144 @@
+//! The analysis part of a scene: a quasi-static, implicit dynamic or explicit analysis of
+//! the model with its settings, and the checks that need the whole analysis — every
+//! constraint holds a node, every point's basis lies in the grid, an explicit fixed step
+//! is stable — so that a scene is refused before its first step.
+
+use super::locate::Seg;
+use super::solver::Solver;
+use super::{AnalysisSpec, LoadedScene, MethodSpec, SceneError, StrengthReductionSpec};
+use loam_analysis::Analysis;
+use loam_explicit::{Explicit, ExplicitError, ExplicitSettings, TimeStep};
+use loam_implicit::{
+    has_strength, ConnectError, Dynamic, DynamicSettings, Model, QuasiStatic, QuasiStaticSettings, StepError,
+};
+
+/// The path of the analysis's `key`.
+fn analysis_key(key: &str) -> [Seg<'_>; 2] {
+    [Seg::Key("analysis"), Seg::Key(key)]
+}
+
+impl LoadedScene {
+    /// The scene's analysis of `model`; each setting the analysis refuses is reported at
+    /// its key.
+    pub(super) fn analysis<const D: usize>(&self, model: Model<D>, solver: Solver) -> Result<Analysis<D>, SceneError> {
+        let Solver { newton, linear_solver, extrapolate } = solver;
+        Ok(match self.scene.analysis {
+            AnalysisSpec::QuasiStatic { load_steps, max_cutbacks, strength_reduction } => {
+                if load_steps == 0 {
+                    return Err(self.error(&analysis_key("load_steps"), "load_steps is 0; it must be at least 1"));
+                }
+                if let Some(srf) = strength_reduction {
+                    self.check_strength_reduction(&srf, &model)?;
+                }
+                let settings = QuasiStaticSettings { load_steps, newton, max_cutbacks, linear_solver, extrapolate };
+                Analysis::QuasiStatic(QuasiStatic::new(model, settings))
+            }
+            AnalysisSpec::ImplicitDynamic { time_step, duration, beta, gamma, bossak_alpha, mass, max_cutbacks } => {
+                let mass = mass.into();
+                let settings = DynamicSettings {
+                    time_step,
+                    duration,
+                    beta,
+                    gamma,
+                    bossak_alpha,
+                    mass,
+                    newton,
+                    max_cutbacks,
+                    linear_solver,
+                };
+                self.dynamic(model, settings)?
+            }
+            AnalysisSpec::Explicit { duration, ref time_step, scheme, flip, damping } => {
+                let time_step = time_step.into();
+                let settings = ExplicitSettings { scheme: scheme.into(), flip, time_step, damping, duration };
+                self.explicit(model, settings)?
+            }
+        })
+    }
+
+    /// A bracket (holds, fails) with 0 < holds < fails, a tolerance below its width, and a
+    /// material with a strength to reduce.
+    fn check_strength_reduction<const D: usize>(
+        &self,
+        srf: &StrengthReductionSpec,
+        model: &Model<D>,
+    ) -> Result<(), SceneError> {
+        let at = |key: &'static str| [Seg::Key("analysis"), Seg::Key("strength_reduction"), Seg::Key(key)];
+        let (lo, hi) = srf.bracket;
+        if !(lo.is_finite() && lo > 0.0 && hi.is_finite() && hi > lo) {
+            return Err(self.error(
+                &at("bracket"),
+                format!("bracket is ({lo}, {hi}); it must be (F_holds, F_fails) with 0 < F_holds < F_fails"),
+            ));
+        }
+        if !(srf.tolerance.is_finite() && srf.tolerance > 0.0 && srf.tolerance < hi - lo) {
+            return Err(self.error(
+                &at("tolerance"),
+                format!(
+                    "tolerance is {}; it must be positive and below the bracket's width {}",
+                    srf.tolerance,
+                    hi - lo
+                ),
+            ));
+        }
+        if !has_strength(&model) {
+            return Err(self.error(&[Seg::Key("materials")], "strength reduction needs a material with a strength (VonMises or MohrCoulomb); every material here is elastic"));
+        }
+        Ok(())
+    }
+
+    fn dynamic<const D: usize>(&self, model: Model<D>, settings: DynamicSettings) -> Result<Analysis<D>, SceneError> {
+        match Dynamic::new(model, settings) {
+            Ok(d) => Ok(Analysis::Dynamic(d)),
+            Err(StepError::InvalidSettings { field, value, valid }) => {
+                Err(self.error(&analysis_key(field), format!("{field} is {value}; valid: {valid}")))
+            }
+            Err(e) => Err(self.error(&[Seg::Key("analysis")], e.to_string())),
+        }
+    }
+
+    /// Explicit MPM; the FEM reference runs with the implicit analyses only.
+    fn explicit<const D: usize>(&self, model: Model<D>, settings: ExplicitSettings) -> Result<Analysis<D>, SceneError> {
+        if self.scene.method == MethodSpec::UpdatedLagrangianFem {
+            return Err(self.error(&[Seg::Key("method")], "method UpdatedLagrangianFem runs with the implicit analyses (QuasiStatic, ImplicitDynamic) only; use method: Mpm for Explicit"));
+        }
+        match Explicit::new(model, settings) {
+            Ok(e) => Ok(Analysis::Explicit(e)),
+            Err(ExplicitError::InvalidSettings { field, value, valid }) => {
+                let key = if field.starts_with("time_step") { "time_step" } else { field };
+                Err(self.error(&analysis_key(key), format!("{field} is {value}; valid: {valid}")))
+            }
+            Err(e) => Err(self.error(&[Seg::Key("analysis")], e.to_string())),
+        }
+    }
+
+    /// What only the whole analysis can tell: a constraint that holds no active node, a
+    /// point whose basis reaches outside the grid, and (explicit) a fixed step above the
+    /// critical one, refused here before any output.
+    pub(super) fn check_before_the_first_step<const D: usize>(
+        &self,
+        analysis: &mut Analysis<D>,
+    ) -> Result<(), SceneError> {
+        analysis.check().map_err(|e| match e.connect_error() {
+            Some(&ConnectError::ConstraintTouchesNoNode { index, .. }) => {
+                self.error(&[Seg::Key("constraints"), Seg::Index(index)], format!("constraint {index}: {e}"))
+            }
+            Some(ConnectError::PointOutsideGrid { source, .. }) => self.error(
+                &[Seg::Key("bodies")],
+                format!("material point {} at {:?}: its basis reaches outside the grid ({}); enlarge the grid or move the body", source.point, source.position, source.source),
+            ),
+            _ => self.error(&[], e.to_string()),
+        })?;
+        if let Analysis::Explicit(e) = &*analysis {
+            if let TimeStep::Fixed { dt, allow_above_critical: false } = e.settings().time_step {
+                let critical = e.critical_time_step();
+                if dt > critical {
+                    return Err(self.error(&analysis_key("time_step"), format!(
+                        "the fixed time step {dt:e} is above the critical step {critical:e} (h / (c_p + |v|)): the explicit run would blow up; use Cfl(0.5), a step ≤ {critical:e}, or allow_above_critical: true"
+                    )));
+                }
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,130 @@
+//! The materials part of a scene: each material's density and constitutive law, every
+//! parameter checked against what is valid and refused at its own key.
+
+use super::locate::Seg;
+use super::{LawSpec, LoadedScene, MaterialSpec, SceneError, SofteningSpec};
+use loam_constitutive::{ConstitutiveError, ConstitutiveLaw, Elastic, MohrCoulomb, VonMises};
+use std::sync::Arc;
+
+impl LoadedScene {
+    /// The laws of the scene's materials, in order: at least one material, each with a
+    /// positive density and a name of its own.
+    pub(super) fn materials(&self) -> Result<Vec<Arc<dyn ConstitutiveLaw>>, SceneError> {
+        let materials = &self.scene.materials;
+        if materials.is_empty() {
+            return Err(self.error(&[Seg::Key("materials")], "no materials: define at least one, e.g. Material(name: \"soil\", density: 2000.0, law: Elastic(young: 1e5, poisson: 0.3))"));
+        }
+        let mut laws: Vec<Arc<dyn ConstitutiveLaw>> = Vec::new();
+        for (i, m) in materials.iter().enumerate() {
+            let at = |key| [Seg::Key("materials"), Seg::Index(i), Seg::Key(key)];
+            if !(m.density.is_finite() && m.density > 0.0) {
+                return Err(self.error(
+                    &at("density"),
+                    format!("material \"{}\": density is {}; it must be a positive number", m.name, m.density),
+                ));
+            }
+            if materials[..i].iter().any(|o| o.name == m.name) {
+                return Err(self
+                    .error(&at("name"), format!("material name \"{}\" is used twice; names must be unique", m.name)));
+            }
+            laws.push(LawChecks { scene: self, i, m }.law()?);
+        }
+        Ok(laws)
+    }
+}
+
+/// The checks of material `i`'s law, each refusal placed at the parameter's key.
+struct LawChecks<'a> {
+    scene: &'a LoadedScene,
+    i: usize,
+    m: &'a MaterialSpec,
+}
+
+impl LawChecks<'_> {
+    /// `key = value` must be `ok` and finite; otherwise the error says it must be `valid`.
+    fn check(&self, key: &'static str, value: f64, ok: bool, valid: &str) -> Result<(), SceneError> {
+        if ok && value.is_finite() {
+            return Ok(());
+        }
+        let at = [Seg::Key("materials"), Seg::Index(self.i), Seg::Key("law"), Seg::Key(key)];
+        Err(self.scene.error(&at, format!("material \"{}\": {key} = {value}; it must be {valid}", self.m.name)))
+    }
+
+    /// Whatever the law still refuses (checked combinations) is reported at the law.
+    fn refused(&self, e: ConstitutiveError) -> SceneError {
+        let at = [Seg::Key("materials"), Seg::Index(self.i), Seg::Key("law")];
+        self.scene.error(&at, format!("material \"{}\": {e}", self.m.name))
+    }
+
+    /// The law: its elastic part, checked first, then its strength.
+    fn law(&self) -> Result<Arc<dyn ConstitutiveLaw>, SceneError> {
+        let elastic = self.elastic()?;
+        Ok(match self.m.law {
+            LawSpec::Elastic { .. } => Arc::new(elastic),
+            LawSpec::VonMises { yield_stress, hardening, residual_yield_stress, .. } => {
+                Arc::new(self.von_mises(elastic, yield_stress, hardening, residual_yield_stress)?)
+            }
+            LawSpec::MohrCoulomb { cohesion, friction, dilation, tension_cutoff, softening, .. } => {
+                Arc::new(self.mohr_coulomb(elastic, [cohesion, friction, dilation], tension_cutoff, softening)?)
+            }
+        })
+    }
+
+    /// The elastic part every law has: Young's modulus and Poisson's ratio.
+    fn elastic(&self) -> Result<Elastic, SceneError> {
+        let (young, poisson) = match self.m.law {
+            LawSpec::Elastic { young, poisson }
+            | LawSpec::VonMises { young, poisson, .. }
+            | LawSpec::MohrCoulomb { young, poisson, .. } => (young, poisson),
+        };
+        self.check("young", young, young > 0.0, "positive (Young's modulus)")?;
+        self.check("poisson", poisson, poisson > -1.0 && poisson < 0.5, "in (-1, 0.5) (Poisson's ratio)")?;
+        let at = [Seg::Key("materials"), Seg::Index(self.i), Seg::Key("law"), Seg::Key("young")];
+        Elastic::new(young, poisson).map_err(|e| self.scene.error(&at, e.to_string()))
+    }
+
+    fn von_mises(
+        &self,
+        elastic: Elastic,
+        yield_stress: f64,
+        hardening: f64,
+        residual_yield_stress: Option<f64>,
+    ) -> Result<VonMises, SceneError> {
+        self.check("yield_stress", yield_stress, yield_stress > 0.0, "positive")?;
+        let (_, mu) = elastic.lame();
+        self.check("hardening", hardening, hardening > -3.0 * mu, "above −3G (a hardening modulus; negative softens)")?;
+        let mut law = VonMises::new(elastic, yield_stress, hardening).map_err(|e| self.refused(e))?;
+        if let Some(r) = residual_yield_stress {
+            self.check("residual_yield_stress", r, (0.0..=yield_stress).contains(&r), "between 0 and yield_stress")?;
+            law = law.with_residual_yield_stress(r).map_err(|e| self.refused(e))?;
+        }
+        Ok(law)
+    }
+
+    /// Mohr–Coulomb from its peak `[cohesion, friction, dilation]` (angles in degrees).
+    fn mohr_coulomb(
+        &self,
+        elastic: Elastic,
+        [cohesion, friction, dilation]: [f64; 3],
+        tension_cutoff: Option<f64>,
+        softening: Option<SofteningSpec>,
+    ) -> Result<MohrCoulomb, SceneError> {
+        self.check("friction", friction, (0.0..90.0).contains(&friction), "in [0, 90) degrees (0 is Tresca)")?;
+        let strong = cohesion >= 0.0 && (cohesion > 0.0 || friction > 0.0);
+        self.check("cohesion", cohesion, strong, "≥ 0, and > 0 when friction = 0")?;
+        let valid_dilation = "in [0, friction] degrees (= friction: associated flow)";
+        self.check("dilation", dilation, (0.0..=friction).contains(&dilation), valid_dilation)?;
+        let mut law = MohrCoulomb::from_degrees(elastic, cohesion, friction, dilation).map_err(|e| self.refused(e))?;
+        if let Some(t) = tension_cutoff {
+            let apex = if friction > 0.0 { cohesion / friction.to_radians().tan() } else { f64::INFINITY };
+            self.check("tension_cutoff", t, t <= apex, "at most c cot φ (the apex of the cone)")?;
+            law = law.with_tension_cutoff(t).map_err(|e| self.refused(e))?;
+        }
+        if let Some(sf) = softening {
+            law = law
+                .with_softening(sf.cohesion, sf.friction, sf.dilation, sf.plastic_strain)
+                .map_err(|e| self.refused(e))?;
+        }
+        Ok(law)
+    }
+}

@@ -1,0 +1,112 @@
+//! Scene files: the RON schema of a run (`docs/scene-format.md`), its parsing and its
+//! validation. Every error names the file, the line and column, and what would be valid;
+//! a scene is checked completely — down to points outside the grid and constraints that
+//! hold no node — before the first step runs.
+//!
+//! The loader is in parts, one file each, called in this order by [`LoadedScene::build`]
+//! (the order decides which of several mistakes is reported):
+//! - `schema`: the types the text deserialises into (syntax, unknown keys, missing fields
+//!   and wrong types are refused by `LoadedScene::parse`);
+//! - `locate`: the line and column of a value, for [`SceneError`];
+//! - `grid`: the dimension and the background grid;
+//! - `materials`: each material's density and constitutive law;
+//! - `bodies`: the material points (or the FEM reference's mesh) and initial velocities;
+//! - `constraints`: gravity, the plane constraints and prescribed displacements;
+//! - `solver`: Newton's tolerances and the linear solver;
+//! - `model`: the model assembled from the parts above, with its options (anti-locking,
+//!   geometric linearity, ghost penalty, initial stress);
+//! - `analysis`: the analysis and its settings, and the checks that need the whole model.
+//!
+//! The output settings need no check (every count and flag is valid); the runner reads
+//! them from the schema.
+//!
+//! The schema's enums (`BasisSpec`, `KinematicsSpec`, `AntiLockingSpec`, `LinearSpec`,
+//! `MassSpec`, `SchemeSpec`, `TimeStepSpec`) mirror domain enums instead of deserialising
+//! them because the file format is a public contract that must not change when a Rust API
+//! is renamed, and the lower crates must not know a file format; `convert` holds the one
+//! `From` impl of each.
+
+mod analysis;
+mod bodies;
+mod constraints;
+mod convert;
+mod grid;
+mod locate;
+mod materials;
+mod model;
+mod schema;
+mod solver;
+
+pub use locate::SceneError;
+pub use schema::*;
+
+use loam_analysis::Analysis;
+use locate::{locate, Seg};
+use nalgebra::SVector;
+use std::path::{Path, PathBuf};
+
+/// A parsed scene with its source, so that later errors can point into the file.
+#[derive(Debug, Clone)]
+pub struct LoadedScene {
+    pub path: PathBuf,
+    pub source: String,
+    pub scene: Scene,
+}
+
+impl LoadedScene {
+    /// Read and parse a scene file (syntax, unknown keys, missing fields, wrong types).
+    pub fn read(path: &Path) -> Result<Self, SceneError> {
+        let source = std::fs::read_to_string(path).map_err(|e| SceneError {
+            file: path.to_owned(),
+            line: 0,
+            column: 0,
+            message: format!("cannot read the scene file: {e}"),
+        })?;
+        Self::parse(path, source)
+    }
+
+    /// Parse scene text; `path` is only used in error messages.
+    pub fn parse(path: &Path, source: String) -> Result<Self, SceneError> {
+        let scene: Scene = ron::from_str(&source).map_err(|e| SceneError {
+            file: path.to_owned(),
+            line: e.span.start.line,
+            column: e.span.start.col,
+            message: e.code.to_string(),
+        })?;
+        Ok(Self { path: path.to_owned(), source, scene })
+    }
+
+    /// An error at `path` in the file.
+    fn error(&self, path: &[Seg], message: impl Into<String>) -> SceneError {
+        let (line, column) = locate(&self.source, path);
+        SceneError { file: self.path.clone(), line, column, message: message.into() }
+    }
+
+    /// The `D` components of the vector `v` at `path` (`what` names it in the message),
+    /// each finite.
+    fn vector<const D: usize>(&self, v: &[f64], path: &[Seg], what: &str) -> Result<SVector<f64, D>, SceneError> {
+        if v.len() != D {
+            return Err(self.error(path, format!("{what} has {} components; a {D}D scene needs {D}", v.len())));
+        }
+        if let Some(x) = v.iter().find(|x| !x.is_finite()) {
+            return Err(self.error(path, format!("{what} has the value {x}; every component must be finite")));
+        }
+        Ok(SVector::from_column_slice(v))
+    }
+
+    /// Build the model and analysis of a `D`-dimensional scene, checking everything that can
+    /// be checked before the first step. `D` must equal the scene's `dimension`.
+    pub fn build<const D: usize>(&self) -> Result<Analysis<D>, SceneError> {
+        self.check_dimension::<D>()?;
+        let grid = self.grid::<D>()?;
+        let laws = self.materials()?;
+        let bodies = self.bodies(&grid)?;
+        let gravity = self.gravity::<D>()?;
+        let constraints = self.constraints(&grid)?;
+        let solver = self.solver()?;
+        let model = self.model(grid, bodies, laws, constraints, gravity)?;
+        let mut analysis = self.analysis(model, solver)?;
+        self.check_before_the_first_step(&mut analysis)?;
+        Ok(analysis)
+    }
+}

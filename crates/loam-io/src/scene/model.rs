@@ -1,0 +1,78 @@
+//! The model part of a scene: the grid, bodies, laws, constraints and gravity assembled
+//! into one model, then its options — anti-locking, geometric linearity, the ghost penalty
+//! and the initial stress — each refused at its key when it does not apply.
+
+use super::bodies::Bodies;
+use super::locate::Seg;
+use super::{AnalysisSpec, InitialStressSpec, LoadedScene, SceneError};
+use loam_constitutive::ConstitutiveLaw;
+use loam_grid::Grid;
+use loam_implicit::{Model, ModelError, PlaneConstraint};
+use nalgebra::SVector;
+use std::sync::Arc;
+
+impl LoadedScene {
+    /// The model of material points, or of the FEM reference's mesh with its initial
+    /// velocities, with the scene's options.
+    pub(super) fn model<const D: usize>(
+        &self,
+        grid: Grid<D>,
+        bodies: Bodies<D>,
+        laws: Vec<Arc<dyn ConstitutiveLaw>>,
+        constraints: Vec<PlaneConstraint>,
+        gravity: SVector<f64, D>,
+    ) -> Result<Model<D>, SceneError> {
+        let s = &self.scene;
+        let at_bodies = |e: ModelError| self.error(&[Seg::Key("bodies")], e.to_string());
+        let model = match bodies {
+            Bodies::Points(points) => {
+                Model::new(grid, s.basis.into(), s.kinematics.into(), points, laws, constraints, gravity)
+                    .map_err(at_bodies)?
+            }
+            Bodies::Mesh { mesh, density, material } => {
+                let mut model = Model::updated_lagrangian_fem(
+                    grid,
+                    s.kinematics.into(),
+                    mesh,
+                    &density,
+                    &material,
+                    laws,
+                    constraints,
+                    gravity,
+                )
+                .map_err(at_bodies)?;
+                self.fem_velocities(&mut model)?;
+                model
+            }
+        };
+        self.model_options(model)
+    }
+
+    /// Anti-locking, geometric linearity (implicit only), the ghost penalty (implicit only)
+    /// and the initial stress, in that order.
+    fn model_options<const D: usize>(&self, model: Model<D>) -> Result<Model<D>, SceneError> {
+        let s = &self.scene;
+        let explicit = matches!(s.analysis, AnalysisSpec::Explicit { .. });
+        let refused = |key: &'static str| move |e: ModelError| self.error(&[Seg::Key(key)], e.to_string());
+        let mut model = model.with_anti_locking(s.anti_locking.into()).map_err(refused("anti_locking"))?;
+        if s.geometrically_linear {
+            if explicit {
+                return Err(self.error(&[Seg::Key("geometrically_linear")], "explicit analysis moves its points by their velocities; set geometrically_linear: false or use an implicit analysis"));
+            }
+            model = model.with_geometrically_linear().map_err(refused("geometrically_linear"))?;
+        }
+        if let Some(gamma) = s.ghost_penalty {
+            if explicit {
+                return Err(self.error(
+                    &[Seg::Key("ghost_penalty")],
+                    "the ghost penalty stabilises the implicit tangent; an Explicit analysis has none (remove the key)",
+                ));
+            }
+            model = model.with_ghost_penalty(gamma).map_err(refused("ghost_penalty"))?;
+        }
+        if let InitialStressSpec::Geostatic { k0 } = s.initial_stress {
+            model.geostatic_stress(k0).map_err(refused("initial_stress"))?;
+        }
+        Ok(model)
+    }
+}

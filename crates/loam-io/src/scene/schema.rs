@@ -1,0 +1,431 @@
+//! The scene file's schema: the types RON text deserialises into, with their defaults.
+//! Nothing here checks a value; the builder parts of `scene` do, each at its place in
+//! the file. `docs/scene-format.md` documents every key.
+
+use loam_implicit::QuasiStaticSettings;
+use loam_solve::NewtonSettings;
+use serde::Deserialize;
+
+/// A scene as written in the file.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// One line saying what the scene is.
+    #[serde(default)]
+    pub title: String,
+    /// 2 (plane strain) or 3.
+    pub dimension: usize,
+    pub grid: GridSpec,
+    #[serde(default = "default_basis")]
+    pub basis: BasisSpec,
+    #[serde(default = "default_kinematics")]
+    pub kinematics: KinematicsSpec,
+    /// The material point method (default), or the updated Lagrangian FEM reference.
+    #[serde(default)]
+    pub method: MethodSpec,
+    /// Volumetric-locking treatment: `None` (default), `BBar` or
+    /// `AssumedStrain(stabilization: β)` (small strain; linear basis or the FEM reference).
+    #[serde(default)]
+    pub anti_locking: AntiLockingSpec,
+    /// Small strain on the initial configuration: points keep their places (default false).
+    #[serde(default)]
+    pub geometrically_linear: bool,
+    /// Face ghost penalty γ on cut cells (implicit MPM; docs/theory.md §15): `None`
+    /// (default) or `Some(γ)`, γ > 0, 0.01–1 useful.
+    #[serde(default)]
+    pub ghost_penalty: Option<f64>,
+    /// Initial stress: `None` (default: unstressed, gravity applied with the load factor)
+    /// or `Geostatic(k0: ..)` (level or layered ground; gravity acts in full from the start).
+    #[serde(default)]
+    pub initial_stress: InitialStressSpec,
+    pub materials: Vec<MaterialSpec>,
+    pub bodies: Vec<BodySpec>,
+    /// Body force per unit mass at full load; D components.
+    pub gravity: Vec<f64>,
+    #[serde(default)]
+    pub constraints: Vec<ConstraintSpec>,
+    pub analysis: AnalysisSpec,
+    #[serde(default)]
+    pub solver: SolverSpec,
+    #[serde(default)]
+    pub output: OutputSpec,
+}
+
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct GridSpec {
+    pub origin: Vec<f64>,
+    pub cell_size: Vec<f64>,
+    pub cells: Vec<usize>,
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+pub enum BasisSpec {
+    Linear,
+    Gimp,
+    QuadraticBSpline,
+}
+
+/// Initial stress of the points.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Default)]
+pub enum InitialStressSpec {
+    #[default]
+    None,
+    /// σ_v = weight of the material above, σ_h = k0 σ_v.
+    Geostatic { k0: f64 },
+}
+
+/// Volumetric-locking treatment.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Default)]
+pub enum AntiLockingSpec {
+    #[default]
+    None,
+    /// B-bar: each point's dilatation averaged over its cell (element).
+    BBar,
+    /// Assumed strain: the cell's average strain plus β times each point's deviatoric
+    /// deviation from it (0 < β ≤ 1).
+    AssumedStrain { stabilization: f64 },
+}
+
+/// How the bodies are discretised.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+pub enum MethodSpec {
+    /// Material points on the background grid, reset every step.
+    #[default]
+    Mpm,
+    /// The updated Lagrangian FEM reference: every Box body meshed by elements of about
+    /// one grid cell, `points_per_cell` Gauss points per axis (1–3) as the points; the mesh
+    /// moves with the body and is never reset. Implicit analyses only.
+    UpdatedLagrangianFem,
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+pub enum KinematicsSpec {
+    SmallStrain,
+    FiniteStrain,
+}
+
+fn default_basis() -> BasisSpec {
+    BasisSpec::Gimp
+}
+
+fn default_kinematics() -> KinematicsSpec {
+    KinematicsSpec::FiniteStrain
+}
+
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialSpec {
+    pub name: String,
+    pub density: f64,
+    pub law: LawSpec,
+}
+
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub enum LawSpec {
+    /// Linear elasticity in small strain; Hencky elasticity in finite strain.
+    Elastic { young: f64, poisson: f64 },
+    /// J2 plasticity: yield stress σ_y (c_u = σ_y/√3 in plane strain), linear hardening
+    /// (negative: softening) down to an optional residual yield stress.
+    VonMises {
+        young: f64,
+        poisson: f64,
+        yield_stress: f64,
+        #[serde(default)]
+        hardening: f64,
+        #[serde(default)]
+        residual_yield_stress: Option<f64>,
+    },
+    /// Mohr–Coulomb: cohesion, friction and dilation angles in degrees (associated when
+    /// dilation = friction), optional tension cut-off and linear softening.
+    MohrCoulomb {
+        young: f64,
+        poisson: f64,
+        cohesion: f64,
+        friction: f64,
+        dilation: f64,
+        #[serde(default)]
+        tension_cutoff: Option<f64>,
+        #[serde(default)]
+        softening: Option<SofteningSpec>,
+    },
+}
+
+/// Linear softening of Mohr–Coulomb strength to residual values (angles in degrees),
+/// reached at the accumulated plastic shear strain `plastic_strain`.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SofteningSpec {
+    pub cohesion: f64,
+    pub friction: f64,
+    pub dilation: f64,
+    pub plastic_strain: f64,
+}
+
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct BodySpec {
+    /// Name of a material in `materials`.
+    pub material: String,
+    pub shape: ShapeSpec,
+    #[serde(default = "default_ppc")]
+    pub points_per_cell: usize,
+    /// Initial velocity of the body's points (dynamic analyses); default at rest.
+    #[serde(default)]
+    pub velocity: Option<VelocitySpec>,
+}
+
+/// An initial velocity field.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub enum VelocitySpec {
+    /// The same velocity everywhere; D components.
+    Uniform(Vec<f64>),
+    /// v(x) = amplitude · sin(2π (x_axis − origin) / wavelength): a standing-wave mode,
+    /// e.g. the vibrating bar's first mode with wavelength 4L.
+    Sine {
+        amplitude: Vec<f64>,
+        axis: Axis,
+        wavelength: f64,
+        #[serde(default)]
+        origin: f64,
+    },
+}
+
+fn default_ppc() -> usize {
+    2
+}
+
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub enum ShapeSpec {
+    Box {
+        min: Vec<f64>,
+        max: Vec<f64>,
+    },
+    /// 2D only: vertices [x, y] in order.
+    Polygon {
+        vertices: Vec<[f64; 2]>,
+    },
+    /// A disk (2D) or ball (3D).
+    Ball {
+        centre: Vec<f64>,
+        radius: f64,
+    },
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+pub enum Axis {
+    X,
+    Y,
+    Z,
+}
+
+impl Axis {
+    pub(super) fn index(self) -> usize {
+        match self {
+            Axis::X => 0,
+            Axis::Y => 1,
+            Axis::Z => 2,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub enum ConstraintSpec {
+    /// The displacement normal to the grid plane `axis = at` is zero.
+    Roller {
+        axis: Axis,
+        at: f64,
+        #[serde(default)]
+        within: Option<RegionSpec>,
+    },
+    /// All displacement components on the grid plane `axis = at` are zero.
+    Fixed {
+        axis: Axis,
+        at: f64,
+        #[serde(default)]
+        within: Option<RegionSpec>,
+    },
+    /// Prescribed displacement at full load on the nodes of the grid plane `axis = at`
+    /// (inside `within`, if given): one entry per axis, `Some(u)` prescribed, `None` free.
+    /// Applied with the load factor of a quasi-static analysis (a footing pushed down).
+    Displacement {
+        axis: Axis,
+        at: f64,
+        displacement: Vec<Option<f64>>,
+        #[serde(default)]
+        within: Option<RegionSpec>,
+    },
+}
+
+/// A box limiting a constraint to part of its plane.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RegionSpec {
+    pub min: Vec<f64>,
+    pub max: Vec<f64>,
+}
+
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub enum AnalysisSpec {
+    /// Loads applied in `load_steps` equal steps with Newton's method per step.
+    QuasiStatic {
+        load_steps: usize,
+        #[serde(default = "default_cutbacks")]
+        max_cutbacks: usize,
+        /// Find the factor of safety first (strength reduction), then run the analysis with
+        /// the largest factor that held, so the outputs show the state just before failure.
+        #[serde(default)]
+        strength_reduction: Option<StrengthReductionSpec>,
+    },
+    /// Implicit Newmark dynamics (Bossak with `bossak_alpha` < 0), loads applied in full at
+    /// t = 0, Newton per time step, a failed step halved up to `max_cutbacks` times.
+    ImplicitDynamic {
+        time_step: f64,
+        duration: f64,
+        #[serde(default = "default_beta")]
+        beta: f64,
+        #[serde(default = "default_gamma")]
+        gamma: f64,
+        #[serde(default)]
+        bossak_alpha: f64,
+        #[serde(default)]
+        mass: MassSpec,
+        #[serde(default = "default_cutbacks")]
+        max_cutbacks: usize,
+    },
+    /// Explicit MPM (no Newton): `time_step` Cfl(safety) or Fixed(dt); a fixed step above
+    /// the critical one is refused unless `allow_above_critical`.
+    Explicit {
+        duration: f64,
+        #[serde(default = "default_explicit_step")]
+        time_step: TimeStepSpec,
+        #[serde(default)]
+        scheme: SchemeSpec,
+        #[serde(default = "default_flip")]
+        flip: f64,
+        #[serde(default)]
+        damping: f64,
+    },
+}
+
+fn default_beta() -> f64 {
+    0.25
+}
+
+fn default_gamma() -> f64 {
+    0.5
+}
+
+fn default_flip() -> f64 {
+    1.0
+}
+
+fn default_explicit_step() -> TimeStepSpec {
+    TimeStepSpec::Cfl(0.5)
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+pub enum MassSpec {
+    #[default]
+    Lumped,
+    Consistent,
+}
+
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub enum TimeStepSpec {
+    /// Δt = safety × the critical step, every step.
+    Cfl(f64),
+    /// A fixed Δt.
+    Fixed {
+        dt: f64,
+        #[serde(default)]
+        allow_above_critical: bool,
+    },
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+pub enum SchemeSpec {
+    Usf,
+    Usl,
+    #[default]
+    Musl,
+}
+
+/// A strength-reduction analysis (Griffiths & Lane 1999): each trial divides c and tan φ
+/// (σ_y for von Mises) by F and applies the loads in the analysis's load steps; F is
+/// bisected between `bracket.0` (must hold) and `bracket.1` (must fail) to `tolerance`.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct StrengthReductionSpec {
+    #[serde(default = "default_bracket")]
+    pub bracket: (f64, f64),
+    #[serde(default = "default_srf_tolerance")]
+    pub tolerance: f64,
+}
+
+fn default_bracket() -> (f64, f64) {
+    (1.0, 3.0)
+}
+
+fn default_srf_tolerance() -> f64 {
+    0.01
+}
+
+fn default_cutbacks() -> usize {
+    8
+}
+
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct SolverSpec {
+    pub residual_tolerance: f64,
+    pub increment_tolerance: f64,
+    pub max_iterations: usize,
+    /// `None`: chosen from the tangent's symmetry.
+    pub linear: Option<LinearSpec>,
+    /// Quasi-static: start each load step from the last increment, scaled (default false).
+    pub extrapolate: bool,
+}
+
+impl Default for SolverSpec {
+    fn default() -> Self {
+        let n = NewtonSettings::default();
+        Self {
+            residual_tolerance: n.residual_tolerance,
+            increment_tolerance: n.increment_tolerance,
+            max_iterations: n.max_iterations,
+            linear: None,
+            extrapolate: QuasiStaticSettings::default().extrapolate,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+pub enum LinearSpec {
+    Cholesky,
+    Lu,
+}
+
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct OutputSpec {
+    /// Write a VTU frame every this many steps (and always after the last); 0 = none.
+    pub vtu_every: usize,
+    /// Write `points_final.csv` after the last step.
+    pub final_csv: bool,
+    /// Write a `history.csv` row (time, energies, momentum) every this many steps (and
+    /// after the last); 0 = none.
+    pub history_every: usize,
+}
+
+impl Default for OutputSpec {
+    fn default() -> Self {
+        Self { vtu_every: 1, final_csv: true, history_every: 1 }
+    }
+}

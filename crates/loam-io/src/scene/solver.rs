@@ -1,0 +1,44 @@
+//! The solver part of a scene: Newton's tolerances and iteration limit, the linear solver
+//! and the quasi-static extrapolation, shared by the implicit analyses.
+
+use super::locate::Seg;
+use super::{LoadedScene, SceneError};
+use loam_solve::{LinearSolverKind, NewtonSettings};
+
+/// The checked solver settings.
+pub(super) struct Solver {
+    pub newton: NewtonSettings,
+    /// `None`: chosen from the tangent's symmetry.
+    pub linear_solver: Option<LinearSolverKind>,
+    pub extrapolate: bool,
+}
+
+impl LoadedScene {
+    /// Both tolerances in (0, 1), at least one iteration.
+    pub(super) fn solver(&self) -> Result<Solver, SceneError> {
+        let sv = &self.scene.solver;
+        let at = |key| [Seg::Key("solver"), Seg::Key(key)];
+        if !(sv.residual_tolerance > 0.0 && sv.residual_tolerance < 1.0) {
+            return Err(self.error(
+                &at("residual_tolerance"),
+                format!("residual_tolerance is {}; it must lie in (0, 1)", sv.residual_tolerance),
+            ));
+        }
+        if !(sv.increment_tolerance > 0.0 && sv.increment_tolerance < 1.0) {
+            return Err(self.error(
+                &at("increment_tolerance"),
+                format!("increment_tolerance is {}; it must lie in (0, 1)", sv.increment_tolerance),
+            ));
+        }
+        if sv.max_iterations == 0 {
+            return Err(self.error(&at("max_iterations"), "max_iterations is 0; it must be at least 1"));
+        }
+        let newton = NewtonSettings {
+            residual_tolerance: sv.residual_tolerance,
+            increment_tolerance: sv.increment_tolerance,
+            max_iterations: sv.max_iterations,
+            ..NewtonSettings::default()
+        };
+        Ok(Solver { newton, linear_solver: sv.linear.map(Into::into), extrapolate: sv.extrapolate })
+    }
+}
