@@ -3,9 +3,9 @@
 use anyhow::Context;
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
-use loam_io::{run_scene, LoadedScene};
+use loam_io::{run_scene, LoadedScene, Progress};
 use std::io::{IsTerminal, Write};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use tracing_subscriber::filter::LevelFilter;
 
@@ -83,102 +83,111 @@ fn main() -> ExitCode {
 
 fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
-        Command::Check { scene } => {
-            let loaded = LoadedScene::read(&scene)?;
-            let (points, dofs) = match loaded.scene.dimension {
-                3 => {
-                    let a = loaded.build::<3>()?;
-                    (a.model().points().len(), a.model().grid().num_nodes() * 3)
-                }
-                _ => {
-                    let a = loaded.build::<2>()?;
-                    (a.model().points().len(), a.model().grid().num_nodes() * 2)
-                }
-            };
-            println!(
-                "{}: ok — {}D, {points} material points, grid of {dofs} nodal dofs at most",
-                scene.display(),
-                loaded.scene.dimension
-            );
-            Ok(())
-        }
+        Command::Check { scene } => check(&scene),
         Command::Run { scene, out, quiet, verbose } => {
-            let loaded = LoadedScene::read(&scene)?;
             let out = out.unwrap_or_else(|| {
                 PathBuf::from("out").join(scene.file_stem().map(|s| s.to_owned()).unwrap_or_default())
             });
-            if let loam_io::scene::AnalysisSpec::QuasiStatic { strength_reduction: Some(srf), .. } =
-                &loaded.scene.analysis
-            {
-                if !quiet {
-                    println!(
-                        "strength reduction: bisecting F between {} and {} to {}, one trial per row in {}",
-                        srf.bracket.0,
-                        srf.bracket.1,
-                        srf.tolerance,
-                        out.join("strength_reduction.csv").display()
-                    );
-                }
-            }
-            let bar = if quiet { ProgressBar::hidden() } else { ProgressBar::new(1000) };
-            bar.set_style(
-                ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:40} {msg}").expect("valid template"),
-            );
-            let level = match (quiet, verbose) {
-                (true, _) => LevelFilter::ERROR,
-                (false, 0) => LevelFilter::WARN,
-                (false, 1) => LevelFilter::INFO,
-                _ => LevelFilter::DEBUG,
-            };
-            let log_bar = bar.clone();
-            tracing_subscriber::fmt()
-                .with_max_level(level)
-                .with_target(false)
-                .with_ansi(std::io::stderr().is_terminal())
-                .with_writer(move || LogLine { bar: log_bar.clone(), text: Vec::new() })
-                .init();
-            let summary = run_scene(&loaded, &out, &mut |r, end| {
-                bar.set_position((1000.0 * (r.time / end).clamp(0.0, 1.0)) as u64);
-                let newton = if r.final_residual.is_nan() {
-                    String::new()
-                } else {
-                    format!(" its={} res={:.1e}", r.iterations, r.final_residual)
-                };
-                bar.set_message(format!(
-                    "step {} t={:.4e}/{:.4e} Δ={:.2e}{newton}{}",
-                    r.step,
-                    r.time,
-                    end,
-                    r.increment,
-                    if r.cutbacks > 0 { format!(" cut-backs={}", r.cutbacks) } else { String::new() }
-                ));
-            })
-            .with_context(|| format!("running {}", scene.display()))?;
-            bar.finish_and_clear();
-            if let Some(fos) = &summary.factor_of_safety {
-                println!(
-                    "factor of safety F = {:.4}: holds at {:.4}, fails at {:.4} ({} trials); the run below is at F = {:.4}",
-                    fos.value(),
-                    fos.stable,
-                    fos.failed,
-                    fos.trials.len(),
-                    fos.stable
-                );
-            }
-            println!(
-                "{}: {} analysis, {} steps, {} points, {} Newton iterations (max {} per step), {} cut-backs, {}, {:.3} s; outputs in {}",
-                scene.display(),
-                summary.analysis,
-                summary.steps,
-                summary.points,
-                summary.newton_iterations,
-                summary.max_iterations_per_step,
-                summary.cutbacks,
-                summary.solver,
-                summary.wall_time.as_secs_f64(),
-                summary.output_dir.display()
-            );
-            Ok(())
+            run_command(&scene, &out, quiet, verbose)
         }
     }
+}
+
+/// `loam check`: build the scene's analysis, every check included, and say what it holds.
+fn check(scene: &Path) -> anyhow::Result<()> {
+    let loaded = LoadedScene::read(scene)?;
+    let (points, dofs) = match loaded.scene.dimension {
+        3 => {
+            let a = loaded.build::<3>()?;
+            (a.model().points().len(), a.model().grid().num_nodes() * 3)
+        }
+        _ => {
+            let a = loaded.build::<2>()?;
+            (a.model().points().len(), a.model().grid().num_nodes() * 2)
+        }
+    };
+    println!(
+        "{}: ok — {}D, {points} material points, grid of {dofs} nodal dofs at most",
+        scene.display(),
+        loaded.scene.dimension
+    );
+    Ok(())
+}
+
+/// `loam run`: the scene run into `out` under a progress bar, the solver's log above it.
+fn run_command(scene: &Path, out: &Path, quiet: bool, verbose: u8) -> anyhow::Result<()> {
+    let loaded = LoadedScene::read(scene)?;
+    if let loam_io::scene::AnalysisSpec::QuasiStatic { strength_reduction: Some(srf), .. } = &loaded.scene.analysis {
+        if !quiet {
+            println!(
+                "strength reduction: bisecting F between {} and {} to {}, one trial per row in {}",
+                srf.bracket.0,
+                srf.bracket.1,
+                srf.tolerance,
+                out.join("strength_reduction.csv").display()
+            );
+        }
+    }
+    let bar = if quiet { ProgressBar::hidden() } else { ProgressBar::new(1000) };
+    bar.set_style(
+        ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:40} {msg}").expect("valid template"),
+    );
+    install_log(&bar, quiet, verbose);
+    let summary = run_scene(&loaded, out, &mut |r, end| show_progress(&bar, r, end))
+        .with_context(|| format!("running {}", scene.display()))?;
+    bar.finish_and_clear();
+    if let Some(fos) = &summary.factor_of_safety {
+        println!(
+            "factor of safety F = {:.4}: holds at {:.4}, fails at {:.4} ({} trials); the run below is at F = {:.4}",
+            fos.value(),
+            fos.stable,
+            fos.failed,
+            fos.trials.len(),
+            fos.stable
+        );
+    }
+    println!(
+        "{}: {} analysis, {} steps, {} points, {} Newton iterations (max {} per step), {} cut-backs, {}, {:.3} s; outputs in {}",
+        scene.display(),
+        summary.analysis,
+        summary.steps,
+        summary.points,
+        summary.newton_iterations,
+        summary.max_iterations_per_step,
+        summary.cutbacks,
+        summary.solver,
+        summary.wall_time.as_secs_f64(),
+        summary.output_dir.display()
+    );
+    Ok(())
+}
+
+/// The solver's log on stderr above the progress bar: errors only when quiet, warnings by
+/// default, -v information (solver choice, cut-backs), -vv debug (Newton iterations).
+fn install_log(bar: &ProgressBar, quiet: bool, verbose: u8) {
+    let level = match (quiet, verbose) {
+        (true, _) => LevelFilter::ERROR,
+        (false, 0) => LevelFilter::WARN,
+        (false, 1) => LevelFilter::INFO,
+        _ => LevelFilter::DEBUG,
+    };
+    let log_bar = bar.clone();
+    tracing_subscriber::fmt()
+        .with_max_level(level)
+        .with_target(false)
+        .with_ansi(std::io::stderr().is_terminal())
+        .with_writer(move || LogLine { bar: log_bar.clone(), text: Vec::new() })
+        .init();
+}
+
+/// The progress bar after step `r` of a run that ends at `end`.
+fn show_progress(bar: &ProgressBar, r: &Progress, end: f64) {
+    bar.set_position((1000.0 * (r.time / end).clamp(0.0, 1.0)) as u64);
+    let newton = if r.final_residual.is_nan() {
+        String::new()
+    } else {
+        format!(" its={} res={:.1e}", r.iterations, r.final_residual)
+    };
+    let cutbacks = if r.cutbacks > 0 { format!(" cut-backs={}", r.cutbacks) } else { String::new() };
+    bar.set_message(format!("step {} t={:.4e}/{:.4e} Δ={:.2e}{newton}{cutbacks}", r.step, r.time, end, r.increment));
 }

@@ -300,6 +300,35 @@ struct Candidate {
     flow_ok: bool,
 }
 
+/// The local system of a flow return at one iterate (see `MohrCoulomb::flow_system`).
+struct FlowSystem {
+    p: Params,
+    /// The plastic flow directions b_j of the planes.
+    bs: [Vector3<f64>; 3],
+    eps_p: Vector3<f64>,
+    /// Σ Δγ_j ∂b_j/∂κ.
+    dbsum: Vector3<f64>,
+    sig: Vector3<f64>,
+    r: Vector4<f64>,
+    jm: Matrix4<f64>,
+}
+
+/// The principal tangent ∂σ_A/∂ε_tr,B of a converged flow return: dx/dσ_tr = −J⁻¹ ∂R/∂σ_tr
+/// with ∂r_j/∂σ_tr = a_j, ∂r_κ/∂σ_tr = 0.
+fn flow_tangent(set: &[Surface], tr: &Trial, sys: &FlowSystem, jinv: &Matrix4<f64>) -> Matrix3<f64> {
+    let mut rs = Matrix4x3::zeros();
+    for (j, surf) in set.iter().enumerate() {
+        rs.set_row(j, &surf.a(&sys.p).transpose());
+    }
+    let dx = -(jinv * rs);
+    let mut dsig = Matrix3::identity();
+    for (i, b) in sys.bs.iter().enumerate().take(set.len()) {
+        dsig -= (tr.de * b) * dx.row(i);
+    }
+    dsig -= (tr.de * sys.dbsum) * dx.row(3);
+    dsig * tr.de
+}
+
 impl MohrCoulomb {
     /// Angles in radians. Validates c ≥ 0, 0 ≤ φ < π/2, 0 ≤ ψ ≤ φ (all finite).
     pub fn new(elastic: Elastic, cohesion: f64, friction: f64, dilation: f64) -> Result<Self, ConstitutiveError> {
@@ -492,8 +521,10 @@ impl MohrCoulomb {
         }
     }
 
-    /// Return to the planes `set` (1–3 of them) with as many multipliers. `Ok(None)` when
-    /// the local system is singular (the region does not exist for these parameters).
+    /// Return to the planes `set` (1–3 of them) with as many multipliers, by Newton on the
+    /// local system ([`flow_system`](Self::flow_system)), polished by one iteration past
+    /// convergence. `Ok(None)` when the local system is singular (the region does not
+    /// exist for these parameters).
     fn solve_flow(
         &self,
         region: MohrCoulombRegion,
@@ -502,43 +533,13 @@ impl MohrCoulomb {
         branch: Branch,
     ) -> Result<Option<Candidate>, ConstitutiveError> {
         let m = set.len();
-        let t = self.tension_cutoff.unwrap_or(f64::INFINITY);
-        let al = alpha();
         let mut dg = [0.0f64; 3];
         let mut kappa = tr.kappa_n;
         let mut polished = false;
         let mut last = f64::NAN;
         for _ in 0..MAX_ITERATIONS {
-            let p = self.params(kappa, branch);
-            let bs: [Vector3<f64>; 3] = std::array::from_fn(|j| set.get(j).map_or(Vector3::zeros(), |s| s.b(&p)));
-            let mut eps_p = Vector3::zeros();
-            let mut dbsum = Vector3::zeros();
-            for j in 0..m {
-                eps_p += bs[j] * dg[j];
-                dbsum += set[j].db(&p) * dg[j];
-            }
-            let sig = tr.sig - tr.de * eps_p;
-            let w = dev3(&eps_p);
-            let nw = w.norm();
-            // ‖dev Δε^p‖ is not differentiable at 0 (e.g. hydrostatic flow at the cut-off
-            // apex): below round-off level use the zero subgradient.
-            let what = if nw > 1e-14 * eps_p.norm() { w / nw } else { Vector3::zeros() };
-
-            let mut r = Vector4::zeros();
-            let mut jm = Matrix4::identity();
-            for j in 0..m {
-                r[j] = set[j].f(&sig, &p, t);
-                let a = set[j].a(&p);
-                for i in 0..m {
-                    jm[(j, i)] = -a.dot(&(tr.de * bs[i]));
-                }
-                jm[(j, 3)] = -a.dot(&(tr.de * dbsum)) + set[j].df(&sig, &p);
-            }
-            r[3] = kappa - tr.kappa_n - al * nw;
-            for i in 0..m {
-                jm[(3, i)] = -al * what.dot(&bs[i]);
-            }
-            jm[(3, 3)] = 1.0 - al * what.dot(&dbsum);
+            let sys = self.flow_system(set, tr, branch, &dg, kappa);
+            let (r, jm) = (&sys.r, &sys.jm);
             if !(r.iter().all(|v| v.is_finite()) && jm.iter().all(|v| v.is_finite())) {
                 return Err(ConstitutiveError::ReturnMappingFailed {
                     law: "mohr-coulomb",
@@ -549,7 +550,7 @@ impl MohrCoulomb {
             let rf = (0..m).map(|j| r[j].abs()).fold(0.0, f64::max);
             last = rf / tr.scale;
             // κ residual relative to κ or, for κ ≈ 0, to the plastic strain it comes from.
-            let conv = rf <= NEWTON_TOL * tr.scale && r[3].abs() <= NEWTON_TOL * kappa.abs().max(eps_p.norm());
+            let conv = rf <= NEWTON_TOL * tr.scale && r[3].abs() <= NEWTON_TOL * kappa.abs().max(sys.eps_p.norm());
             // Singular local system: Hadamard ratio |det| / Π ‖row‖.
             let hadamard: f64 = jm.row_iter().map(|row| row.norm()).product();
             let det = jm.determinant();
@@ -561,21 +562,10 @@ impl MohrCoulomb {
                 return Ok(None);
             };
             if conv && polished {
-                // Tangent: dx/dσ_tr = −J⁻¹ ∂R/∂σ_tr with ∂r_j/∂σ_tr = a_j, ∂r_κ/∂σ_tr = 0.
-                let mut rs = Matrix4x3::zeros();
-                for (j, surf) in set.iter().enumerate() {
-                    rs.set_row(j, &surf.a(&p).transpose());
-                }
-                let dx = -(jinv * rs);
-                let mut dsig = Matrix3::identity();
-                for (i, b) in bs.iter().enumerate().take(m) {
-                    dsig -= (tr.de * b) * dx.row(i);
-                }
-                dsig -= (tr.de * dbsum) * dx.row(3);
-                let jp = dsig * tr.de;
+                let jp = flow_tangent(set, tr, &sys, &jinv);
                 let gmax = dg[..m].iter().fold(0.0f64, |a, &v| a.max(v.abs()));
                 let flow_ok = dg[..m].iter().all(|&v| v >= -1e-12 * gmax);
-                return Ok(Some(Candidate { region, sig, deps_p: eps_p, kappa, branch, jp, flow_ok }));
+                return Ok(Some(Candidate { region, sig: sys.sig, deps_p: sys.eps_p, kappa, branch, jp, flow_ok }));
             }
             if conv {
                 polished = true;
@@ -587,6 +577,45 @@ impl MohrCoulomb {
             kappa = (kappa + delta[3]).max(tr.kappa_n);
         }
         Err(ConstitutiveError::ReturnMappingFailed { law: "mohr-coulomb", iterations: MAX_ITERATIONS, residual: last })
+    }
+
+    /// The local system of a return to the planes `set` at multipliers `dg` and κ: the
+    /// plastic strain Σ Δγ_j b_j, the stress, the residual (one yield function per plane,
+    /// then κ − κ_n − α ‖dev Δε^p‖) and its Jacobian in (Δγ, κ).
+    fn flow_system(&self, set: &[Surface], tr: &Trial, branch: Branch, dg: &[f64; 3], kappa: f64) -> FlowSystem {
+        let m = set.len();
+        let t = self.tension_cutoff.unwrap_or(f64::INFINITY);
+        let al = alpha();
+        let p = self.params(kappa, branch);
+        let bs: [Vector3<f64>; 3] = std::array::from_fn(|j| set.get(j).map_or(Vector3::zeros(), |s| s.b(&p)));
+        let mut eps_p = Vector3::zeros();
+        let mut dbsum = Vector3::zeros();
+        for j in 0..m {
+            eps_p += bs[j] * dg[j];
+            dbsum += set[j].db(&p) * dg[j];
+        }
+        let sig = tr.sig - tr.de * eps_p;
+        let w = dev3(&eps_p);
+        let nw = w.norm();
+        // ‖dev Δε^p‖ is not differentiable at 0 (e.g. hydrostatic flow at the cut-off
+        // apex): below round-off level use the zero subgradient.
+        let what = if nw > 1e-14 * eps_p.norm() { w / nw } else { Vector3::zeros() };
+        let mut r = Vector4::zeros();
+        let mut jm = Matrix4::identity();
+        for j in 0..m {
+            r[j] = set[j].f(&sig, &p, t);
+            let a = set[j].a(&p);
+            for i in 0..m {
+                jm[(j, i)] = -a.dot(&(tr.de * bs[i]));
+            }
+            jm[(j, 3)] = -a.dot(&(tr.de * dbsum)) + set[j].df(&sig, &p);
+        }
+        r[3] = kappa - tr.kappa_n - al * nw;
+        for i in 0..m {
+            jm[(3, i)] = -al * what.dot(&bs[i]);
+        }
+        jm[(3, 3)] = 1.0 - al * what.dot(&dbsum);
+        FlowSystem { p, bs, eps_p, dbsum, sig, r, jm }
     }
 
     /// Vertex σ₁ = σ₂ = σ_t on the MC surface: σ₃ = ((1 + sin φ) σ_t − 2c cos φ)/(1 − sin φ),
@@ -672,43 +701,21 @@ impl MohrCoulomb {
         Some(Candidate { region: R::Apex, sig, deps_p, kappa, branch, jp, flow_ok: in_cone(&deps_p, &gens) })
     }
 
-    /// The stress update with its return region and diagnostics.
+    /// The stress update with its return region and diagnostics: the trial state in
+    /// principal space, then either the elastic update or the return the regions admit,
+    /// rotated back to the full space with its consistent tangent.
     pub fn update_with_info(
         &self,
         eps_trial: &Matrix3<f64>,
         h_n: &[f64],
         h_out: &mut [f64],
     ) -> Result<(StressUpdate, MohrCoulombReturn), ConstitutiveError> {
-        check_finite(eps_trial, "trial strain")?;
-        for got in [h_n.len(), h_out.len()] {
-            if got != 2 {
-                return Err(ConstitutiveError::HistoryLength { expected: 2, got });
-            }
-        }
-        let (kappa_n, evp_n) = (h_n[0], h_n[1]);
-        if !(kappa_n.is_finite() && kappa_n >= 0.0 && evp_n.is_finite()) {
-            return Err(ConstitutiveError::NonFinite { what: "Mohr-Coulomb history" });
-        }
+        let (kappa_n, evp_n) = check_inputs(eps_trial, h_n, h_out)?;
         let eps = (eps_trial + eps_trial.transpose()) * 0.5;
-        let (lambda, g) = self.elastic.lame();
-        let spec = spectral(&eps)?;
-        // Order principal values descending (σ₁ ≥ σ₂ ≥ σ₃ follows since σ_A = λ tr ε + 2G ε_A).
-        let mut order = [0usize, 1, 2];
-        order.sort_by(|&a, &b| spec.values[b].total_cmp(&spec.values[a]));
-        let e = Vector3::from_fn(|a, _| spec.values[order[a]]);
-        let n = Matrix3::from_fn(|r, c| spec.vectors[(r, order[c])]);
-        let de = Matrix3::repeat(lambda) + Matrix3::identity() * (2.0 * g);
-        let de_inv = (Matrix3::identity() - Matrix3::repeat(lambda / (3.0 * lambda + 2.0 * g))) / (2.0 * g);
-        let sig_tr = de * e;
-        if !sig_tr.iter().all(|v| v.is_finite()) {
-            return Err(ConstitutiveError::NonFinite { what: "Mohr-Coulomb trial stress" });
-        }
-        let scale =
-            sig_tr.amax().max(self.cohesion).max(self.tension_cutoff.map_or(0.0, f64::abs)).max(f64::MIN_POSITIVE);
+        let (tr, n) = self.principal_trial(&eps, kappa_n)?;
         let branch_n = self.branch_at(kappa_n);
-        let p_n = self.params(kappa_n, branch_n);
-        let (f_tr, ft_tr) = self.yield_principal(&sig_tr, &p_n);
-        if f_tr <= ELASTIC_TOL * scale && ft_tr <= ELASTIC_TOL * scale {
+        let (f_tr, ft_tr) = self.yield_principal(&tr.sig, &self.params(kappa_n, branch_n));
+        if f_tr <= ELASTIC_TOL * tr.scale && ft_tr <= ELASTIC_TOL * tr.scale {
             h_out[0] = kappa_n;
             h_out[1] = evp_n;
             return Ok((
@@ -725,10 +732,41 @@ impl MohrCoulomb {
                 },
             ));
         }
+        let Some((mut c, fallback)) = self.select_return(&tr)? else {
+            return Err(ConstitutiveError::ReturnMappingFailed { law: "mohr-coulomb", iterations: 0, residual: f_tr });
+        };
+        tie_equalities(&mut c);
+        let update = full_space(&n, &tr.e, &eps, &c)?;
+        h_out[0] = c.kappa;
+        h_out[1] = evp_n + c.deps_p.sum();
+        Ok((update, MohrCoulombReturn { region: c.region, fallback, residual_branch: c.branch == Branch::Residual }))
+    }
 
-        let tr = Trial { e, sig: sig_tr, kappa_n, de, de_inv, g, scale };
-        let admissible = |c: &Candidate| self.admissible(&c.sig, &self.params(c.kappa, c.branch), scale);
-        let mut chosen: Option<(Candidate, bool)> = None;
+    /// The trial state in principal space, principal values descending (σ₁ ≥ σ₂ ≥ σ₃
+    /// follows since σ_A = λ tr ε + 2G ε_A), with the principal directions as columns.
+    fn principal_trial(&self, eps: &Matrix3<f64>, kappa_n: f64) -> Result<(Trial, Matrix3<f64>), ConstitutiveError> {
+        let (lambda, g) = self.elastic.lame();
+        let spec = spectral(eps)?;
+        let mut order = [0usize, 1, 2];
+        order.sort_by(|&a, &b| spec.values[b].total_cmp(&spec.values[a]));
+        let e = Vector3::from_fn(|a, _| spec.values[order[a]]);
+        let n = Matrix3::from_fn(|r, c| spec.vectors[(r, order[c])]);
+        let de = Matrix3::repeat(lambda) + Matrix3::identity() * (2.0 * g);
+        let de_inv = (Matrix3::identity() - Matrix3::repeat(lambda / (3.0 * lambda + 2.0 * g))) / (2.0 * g);
+        let sig = de * e;
+        if !sig.iter().all(|v| v.is_finite()) {
+            return Err(ConstitutiveError::NonFinite { what: "Mohr-Coulomb trial stress" });
+        }
+        let scale = sig.amax().max(self.cohesion).max(self.tension_cutoff.map_or(0.0, f64::abs)).max(f64::MIN_POSITIVE);
+        Ok((Trial { e, sig, kappa_n, de, de_inv, g, scale }, n))
+    }
+
+    /// The return: the first flow region whose multipliers are non-negative and whose
+    /// stress is admissible, else a vertex, else (not expected, see module docs) the
+    /// closest admissible candidate in the energy norm; with whether it was a fallback.
+    fn select_return(&self, tr: &Trial) -> Result<Option<(Candidate, bool)>, ConstitutiveError> {
+        let kappa_n = tr.kappa_n;
+        let admissible = |c: &Candidate| self.admissible(&c.sig, &self.params(c.kappa, c.branch), tr.scale);
         // Rejected candidates (at most 8 flow regions + 2 vertices; no heap allocation).
         let mut seen: [Option<Candidate>; 10] = [None; 10];
         let mut n_seen = 0;
@@ -740,72 +778,82 @@ impl MohrCoulomb {
             if needs_cutoff && self.tension_cutoff.is_none() {
                 continue;
             }
-            if let Some(c) = self.on_branches(kappa_n, |b| self.solve_flow(region, set, &tr, b))? {
+            if let Some(c) = self.on_branches(kappa_n, |b| self.solve_flow(region, set, tr, b))? {
                 if c.flow_ok && admissible(&c) {
-                    chosen = Some((c, false));
-                    break;
+                    return Ok(Some((c, false)));
                 }
                 remember(c);
             }
         }
-        if chosen.is_none() {
-            // Vertices where more planes meet than there are constraints.
-            let corner = self.on_branches(kappa_n, |b| self.solve_corner12(&tr, b))?;
-            for c in corner.into_iter().chain(self.solve_apex(&tr)) {
-                if admissible(&c) {
-                    chosen = Some((c, !c.flow_ok));
-                    break;
-                }
-                remember(c);
+        // Vertices where more planes meet than there are constraints.
+        let corner = self.on_branches(kappa_n, |b| self.solve_corner12(tr, b))?;
+        for c in corner.into_iter().chain(self.solve_apex(tr)) {
+            if admissible(&c) {
+                return Ok(Some((c, !c.flow_ok)));
             }
+            remember(c);
         }
-        if chosen.is_none() {
-            // Not expected (see module docs): closest admissible candidate, energy norm.
-            chosen = seen
-                .iter()
-                .flatten()
-                .filter(|c| admissible(c))
-                .min_by(|a, b| {
-                    let da = a.deps_p.dot(&(de * a.deps_p));
-                    let db = b.deps_p.dot(&(de * b.deps_p));
-                    da.total_cmp(&db)
-                })
-                .map(|c| (*c, true));
-        }
-        let Some((mut c, fallback)) = chosen else {
-            return Err(ConstitutiveError::ReturnMappingFailed { law: "mohr-coulomb", iterations: 0, residual: f_tr });
-        };
-
-        // Enforce the equalities the region implies exactly (they hold to round-off).
-        let tied = c.region.tied();
-        if tied == [true; 3] {
-            c.sig = Vector3::repeat(c.sig.mean());
-        } else if tied[0] {
-            let m = 0.5 * (c.sig[0] + c.sig[1]);
-            c.sig[0] = m;
-            c.sig[1] = m;
-        } else if tied[2] {
-            let m = 0.5 * (c.sig[1] + c.sig[2]);
-            c.sig[1] = m;
-            c.sig[2] = m;
-        }
-
-        let stress = n * Matrix3::from_diagonal(&c.sig) * n.transpose();
-        let stress = (stress + stress.transpose()) * 0.5;
-        let eps_p = n * Matrix3::from_diagonal(&c.deps_p) * n.transpose();
-        let elastic_strain = eps - (eps_p + eps_p.transpose()) * 0.5;
-        let tangent = assemble(&n, &e, &c.sig, &c.jp, tied);
-        check_finite(&stress, "Mohr-Coulomb stress")?;
-        if !tangent.iter().all(|v| v.is_finite()) {
-            return Err(ConstitutiveError::NonFinite { what: "Mohr-Coulomb tangent" });
-        }
-        h_out[0] = c.kappa;
-        h_out[1] = evp_n + c.deps_p.sum();
-        Ok((
-            StressUpdate { stress, elastic_strain, tangent },
-            MohrCoulombReturn { region: c.region, fallback, residual_branch: c.branch == Branch::Residual },
-        ))
+        let energy = |c: &Candidate| c.deps_p.dot(&(tr.de * c.deps_p));
+        Ok(seen
+            .iter()
+            .flatten()
+            .filter(|c| admissible(c))
+            .min_by(|a, b| energy(a).total_cmp(&energy(b)))
+            .map(|c| (*c, true)))
     }
+}
+
+/// The input checks: a finite trial strain and the law's two history values (κ, the
+/// accumulated plastic volumetric strain), κ ≥ 0; returns them.
+fn check_inputs(eps_trial: &Matrix3<f64>, h_n: &[f64], h_out: &[f64]) -> Result<(f64, f64), ConstitutiveError> {
+    check_finite(eps_trial, "trial strain")?;
+    for got in [h_n.len(), h_out.len()] {
+        if got != 2 {
+            return Err(ConstitutiveError::HistoryLength { expected: 2, got });
+        }
+    }
+    let (kappa_n, evp_n) = (h_n[0], h_n[1]);
+    if !(kappa_n.is_finite() && kappa_n >= 0.0 && evp_n.is_finite()) {
+        return Err(ConstitutiveError::NonFinite { what: "Mohr-Coulomb history" });
+    }
+    Ok((kappa_n, evp_n))
+}
+
+/// Enforce the equalities of principal stresses the return region implies exactly (they
+/// hold to round-off).
+fn tie_equalities(c: &mut Candidate) {
+    let tied = c.region.tied();
+    if tied == [true; 3] {
+        c.sig = Vector3::repeat(c.sig.mean());
+    } else if tied[0] {
+        let m = 0.5 * (c.sig[0] + c.sig[1]);
+        c.sig[0] = m;
+        c.sig[1] = m;
+    } else if tied[2] {
+        let m = 0.5 * (c.sig[1] + c.sig[2]);
+        c.sig[1] = m;
+        c.sig[2] = m;
+    }
+}
+
+/// The returned state in the full space: stress and plastic strain rotated back from the
+/// principal directions `n`, the elastic strain, and the consistent tangent.
+fn full_space(
+    n: &Matrix3<f64>,
+    e: &Vector3<f64>,
+    eps: &Matrix3<f64>,
+    c: &Candidate,
+) -> Result<StressUpdate, ConstitutiveError> {
+    let stress = n * Matrix3::from_diagonal(&c.sig) * n.transpose();
+    let stress = (stress + stress.transpose()) * 0.5;
+    let eps_p = n * Matrix3::from_diagonal(&c.deps_p) * n.transpose();
+    let elastic_strain = eps - (eps_p + eps_p.transpose()) * 0.5;
+    let tangent = assemble(n, e, &c.sig, &c.jp, c.region.tied());
+    check_finite(&stress, "Mohr-Coulomb stress")?;
+    if !tangent.iter().all(|v| v.is_finite()) {
+        return Err(ConstitutiveError::NonFinite { what: "Mohr-Coulomb tangent" });
+    }
+    Ok(StressUpdate { stress, elastic_strain, tangent })
 }
 
 /// Full tangent from the principal one (de Souza Neto Appendix A.5), see module docs.

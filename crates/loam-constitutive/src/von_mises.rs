@@ -76,16 +76,7 @@ impl VonMises {
         h_n: &[f64],
         h_out: &mut [f64],
     ) -> Result<(StressUpdate, VonMisesRegion), ConstitutiveError> {
-        check_finite(eps_trial, "trial strain")?;
-        for got in [h_n.len(), h_out.len()] {
-            if got != 1 {
-                return Err(ConstitutiveError::HistoryLength { expected: 1, got });
-            }
-        }
-        let eqps_n = h_n[0];
-        if !(eqps_n.is_finite() && eqps_n >= 0.0) {
-            return Err(ConstitutiveError::NonFinite { what: "equivalent plastic strain history" });
-        }
+        let eqps_n = check_inputs(eps_trial, h_n, h_out)?;
         let eps = (eps_trial + eps_trial.transpose()) * 0.5;
         let (lambda, mu) = self.elastic.lame();
         let bulk = lambda + 2.0 * mu / 3.0;
@@ -115,23 +106,7 @@ impl VonMises {
             ));
         }
 
-        // Closed-form multiplier on the sloped branch (Box 7.4 with linear hardening):
-        // Φ(Δγ) = q_tr − 3GΔγ − (σ_y(ε̄p_n) + H Δγ) = 0.
-        let floor = self.residual_yield_stress;
-        let h = self.hardening;
-        let on_slope_at_n = h >= 0.0 || self.yield_stress + h * eqps_n > floor;
-        let mut region = VonMisesRegion::Plastic;
-        let mut h_eff = h;
-        let mut dgamma = f_tr / (3.0 * g + h);
-        if !on_slope_at_n || (h < 0.0 && self.yield_stress + h * (eqps_n + dgamma) < floor) {
-            // The return ends on the floor (σ_y constant = σ_res): redo with H = 0.
-            // q_tr > σ_y(ε̄p_n) ≥ σ_res, so Δγ > 0; the sloped solution crossed the floor, so
-            // ε̄p_n + Δγ lies beyond the kink and the floor branch is the consistent one
-            // (Φ decreases monotonically in Δγ because H > −3G).
-            region = VonMisesRegion::Residual;
-            h_eff = 0.0;
-            dgamma = (q_tr - floor) / (3.0 * g);
-        }
+        let (dgamma, h_eff, region) = self.multiplier(q_tr, f_tr, g, eqps_n);
         // q_tr > 0 here: f_tr > 0 and σ_y ≥ 0.
         let n_hat = s_tr / s_norm;
         let factor = 1.0 - 3.0 * g * dgamma / q_tr;
@@ -152,6 +127,41 @@ impl VonMises {
         h_out[0] = eqps_n + dgamma;
         Ok((StressUpdate { stress, elastic_strain, tangent }, region))
     }
+
+    /// The plastic multiplier Δγ of a return from q_tr with the yield excess f_tr, the
+    /// hardening modulus it ends on and its region: the closed form on the sloped branch
+    /// (de Souza Neto et al. 2008, Box 7.4 with linear hardening),
+    /// Φ(Δγ) = q_tr − 3GΔγ − (σ_y(ε̄p_n) + H Δγ) = 0, or on the residual floor.
+    fn multiplier(&self, q_tr: f64, f_tr: f64, g: f64, eqps_n: f64) -> (f64, f64, VonMisesRegion) {
+        let floor = self.residual_yield_stress;
+        let h = self.hardening;
+        let on_slope_at_n = h >= 0.0 || self.yield_stress + h * eqps_n > floor;
+        let dgamma = f_tr / (3.0 * g + h);
+        if !on_slope_at_n || (h < 0.0 && self.yield_stress + h * (eqps_n + dgamma) < floor) {
+            // The return ends on the floor (σ_y constant = σ_res): redo with H = 0.
+            // q_tr > σ_y(ε̄p_n) ≥ σ_res, so Δγ > 0; the sloped solution crossed the floor, so
+            // ε̄p_n + Δγ lies beyond the kink and the floor branch is the consistent one
+            // (Φ decreases monotonically in Δγ because H > −3G).
+            return ((q_tr - floor) / (3.0 * g), 0.0, VonMisesRegion::Residual);
+        }
+        (dgamma, h, VonMisesRegion::Plastic)
+    }
+}
+
+/// The input checks: a finite trial strain and one history value, the equivalent plastic
+/// strain ε̄p ≥ 0; returns it.
+fn check_inputs(eps_trial: &Matrix3<f64>, h_n: &[f64], h_out: &[f64]) -> Result<f64, ConstitutiveError> {
+    check_finite(eps_trial, "trial strain")?;
+    for got in [h_n.len(), h_out.len()] {
+        if got != 1 {
+            return Err(ConstitutiveError::HistoryLength { expected: 1, got });
+        }
+    }
+    let eqps_n = h_n[0];
+    if !(eqps_n.is_finite() && eqps_n >= 0.0) {
+        return Err(ConstitutiveError::NonFinite { what: "equivalent plastic strain history" });
+    }
+    Ok(eqps_n)
 }
 
 impl StrengthReducible for VonMises {

@@ -192,8 +192,9 @@ impl<const D: usize> Explicit<D> {
         Ok(dt)
     }
 
-    /// Advance one time step (the last one shortened to land on `duration`). On error the
-    /// committed state is that of the last successful step.
+    /// Advance one time step (the last one shortened to land on `duration`), stage by
+    /// stage as the crate docs number them. On error the committed state is that of the last
+    /// successful step.
     pub fn step(&mut self) -> Result<ExplicitStepReport, ExplicitError> {
         if self.is_finished() {
             return Err(ExplicitError::Finished(self.steps));
@@ -203,77 +204,118 @@ impl<const D: usize> Explicit<D> {
         connect(&self.model, &mut self.conn, &mut self.constrained, step)?;
         let critical = self.critical_time_step();
         let dt = self.time_step(step, critical)?;
-        let n_nodes = self.conn.active_nodes().len();
-        let hs = self.model.points().history_stride();
-        let nodes = &mut self.nodes;
-        nodes.gathered.resize(n_nodes * (1 + 2 * D), 0.0);
-        for v in [&mut nodes.internal, &mut nodes.velocity, &mut nodes.acceleration, &mut nodes.strain_velocity] {
-            v.resize(n_nodes * D, 0.0);
+        self.size_buffers();
+        let m_min = self.map_to_grid();
+        if self.settings.scheme == UpdateScheme::Usf {
+            self.update_stress_first(step, dt, m_min)?;
         }
-        self.points.resize(self.model.points().len(), hs);
-
-        let time = self.time;
-        let unstable = |(point, failure): (usize, PointFailure), model: &Model<D>, sc: &PointScratch<D>| match failure {
-            PointFailure::Unstable(reason) => ExplicitError::Unstable { step, time, point, reason },
-            PointFailure::Outside => {
-                ConnectError::PointOutsideGrid { step, source: outside_error(model, point, &sc.position[point]) }.into()
-            }
-        };
-        let Settings { scheme, flip, damping } = Settings::of(&self.settings);
-        let (model, conn, constrained) = (&self.model, &self.conn, &self.constrained[..]);
-        let (nodes, sc) = (&mut self.nodes, &mut self.points);
-
-        gather_grid(model, conn, scheme != UpdateScheme::Usf, &mut nodes.gathered);
-        let stride = 1 + 2 * D;
-        let max_mass = nodes.gathered.par_chunks(stride).map(|g| g[0]).reduce(|| 0.0, f64::max);
-        let m_min = EMPTY_NODE_MASS * max_mass;
-        if scheme == UpdateScheme::Usf {
-            nodes
-                .strain_velocity
-                .par_chunks_mut(D)
-                .zip(nodes.gathered.par_chunks(stride))
-                .for_each(|(v, g)| v.copy_from_slice(&g[1..1 + D]));
-            momentum_to_velocity::<D>(&nodes.gathered, constrained, m_min, &mut nodes.strain_velocity);
-            update_stress(model, conn, &nodes.strain_velocity, dt, sc).map_err(|e| unstable(e, model, sc))?;
-            negative_internal_force(model, conn, sc, &mut nodes.internal);
-        }
-        let internal = (scheme == UpdateScheme::Usf).then_some(&nodes.internal[..]);
-        nodal_update::<D>(
-            &nodes.gathered,
-            internal,
-            constrained,
-            m_min,
+        self.update_grid(dt, m_min);
+        let (conn, nodes) = (&self.conn, &self.nodes);
+        let moved = grid_to_points(
+            &self.model,
+            conn,
+            &nodes.velocity,
+            &nodes.acceleration,
             dt,
-            damping,
-            &mut nodes.velocity,
-            &mut nodes.acceleration,
+            self.settings.flip,
+            &mut self.points,
         );
-        grid_to_points(model, conn, &nodes.velocity, &nodes.acceleration, dt, flip, sc)
-            .map_err(|e| unstable(e, model, sc))?;
-        match scheme {
-            UpdateScheme::Usf => {}
-            UpdateScheme::Usl => {
-                update_stress(model, conn, &nodes.velocity, dt, sc).map_err(|e| unstable(e, model, sc))?;
-            }
-            UpdateScheme::Musl => {
-                remap_momentum(model, conn, &sc.velocity, &mut nodes.strain_velocity);
-                momentum_to_velocity::<D>(&nodes.gathered, constrained, m_min, &mut nodes.strain_velocity);
-                update_stress(model, conn, &nodes.strain_velocity, dt, sc).map_err(|e| unstable(e, model, sc))?;
-            }
-        }
+        moved.map_err(|e| self.failure(step, e))?;
+        self.update_stress_last(step, dt, m_min)?;
         self.commit();
         let remaining = self.settings.duration - self.time;
         self.time = if dt >= remaining { self.settings.duration } else { self.time + dt };
         self.steps = step;
-        tracing::debug!(step, time = self.time, dt, critical, active_nodes = n_nodes, "explicit step");
+        let active_nodes = self.conn.active_nodes().len();
+        tracing::debug!(step, time = self.time, dt, critical, active_nodes, "explicit step");
         Ok(ExplicitStepReport {
             step,
             time: self.time,
             dt,
             critical_dt: critical,
-            active_nodes: n_nodes,
+            active_nodes,
             wall_time: start.elapsed(),
         })
+    }
+
+    /// Size the nodal and point scratch to the step's connectivity.
+    fn size_buffers(&mut self) {
+        let n_nodes = self.conn.active_nodes().len();
+        let nodes = &mut self.nodes;
+        nodes.gathered.resize(n_nodes * (1 + 2 * D), 0.0);
+        for v in [&mut nodes.internal, &mut nodes.velocity, &mut nodes.acceleration, &mut nodes.strain_velocity] {
+            v.resize(n_nodes * D, 0.0);
+        }
+        self.points.resize(self.model.points().len(), self.model.points().history_stride());
+    }
+
+    /// Stage 2, points to grid: [m_I, p_I, f_I] per active node, with the internal force of
+    /// the committed stress unless USF updates the stress first; returns the mass below
+    /// which a node counts as empty.
+    fn map_to_grid(&mut self) -> f64 {
+        let usf = self.settings.scheme == UpdateScheme::Usf;
+        gather_grid(&self.model, &self.conn, !usf, &mut self.nodes.gathered);
+        let max_mass = self.nodes.gathered.par_chunks(1 + 2 * D).map(|g| g[0]).reduce(|| 0.0, f64::max);
+        EMPTY_NODE_MASS * max_mass
+    }
+
+    /// USF: the stress updated from the start-of-step nodal velocity p_I / m_I before the
+    /// grid update, and the internal force of that stress.
+    fn update_stress_first(&mut self, step: usize, dt: f64, m_min: f64) -> Result<(), ExplicitError> {
+        let nodes = &mut self.nodes;
+        nodes
+            .strain_velocity
+            .par_chunks_mut(D)
+            .zip(nodes.gathered.par_chunks(1 + 2 * D))
+            .for_each(|(v, g)| v.copy_from_slice(&g[1..1 + D]));
+        momentum_to_velocity::<D>(&nodes.gathered, &self.constrained, m_min, &mut nodes.strain_velocity);
+        let updated = update_stress(&self.model, &self.conn, &nodes.strain_velocity, dt, &mut self.points);
+        updated.map_err(|e| self.failure(step, e))?;
+        negative_internal_force(&self.model, &self.conn, &self.points, &mut self.nodes.internal);
+        Ok(())
+    }
+
+    /// Stages 3–4: local damping and the grid momentum update.
+    fn update_grid(&mut self, dt: f64, m_min: f64) {
+        let nodes = &mut self.nodes;
+        let internal = (self.settings.scheme == UpdateScheme::Usf).then_some(&nodes.internal[..]);
+        nodal_update::<D>(
+            &nodes.gathered,
+            internal,
+            &self.constrained,
+            m_min,
+            dt,
+            self.settings.damping,
+            &mut nodes.velocity,
+            &mut nodes.acceleration,
+        );
+    }
+
+    /// Stage 6 for USL (the new grid velocity) and MUSL (the velocity re-mapped from the
+    /// updated points); USF updated the stress first.
+    fn update_stress_last(&mut self, step: usize, dt: f64, m_min: f64) -> Result<(), ExplicitError> {
+        let (model, conn, nodes) = (&self.model, &self.conn, &mut self.nodes);
+        let updated = match self.settings.scheme {
+            UpdateScheme::Usf => return Ok(()),
+            UpdateScheme::Usl => update_stress(model, conn, &nodes.velocity, dt, &mut self.points),
+            UpdateScheme::Musl => {
+                remap_momentum(model, conn, &self.points.velocity, &mut nodes.strain_velocity);
+                momentum_to_velocity::<D>(&nodes.gathered, &self.constrained, m_min, &mut nodes.strain_velocity);
+                update_stress(model, conn, &nodes.strain_velocity, dt, &mut self.points)
+            }
+        };
+        updated.map_err(|e| self.failure(step, e))
+    }
+
+    /// The error of step `step` for a point that failed it.
+    fn failure(&self, step: usize, (point, failure): (usize, PointFailure)) -> ExplicitError {
+        match failure {
+            PointFailure::Unstable(reason) => ExplicitError::Unstable { step, time: self.time, point, reason },
+            PointFailure::Outside => {
+                let source = outside_error(&self.model, point, &self.points.position[point]);
+                ConnectError::PointOutsideGrid { step, source }.into()
+            }
+        }
     }
 
     /// Commit the trial state of a successful step (docs/theory.md §1): F ← ΔF F,
@@ -313,19 +355,6 @@ impl<const D: usize> Explicit<D> {
             on_step(&report, &self.model).map_err(RunError::Observer)?;
         }
         Ok(())
-    }
-}
-
-/// The settings the hot loops read, copied out so the borrows stay simple.
-struct Settings {
-    scheme: UpdateScheme,
-    flip: f64,
-    damping: f64,
-}
-
-impl Settings {
-    fn of(s: &ExplicitSettings) -> Self {
-        Self { scheme: s.scheme, flip: s.flip, damping: s.damping }
     }
 }
 

@@ -88,48 +88,17 @@ impl BasisKind {
         let mut dw = [[0f64; 4]; D];
         let mut count = [0usize; D];
         for a in 0..D {
-            let h = grid.cell_size()[a];
-            let xi = (x[a] - grid.origin()[a]) / h;
-            let l = half_length[a] / h;
-            if !xi.is_finite() || !l.is_finite() {
-                return Err(BasisError::NonFinite { axis: a });
-            }
-            let n_cells = grid.cells()[a];
-            // A domain is clipped at the grid faces: material cannot lie beyond the grid,
-            // and a point resting on a constrained grid face would otherwise need a node
-            // outside it after any rounding of its stretched domain. GIMP remains a
-            // partition of unity for any half-length, so clipping costs no consistency.
-            let l = l.min(xi).min(n_cells as f64 - xi);
-            let outside = || BasisError::OutsideGrid {
-                axis: a,
-                coordinate: x[a],
-                min: grid.origin()[a],
-                max: grid.origin()[a] + h * n_cells as f64,
-            };
-            count[a] = match self {
-                BasisKind::Linear => linear_1d(xi, n_cells, &mut idx[a], &mut w[a], &mut dw[a]),
-                BasisKind::QuadraticBSpline if n_cells == 1 => {
-                    linear_1d(xi, n_cells, &mut idx[a], &mut w[a], &mut dw[a])
-                }
-                BasisKind::QuadraticBSpline => bspline_1d(xi, n_cells, &mut idx[a], &mut w[a], &mut dw[a]),
-                BasisKind::Gimp if l < MIN_HALF_LENGTH || xi < 0.0 || xi >= n_cells as f64 => {
-                    linear_1d(xi, n_cells, &mut idx[a], &mut w[a], &mut dw[a])
-                }
-                BasisKind::Gimp => gimp_1d(xi, l.min(MAX_HALF_LENGTH), n_cells, &mut idx[a], &mut w[a], &mut dw[a]),
-            }
-            .ok_or_else(outside)?;
-            for v in dw[a][..count[a]].iter_mut() {
-                *v /= h;
-            }
+            count[a] = self.evaluate_axis(grid, x, half_length, a, &mut idx[a], &mut w[a], &mut dw[a])?;
         }
         // Tensor product with axis 0 fastest: node indices come out ascending.
+        // An odometer over the per-axis supports (the lexicographic order of
+        // `lexicographic_coords`, counted up without a division per node).
         let total: usize = count.iter().product();
         let mut odo = [0usize; D];
         for k in 0..total {
-            let mut ijk = [0usize; D];
+            let ijk: [usize; D] = std::array::from_fn(|a| idx[a][odo[a]]);
             let mut value = 1.0;
             for a in 0..D {
-                ijk[a] = idx[a][odo[a]];
                 value *= w[a][odo[a]];
             }
             let mut grad = SVector::<f64, D>::zeros();
@@ -154,6 +123,53 @@ impl BasisKind {
             }
         }
         Ok(total)
+    }
+
+    /// The 1D functions along axis `a` at `x`: node indices, values and derivatives (per
+    /// unit length) into `idx`, `w`, `dw`; returns how many.
+    #[allow(clippy::too_many_arguments)]
+    fn evaluate_axis<const D: usize>(
+        self,
+        grid: &Grid<D>,
+        x: &SVector<f64, D>,
+        half_length: &SVector<f64, D>,
+        a: usize,
+        idx: &mut [usize; 4],
+        w: &mut [f64; 4],
+        dw: &mut [f64; 4],
+    ) -> Result<usize, BasisError> {
+        let h = grid.cell_size()[a];
+        let xi = (x[a] - grid.origin()[a]) / h;
+        let l = half_length[a] / h;
+        if !xi.is_finite() || !l.is_finite() {
+            return Err(BasisError::NonFinite { axis: a });
+        }
+        let n_cells = grid.cells()[a];
+        // A domain is clipped at the grid faces: material cannot lie beyond the grid, and a
+        // point resting on a constrained grid face would otherwise need a node outside it
+        // after any rounding of its stretched domain. GIMP remains a partition of unity for
+        // any half-length, so clipping costs no consistency.
+        let l = l.min(xi).min(n_cells as f64 - xi);
+        let outside = || BasisError::OutsideGrid {
+            axis: a,
+            coordinate: x[a],
+            min: grid.origin()[a],
+            max: grid.origin()[a] + h * n_cells as f64,
+        };
+        let count = match self {
+            BasisKind::Linear => linear_1d(xi, n_cells, idx, w, dw),
+            BasisKind::QuadraticBSpline if n_cells == 1 => linear_1d(xi, n_cells, idx, w, dw),
+            BasisKind::QuadraticBSpline => bspline_1d(xi, n_cells, idx, w, dw),
+            BasisKind::Gimp if l < MIN_HALF_LENGTH || xi < 0.0 || xi >= n_cells as f64 => {
+                linear_1d(xi, n_cells, idx, w, dw)
+            }
+            BasisKind::Gimp => gimp_1d(xi, l.min(MAX_HALF_LENGTH), n_cells, idx, w, dw),
+        }
+        .ok_or_else(outside)?;
+        for v in dw[..count].iter_mut() {
+            *v /= h;
+        }
+        Ok(count)
     }
 }
 

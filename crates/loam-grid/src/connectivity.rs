@@ -202,13 +202,24 @@ impl<const D: usize> Connectivity<D> {
         num_nodes: usize,
         evaluate: impl Fn(usize, &mut [u32], &mut [f64], &mut [SVector<f64, D>]) -> Result<usize, E> + Sync,
     ) -> Result<(), (usize, E)> {
+        self.evaluate_supports(n, evaluate)?;
+        self.number_active_nodes(num_nodes);
+        self.build_adjacency();
+        Ok(())
+    }
+
+    /// Every point's support nodes, values and gradients, in parallel.
+    fn evaluate_supports<E: Send>(
+        &mut self,
+        n: usize,
+        evaluate: impl Fn(usize, &mut [u32], &mut [f64], &mut [SVector<f64, D>]) -> Result<usize, E> + Sync,
+    ) -> Result<(), (usize, E)> {
         let stride = self.stride;
         self.count.resize(n, 0);
         self.grid_nodes.resize(n * stride, 0);
         self.active.resize(n * stride, 0);
         self.values.resize(n * stride, 0.0);
         self.gradients.resize(n * stride, SVector::zeros());
-
         let first_error = self
             .grid_nodes
             .par_chunks_mut(stride)
@@ -227,15 +238,17 @@ impl<const D: usize> Connectivity<D> {
                 }
             })
             .min_by_key(|(p, _)| *p);
-        if let Some(e) = first_error {
-            return Err(e);
-        }
+        first_error.map_or(Ok(()), Err)
+    }
 
-        // Active numbering, ascending in grid index so that supports stay sorted.
+    /// Number the active nodes ascending in grid index, so that supports stay sorted, and
+    /// renumber every support to them.
+    fn number_active_nodes(&mut self, num_nodes: usize) {
+        let stride = self.stride;
         let an = &mut self.active_nodes;
         an.grid_to_active.clear();
         an.grid_to_active.resize(num_nodes, INACTIVE);
-        for p in 0..n {
+        for p in 0..self.count.len() {
             let s = p * stride;
             for &g in &self.grid_nodes[s..s + self.count[p] as usize] {
                 an.grid_to_active[g as usize] = 0;
@@ -256,9 +269,12 @@ impl<const D: usize> Connectivity<D> {
                 }
             },
         );
+    }
 
-        // Node → point adjacency by counting sort (points ascending within each node).
-        let n_active = an.active_to_grid.len();
+    /// Node → point adjacency by counting sort (points ascending within each node).
+    fn build_adjacency(&mut self) {
+        let (stride, n) = (self.stride, self.count.len());
+        let n_active = self.active_nodes.active_to_grid.len();
         let adj = &mut self.node_points;
         adj.offsets.clear();
         adj.offsets.resize(n_active + 1, 0);
@@ -282,7 +298,6 @@ impl<const D: usize> Connectivity<D> {
                 *slot += 1;
             }
         }
-        Ok(())
     }
 }
 

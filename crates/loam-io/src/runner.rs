@@ -4,7 +4,7 @@
 //! keeps every file written so far; the error says which step failed and why.
 
 use crate::output::{write_csv_table, write_vtu, CsvCell, CsvWriter, OutputError, PointCloud, PvdWriter};
-use crate::scene::{AnalysisSpec, LoadedScene, SceneError};
+use crate::scene::{AnalysisSpec, LoadedScene, OutputSpec, SceneError};
 use loam_analysis::{Analysis, AnalysisError, Progress};
 use loam_implicit::{reduced_strength, FactorOfSafety, QuasiStatic, StrengthReduction, StrengthReductionError};
 use loam_model::{ExternalWork, Model};
@@ -100,29 +100,119 @@ fn run_dim<const D: usize>(
     let start = Instant::now();
     let mut analysis: Analysis<D> = scene.build::<D>()?;
     std::fs::create_dir_all(out_dir).map_err(|source| RunFailure::OutputDir { path: out_dir.to_owned(), source })?;
-    let factor_of_safety = match (&scene.scene.analysis, &analysis) {
-        (AnalysisSpec::QuasiStatic { strength_reduction: Some(spec), .. }, Analysis::QuasiStatic(qs)) => {
-            let fos = factor_of_safety(qs, spec.bracket, spec.tolerance, out_dir)?;
-            let reduced = reduced_strength(qs.model(), fos.stable)?;
-            analysis = Analysis::QuasiStatic(QuasiStatic::new(reduced, qs.settings().clone()));
-            Some(fos)
-        }
-        _ => None,
-    };
-    let out = &scene.scene.output;
+    let factor_of_safety = strength_reduction_first(scene, &mut analysis, out_dir)?;
+    let mut outputs = Outputs::create(&scene.scene.output, &analysis, out_dir)?;
     let end_time = analysis.end_time();
-    // A displaced constraint (a footing) adds its prescribed displacement and reaction per
-    // prescribed component: the load–displacement curve.
-    const AXES: [&str; 3] = ["x", "y", "z"];
-    let displaced: Vec<(usize, usize, f64)> = analysis
-        .model()
-        .constraints()
-        .iter()
-        .enumerate()
-        .filter(|(_, c)| c.is_displaced())
-        .flat_map(|(k, c)| (0..D).filter(|&i| c.fixed[i]).map(move |i| (k, i, c.displacement[i])))
-        .collect();
-    let mut header: Vec<String> = [
+    let (mut iterations, mut max_its, mut cutbacks) = (0, 0, 0);
+    while !analysis.is_finished() {
+        let r = analysis.step()?;
+        iterations += r.iterations;
+        max_its = max_its.max(r.iterations);
+        cutbacks += r.cutbacks;
+        outputs.record(&r, analysis.model(), analysis.is_finished())?;
+        progress(&r, end_time);
+    }
+    outputs.finish(analysis.model())?;
+    Ok(RunSummary {
+        analysis: analysis.name(),
+        steps: analysis.steps_done(),
+        points: analysis.model().points().len(),
+        newton_iterations: iterations,
+        max_iterations_per_step: max_its,
+        cutbacks,
+        wall_time: start.elapsed(),
+        solver: analysis.solver(),
+        output_dir: out_dir.to_owned(),
+        factor_of_safety,
+    })
+}
+
+/// A scene that asks for strength reduction first brackets its factor of safety; the run
+/// then goes on at the largest factor that held, so the outputs show the state just
+/// before failure.
+fn strength_reduction_first<const D: usize>(
+    scene: &LoadedScene,
+    analysis: &mut Analysis<D>,
+    out_dir: &Path,
+) -> Result<Option<FactorOfSafety>, RunFailure> {
+    let (AnalysisSpec::QuasiStatic { strength_reduction: Some(spec), .. }, Analysis::QuasiStatic(qs)) =
+        (&scene.scene.analysis, &*analysis)
+    else {
+        return Ok(None);
+    };
+    let fos = factor_of_safety(qs, spec.bracket, spec.tolerance, out_dir)?;
+    let reduced = reduced_strength(qs.model(), fos.stable)?;
+    *analysis = Analysis::QuasiStatic(QuasiStatic::new(reduced, qs.settings().clone()));
+    Ok(Some(fos))
+}
+
+/// The files a run writes as it goes: the run log, the VTU frames and their PVD, the
+/// energy history, and `points_final.csv` at the end.
+struct Outputs<'a, const D: usize> {
+    spec: &'a OutputSpec,
+    out_dir: &'a Path,
+    log: RunLog,
+    pvd: Option<PvdWriter>,
+    history: Option<History<D>>,
+}
+
+impl<'a, const D: usize> Outputs<'a, D> {
+    /// Create the files and write the state before the first step (frame 0, the first
+    /// history row).
+    fn create(spec: &'a OutputSpec, analysis: &Analysis<D>, out_dir: &'a Path) -> Result<Self, OutputError> {
+        let model = analysis.model();
+        let log = RunLog::create(&out_dir.join("run_log.csv"), model)?;
+        let mut pvd = if spec.vtu_every > 0 { Some(PvdWriter::create(out_dir.join("points.pvd"))?) } else { None };
+        if let Some(pvd) = pvd.as_mut() {
+            write_frame(model, out_dir, pvd, 0, 0.0)?;
+        }
+        let mut history = None;
+        if spec.history_every > 0 {
+            let mut h = History::create(&out_dir.join("history.csv"), model, analysis.load_factor())?;
+            h.row(model, analysis.time())?;
+            history = Some(h);
+        }
+        Ok(Self { spec, out_dir, log, pvd, history })
+    }
+
+    /// After step `r`: its log row, and a history row and a frame when due (always after the
+    /// `last` step).
+    fn record(&mut self, r: &Progress, model: &Model<D>, last: bool) -> Result<(), OutputError> {
+        self.log.row(r)?;
+        if let Some(h) = self.history.as_mut() {
+            h.advance(model, r.load_factor);
+            if r.step % self.spec.history_every == 0 || last {
+                h.row(model, r.time)?;
+            }
+        }
+        if let Some(pvd) = self.pvd.as_mut() {
+            if r.step % self.spec.vtu_every == 0 || last {
+                write_frame(model, self.out_dir, pvd, r.step, r.time)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// After the last step: `points_final.csv`, if asked for.
+    fn finish(&self, model: &Model<D>) -> Result<(), OutputError> {
+        if self.spec.final_csv {
+            write_points_csv(model, &self.out_dir.join("points_final.csv"))?;
+        }
+        Ok(())
+    }
+}
+
+/// `run_log.csv`: one row per step (load factor, Newton iterations, final residual, wall
+/// time, ...). A displaced constraint (a footing) adds its prescribed displacement and
+/// reaction per prescribed component: the load–displacement curve.
+struct RunLog {
+    writer: CsvWriter,
+    /// (constraint, component, prescribed displacement at full load).
+    displaced: Vec<(usize, usize, f64)>,
+}
+
+impl RunLog {
+    const COLUMNS: [&'static str; 11] = [
         "step",
         "time",
         "load_factor",
@@ -134,35 +224,27 @@ fn run_dim<const D: usize>(
         "active_nodes",
         "dofs",
         "wall_time_s",
-    ]
-    .iter()
-    .map(|s| s.to_string())
-    .collect();
-    for &(k, i, _) in &displaced {
-        header.push(format!("constraint{k}_displacement_{}", AXES[i]));
-        header.push(format!("constraint{k}_reaction_{}", AXES[i]));
+    ];
+
+    fn create<const D: usize>(path: &Path, model: &Model<D>) -> Result<Self, OutputError> {
+        const AXES: [&str; 3] = ["x", "y", "z"];
+        let displaced: Vec<(usize, usize, f64)> = model
+            .constraints()
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| c.is_displaced())
+            .flat_map(|(k, c)| (0..D).filter(|&i| c.fixed[i]).map(move |i| (k, i, c.displacement[i])))
+            .collect();
+        let mut header: Vec<String> = Self::COLUMNS.iter().map(|s| s.to_string()).collect();
+        for &(k, i, _) in &displaced {
+            header.push(format!("constraint{k}_displacement_{}", AXES[i]));
+            header.push(format!("constraint{k}_reaction_{}", AXES[i]));
+        }
+        let writer = CsvWriter::create(path, &header.iter().map(String::as_str).collect::<Vec<_>>())?;
+        Ok(Self { writer, displaced })
     }
-    let mut log =
-        CsvWriter::create(out_dir.join("run_log.csv"), &header.iter().map(String::as_str).collect::<Vec<_>>())?;
-    let mut pvd = if out.vtu_every > 0 { Some(PvdWriter::create(out_dir.join("points.pvd"))?) } else { None };
-    if let Some(pvd) = pvd.as_mut() {
-        write_frame(analysis.model(), out_dir, pvd, 0, 0.0)?;
-    }
-    let mut history = if out.history_every > 0 {
-        let mut h = History::create(&out_dir.join("history.csv"), analysis.model(), analysis.load_factor())?;
-        h.row(analysis.model(), analysis.time())?;
-        Some(h)
-    } else {
-        None
-    };
-    let (mut iterations, mut max_its, mut cutbacks) = (0, 0, 0);
-    while !analysis.is_finished() {
-        let r = analysis.step()?;
-        let model = analysis.model();
-        let last = analysis.is_finished();
-        iterations += r.iterations;
-        max_its = max_its.max(r.iterations);
-        cutbacks += r.cutbacks;
+
+    fn row(&mut self, r: &Progress) -> Result<(), OutputError> {
         let mut cells = vec![
             CsvCell::Int(r.step as i64),
             CsvCell::Float(r.time),
@@ -176,39 +258,12 @@ fn run_dim<const D: usize>(
             CsvCell::Int(r.dofs as i64),
             CsvCell::Float(r.wall_time.as_secs_f64()),
         ];
-        for &(k, i, u) in &displaced {
+        for &(k, i, u) in &self.displaced {
             cells.push(CsvCell::Float(r.load_factor * u));
             cells.push(CsvCell::Float(r.reactions.get(k).map_or(f64::NAN, |f| f[i])));
         }
-        log.row_mixed(&cells)?;
-        if let Some(h) = history.as_mut() {
-            h.advance(model, r.load_factor);
-            if r.step % out.history_every == 0 || last {
-                h.row(model, r.time)?;
-            }
-        }
-        if let Some(pvd) = pvd.as_mut() {
-            if r.step % out.vtu_every == 0 || last {
-                write_frame(model, out_dir, pvd, r.step, r.time)?;
-            }
-        }
-        progress(&r, end_time);
+        self.writer.row_mixed(&cells)
     }
-    if out.final_csv {
-        write_points_csv(analysis.model(), &out_dir.join("points_final.csv"))?;
-    }
-    Ok(RunSummary {
-        analysis: analysis.name(),
-        steps: analysis.steps_done(),
-        points: analysis.model().points().len(),
-        newton_iterations: iterations,
-        max_iterations_per_step: max_its,
-        cutbacks,
-        wall_time: start.elapsed(),
-        solver: analysis.solver(),
-        output_dir: out_dir.to_owned(),
-        factor_of_safety,
-    })
 }
 
 /// Bracket the factor of safety of the quasi-static analysis's model, one row per trial in

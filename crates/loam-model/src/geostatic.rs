@@ -1,4 +1,4 @@
-//! The geostatic (K0) initial stress of level or layered ground (docs/theory.md §5).
+//! The geostatic (K0) initial stress of level or layered ground.
 
 use crate::{Kinematics, Model, ModelError};
 use nalgebra::Matrix3;
@@ -21,12 +21,30 @@ impl<const D: usize> Model<D> {
         if g == 0.0 || (0..D).any(|a| a != vertical && self.gravity[a] != 0.0) {
             return Err(ModelError::Geostatic("a geostatic stress needs gravity along one axis".into()));
         }
-        // Down is the direction of gravity; "above" is against it.
+        let sigma_v = self.overburden(vertical, g);
+        let mut h_out = vec![0.0; self.points.history_stride()];
+        let mut strains = Vec::with_capacity(sigma_v.len());
+        let mut stresses = Vec::with_capacity(sigma_v.len());
+        for (p, &sv) in sigma_v.iter().enumerate() {
+            let mut sigma = Matrix3::identity() * (k0 * sv);
+            sigma[(vertical, vertical)] = sv;
+            strains.push(self.carrying_strain(p, &sigma, (k0, sv), &mut h_out)?);
+            stresses.push(sigma);
+        }
+        self.points.elastic_strain = strains;
+        self.points.stress = stresses;
+        self.gravity_preloaded = true;
+        Ok(())
+    }
+
+    /// σ_v of every point: the weight of the material above it in its grid column over the
+    /// column's area, points at the same height (within 1e-9 of a cell) counting half.
+    /// Gravity `g` acts along axis `vertical`; "above" is against it.
+    fn overburden(&self, vertical: usize, g: f64) -> Vec<f64> {
         let up = -g.signum();
         let h = self.grid().cell_size();
         let area: f64 = (0..D).filter(|&a| a != vertical).map(|a| h[a]).product();
         let pts = &self.points;
-        let n = pts.len();
         // The column of a point: its cell's coordinates across gravity (the vertical one
         // zeroed), so points sort by column, then from the top down.
         let column = |p: usize| {
@@ -34,12 +52,12 @@ impl<const D: usize> Model<D> {
             ijk[vertical] = 0;
             ijk
         };
-        let mut order: Vec<([usize; D], usize)> = (0..n).map(|p| (column(p), p)).collect();
+        let mut order: Vec<([usize; D], usize)> = (0..pts.len()).map(|p| (column(p), p)).collect();
         order.sort_by(|(ca, a), (cb, b)| {
             ca.cmp(cb).then((up * pts.position[*b][vertical]).total_cmp(&(up * pts.position[*a][vertical])))
         });
         let tol = 1e-9 * h[vertical];
-        let mut sigma_v = vec![0.0; n];
+        let mut sigma_v = vec![0.0; pts.len()];
         for col in order.chunk_by(|a, b| a.0 == b.0) {
             let mut above = 0.0;
             // The rows of the column: points at the same height, top down.
@@ -53,43 +71,41 @@ impl<const D: usize> Model<D> {
                 above += row_mass;
             }
         }
-        let hs = pts.history_stride();
-        let mut h_out = vec![0.0; hs];
-        let mut strains = Vec::with_capacity(n);
-        let mut stresses = Vec::with_capacity(n);
-        for (p, &sv) in sigma_v.iter().enumerate() {
-            let law = &self.materials[pts.material[p] as usize];
-            let Some(elastic) = law.elasticity() else {
-                return Err(ModelError::Geostatic(format!(
-                    "material {} ({}) has no isotropic elasticity to carry an initial stress",
-                    pts.material[p],
-                    law.name()
-                )));
-            };
-            let mut sigma = Matrix3::identity() * (k0 * sv);
-            sigma[(vertical, vertical)] = sv;
-            let eps = elastic.strain(&sigma);
-            // Admissible: the law's own update from that elastic strain returns the stress.
-            let upd = law
-                .update(&eps, pts.history(p), &mut h_out)
-                .map_err(|e| ModelError::Geostatic(format!("point {p}: {e}")))?;
-            if (upd.stress - sigma).norm() > 1e-8 * sigma.norm().max(f64::MIN_POSITIVE) {
-                return Err(ModelError::Geostatic(format!(
-                    "point {p} at {:?}: the K0 = {k0} stress (σ_v = {:.4e}) lies outside the yield surface of material {} ({}); use a K0 inside it or gravity loading",
-                    pts.position[p].as_slice(), sv, pts.material[p], law.name()
-                )));
-            }
-            let be = match self.kinematics {
-                Kinematics::SmallStrain => eps,
-                Kinematics::FiniteStrain => loam_constitutive::tensor::sym_exp(&(eps * 2.0))
-                    .map_err(|e| ModelError::Geostatic(format!("point {p}: {e}")))?,
-            };
-            strains.push(be);
-            stresses.push(sigma);
+        sigma_v
+    }
+
+    /// The elastic strain state that carries `sigma` (K0 and σ_v given for the message) at
+    /// point `p` (ε^e = C⁻¹σ, or b^e = exp(2 C⁻¹σ) in finite strain), checked admissible:
+    /// the law's own update from it returns the stress.
+    fn carrying_strain(
+        &self,
+        p: usize,
+        sigma: &Matrix3<f64>,
+        (k0, sv): (f64, f64),
+        h_out: &mut [f64],
+    ) -> Result<Matrix3<f64>, ModelError> {
+        let pts = &self.points;
+        let law = &self.materials[pts.material[p] as usize];
+        let Some(elastic) = law.elasticity() else {
+            return Err(ModelError::Geostatic(format!(
+                "material {} ({}) has no isotropic elasticity to carry an initial stress",
+                pts.material[p],
+                law.name()
+            )));
+        };
+        let eps = elastic.strain(sigma);
+        let upd =
+            law.update(&eps, pts.history(p), h_out).map_err(|e| ModelError::Geostatic(format!("point {p}: {e}")))?;
+        if (upd.stress - sigma).norm() > 1e-8 * sigma.norm().max(f64::MIN_POSITIVE) {
+            return Err(ModelError::Geostatic(format!(
+                "point {p} at {:?}: the K0 = {k0} stress (σ_v = {:.4e}) lies outside the yield surface of material {} ({}); use a K0 inside it or gravity loading",
+                pts.position[p].as_slice(), sv, pts.material[p], law.name()
+            )));
         }
-        self.points.elastic_strain = strains;
-        self.points.stress = stresses;
-        self.gravity_preloaded = true;
-        Ok(())
+        match self.kinematics {
+            Kinematics::SmallStrain => Ok(eps),
+            Kinematics::FiniteStrain => loam_constitutive::tensor::sym_exp(&(eps * 2.0))
+                .map_err(|e| ModelError::Geostatic(format!("point {p}: {e}"))),
+        }
     }
 }
