@@ -209,6 +209,7 @@ fn von_mises_oedometer_closed_form() {
 /// - then the stress stays on the edge σ₁ = σ₂ = σ_xx (both planes with σ₃ = σ_zz, equal
 ///   multipliers by symmetry): σ_xx = k σ_zz + 2c cos φ/(1 + s), and ε_xx = 0 with the flow
 ///   of both planes gives dσ_zz/dε_zz = E / (1 − 2νk + 2m((1 − ν)k − ν)).
+///
 /// Linear planes, fixed axes and a fixed flow direction make the return exact for any
 /// increment, so the incremental result matches to round-off (1e-10 of c).
 #[test]

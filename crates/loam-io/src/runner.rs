@@ -181,12 +181,12 @@ impl<'a, const D: usize> Outputs<'a, D> {
         self.log.row(r)?;
         if let Some(h) = self.history.as_mut() {
             h.advance(model, r.load_factor);
-            if r.step % self.spec.history_every == 0 || last {
+            if r.step.is_multiple_of(self.spec.history_every) || last {
                 h.row(model, r.time)?;
             }
         }
         if let Some(pvd) = self.pvd.as_mut() {
-            if r.step % self.spec.vtu_every == 0 || last {
+            if r.step.is_multiple_of(self.spec.vtu_every) || last {
                 write_frame(model, self.out_dir, pvd, r.step, r.time)?;
             }
         }

@@ -56,7 +56,7 @@ impl<const D: usize> Shape<D> {
     fn bounds(&self) -> Result<(SVector<f64, D>, SVector<f64, D>), PointsError> {
         match self {
             Shape::Box { min, max } => {
-                if (0..D).any(|a| !(min[a] < max[a])) {
+                if (0..D).any(|a| min[a].partial_cmp(&max[a]) != Some(std::cmp::Ordering::Less)) {
                     return Err(PointsError::BoxOrder {
                         min: min.iter().copied().collect(),
                         max: max.iter().copied().collect(),

@@ -207,9 +207,9 @@ impl BlockPattern {
     /// `y = A x` for a matrix with this pattern.
     pub fn mul_vec(&self, values: &[f64], x: &[f64], y: &mut [f64]) {
         y.iter_mut().for_each(|v| *v = 0.0);
-        for c in 0..self.num_dofs() {
+        for (c, xc) in x.iter().enumerate().take(self.num_dofs()) {
             for idx in self.col_ptr[c]..self.col_ptr[c + 1] {
-                y[self.row_idx[idx]] += values[idx] * x[c];
+                y[self.row_idx[idx]] += values[idx] * xc;
             }
         }
     }

@@ -81,7 +81,7 @@ impl LoadedScene {
                 ),
             ));
         }
-        if !has_strength(&model) {
+        if !has_strength(model) {
             return Err(self.error(&[Seg::Key("materials")], "strength reduction needs a material with a strength (VonMises or MohrCoulomb); every material here is elastic"));
         }
         Ok(())
