@@ -1,8 +1,8 @@
 //! Kinematic drivers that turn a displacement increment into a trial elastic strain, call
 //! a [`ConstitutiveLaw`], and return stress and tangent in the form the assembly needs.
 //!
-//! - Small strain (THEORY §3): `ε_tr = ε^e_n + sym(∇Δu)`.
-//! - Finite strain (THEORY §2): logarithmic elastic strain from `b^e_tr = ΔF b^e_n ΔFᵀ`,
+//! - Small strain (docs/theory.md §3): `ε_tr = ε^e_n + sym(∇Δu)`.
+//! - Finite strain (docs/theory.md §2): logarithmic elastic strain from `b^e_tr = ΔF b^e_n ΔFᵀ`,
 //!   spatial tangent of de Souza Neto, Perić & Owen (2008), eq. 14.103.
 
 use nalgebra::Matrix3;
@@ -20,7 +20,7 @@ fn check_history(law: &dyn ConstitutiveLaw, h_n: &[f64], h_out: &[f64]) -> Resul
     Ok(())
 }
 
-/// Small-strain kinematics (THEORY §3): `eps_trial = eps_e_n + sym(grad_du)` where
+/// Small-strain kinematics (docs/theory.md §3): `eps_trial = eps_e_n + sym(grad_du)` where
 /// `grad_du` is the 3×3 displacement-increment gradient; returns the law's update.
 pub fn small_strain_update(
     law: &dyn ConstitutiveLaw,
@@ -45,13 +45,13 @@ pub struct FiniteStrainUpdate {
     pub kirchhoff: Matrix3<f64>,
     /// Updated elastic left Cauchy–Green tensor b^e = exp(2 ε^e).
     pub be: Matrix3<f64>,
-    /// a_ijkl = (1/(2J)) D_ijmn L_mnpq B_pqkl − σ_il δ_jk (THEORY §2). With g the
+    /// a_ijkl = (1/(2J)) D_ijmn L_mnpq B_pqkl − σ_il δ_jk (docs/theory.md §2). With g the
     /// velocity-gradient-like perturbation (δΔF = g ΔF), `J a : g = δτ − τ gᵀ`, the exact
     /// linearisation of the internal force per reference volume.
     pub spatial_tangent: Tensor4,
 }
 
-/// Finite-strain update (THEORY §2): `b_tr = ΔF b^e_n ΔFᵀ`, `ε_tr = ½ ln b_tr` (spectral),
+/// Finite-strain update (docs/theory.md §2): `b_tr = ΔF b^e_n ΔFᵀ`, `ε_tr = ½ ln b_tr` (spectral),
 /// `law.update(ε_tr)` → τ, ε^e, D; `σ = τ / j_total`; `b^e = exp(2 ε^e)`; spatial tangent a
 /// (de Souza Neto et al. 2008, eq. 14.103).
 ///

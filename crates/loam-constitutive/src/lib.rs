@@ -12,7 +12,7 @@
 //!   tension cut-off, linear softening of c, φ, ψ), consistent tangent mapped back
 //!   through the eigenbasis; φ = 0 is Tresca.
 //! - [`small_strain_update`] and [`finite_strain_update`]: the two kinematic drivers
-//!   (THEORY §3 and §2). The finite-strain spatial tangent is de Souza Neto, Perić &
+//!   (docs/theory.md §3 and §2). The finite-strain spatial tangent is de Souza Neto, Perić &
 //!   Owen (2008), *Computational Methods for Plasticity*, eq. 14.103.
 //!
 //! Stress is tension-positive. Fourth-order tensors are full (not Voigt) 9×9 matrices
@@ -103,7 +103,7 @@ pub trait ConstitutiveLaw: Send + Sync + std::fmt::Debug {
         None
     }
     /// P-wave (constrained) modulus λ + 2μ: the stiffness of the explicit CFL condition
-    /// (THEORY §9) and of stiffness scaling.
+    /// (docs/theory.md §10) and of stiffness scaling.
     fn p_wave_modulus(&self) -> f64;
     /// Stored (elastic) energy per unit volume at elastic strain ε^e: ½ ε^e : C : ε^e for
     /// isotropic linear elasticity. With logarithmic strain it is the Hencky energy per unit

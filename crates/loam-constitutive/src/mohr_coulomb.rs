@@ -1,4 +1,4 @@
-//! Mohr–Coulomb plasticity in principal stresses (THEORY §8; de Souza Neto, Perić & Owen
+//! Mohr–Coulomb plasticity in principal stresses (docs/theory.md §16; de Souza Neto, Perić & Owen
 //! 2008, §8.2–8.3 and Appendix A.5; Clausen, Damkilde & Andersen 2007), with an optional
 //! tension cut-off and linear softening of c, φ, ψ.
 //!

@@ -1,4 +1,4 @@
-//! Finite-strain driver checks (THEORY §2). The key one is that the spatial tangent is
+//! Finite-strain driver checks (docs/theory.md §2). The key one is that the spatial tangent is
 //! the exact linearisation of the internal force: with δΔF = g ΔF,
 //! `J a : g = δτ − τ gᵀ` (f_int per reference volume is τ_ij ∂N/∂x_j and
 //! δ(∂N/∂x_j) = −∂N/∂x_m g_mj).

@@ -1,4 +1,4 @@
-//! Plasticity checks (VERIFICATION.md "Unit-level checks"): elastic trial states unchanged,
+//! Plasticity checks (docs/theory.md §16, the table of failures and checks): elastic trial states unchanged,
 //! consistency after return, the algorithmic tangent against central differences in every
 //! return region, rotation invariance, symmetry for associated flow, no NaN at apexes and
 //! edges, and closed-form oedometer / triaxial / Tresca paths.

@@ -3,11 +3,10 @@
 use crate::{ExplicitError, ExplicitSettings, TimeStep, UpdateScheme};
 use loam_grid::{BasisError, Connectivity, PointBasisError};
 use loam_kernels::{
-    check_constraints, connect, embed, gather_internal_force, gather_nodal, internal_force, interpolate, update_point,
-    ConnectError, PointUpdate, RunError,
+    advance_deformation, check_constraints, connect, embed, gather_internal_force, gather_nodal, internal_force,
+    interpolate, update_point, ConnectError, PointUpdate, RunError,
 };
 use loam_model::{Kinematics, Model};
-use loam_points::stretched_half_length;
 use nalgebra::{Matrix3, SMatrix, SVector};
 use rayon::prelude::*;
 use std::time::{Duration, Instant};
@@ -333,9 +332,8 @@ impl<const D: usize> Explicit<D> {
         )
             .into_par_iter()
             .for_each(|(f, v, l, l0, df, v_new)| {
-                *f = df * *f;
+                advance_deformation(df, f, l, l0);
                 *v = *v_new;
-                *l = stretched_half_length(l0, f);
             });
         pts.position.copy_from_slice(&sc.position);
         pts.velocity.copy_from_slice(&sc.velocity);

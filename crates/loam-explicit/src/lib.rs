@@ -1,5 +1,5 @@
 //! Explicit material point method over the same grid, points, constitutive laws and model
-//! as the implicit solver, for comparison with it (THEORY.md §9) and for fast dynamics.
+//! as the implicit solver, for comparison with it (docs/theory.md §10) and for fast dynamics.
 //!
 //! One step, updated Lagrangian with the grid reset every step:
 //!
@@ -30,14 +30,14 @@
 //! The algorithm is that of Sulsky, Chen & Schreyer (1994), "A particle method for
 //! history-dependent materials", Comput. Methods Appl. Mech. Engrg. 118. The time step is
 //! the CFL limit Δt_c = min_p h_min / (c_p + |v_p|), c_p = √(M / ρ_p) with M the P-wave
-//! modulus of the point's law and ρ_p = m_p / v_p its current density (THEORY.md §9).
+//! modulus of the point's law and ρ_p = m_p / v_p its current density (docs/theory.md §10).
 //!
 //! Everything a step computes goes into scratch buffers reused from step to step; the
 //! model is changed only when the whole step has succeeded, so a failed step (a point
 //! leaving the grid, a blow-up) leaves the last committed state intact. Every point → node
 //! transfer is a gather in a fixed order and every point loop is independent, so results
-//! are bitwise identical for any number of threads (DESIGN.md, "Parallelism and
-//! determinism").
+//! are bitwise identical for any number of threads (docs/theory.md
+//! §7).
 
 mod energy;
 mod error;

@@ -13,18 +13,15 @@ pub enum UpdateScheme {
     /// v_I^{n+1}; the internal force uses the stress of the start of the step.
     ///
     /// Less stable than the CFL step suggests: with FLIP the point round trip softens the
-    /// momentum update (a grid mode is scaled by μ = 1 − ¾ sin²(kh/2) for the linear basis
-    /// and 2 points per cell) but not the strain update, and the mismatch is stable only
-    /// for cΔt/h < 0.756 in 1D (confirmed on the V2 bar, where CFL safety 0.8 blows up).
-    /// Nearly empty nodes make it worse (V5 with the linear basis blows up at 0.4 h/c).
-    /// Use MUSL, or USL with GIMP and a safety of at most 0.5.
+    /// momentum update but not the strain update, and the mismatch is stable only for
+    /// cΔt/h < 0.756 in 1D, less near nearly empty nodes (docs/theory.md §10, with the
+    /// runs that show it). Use MUSL, or USL with GIMP and a safety of at most 0.5.
     Usl,
     /// Modified USL (Sulsky, Zhou & Schreyer 1995): as USL, but the nodal velocities for
     /// the strain increment are re-mapped from the updated point velocities. Robust near
     /// nearly empty nodes and the usual default. Like USF it is symplectic Euler on the
-    /// softened modes, stable to about √3 h/c in 1D (linear basis, 2 points per cell): the
-    /// CFL estimate is conservative for it (1.5 × the estimate ran stably in every scene
-    /// tested: V2 bar, V1a column, V5 disks; 2 × blew up in all of them).
+    /// softened modes, stable to about √3 h/c in 1D (linear basis, 2 points per cell), so
+    /// the CFL estimate is conservative for it (docs/theory.md §10).
     #[default]
     Musl,
 }
@@ -32,7 +29,7 @@ pub enum UpdateScheme {
 /// How the time step is chosen.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum TimeStep {
-    /// Δt = safety · Δt_crit, recomputed every step (THEORY.md §9).
+    /// Δt = safety · Δt_crit, recomputed every step (docs/theory.md §10).
     Cfl { safety: f64 },
     /// A fixed Δt; refused with [`ExplicitError::AboveCritical`] at the first step where it
     /// exceeds Δt_crit unless `allow_above_critical`.

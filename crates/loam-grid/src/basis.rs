@@ -5,7 +5,7 @@
 //! - `Gimp`: the uniform GIMP function of Bardenhagen & Kober (2004): the tent averaged over
 //!   the point's domain [x_p − l_p, x_p + l_p], S(d) = (M(d + l) − M(d − l)) / (2l) with M the
 //!   antiderivative of the tent. For l ≤ h/2 this is exactly the five-piece table of
-//!   THEORY.md §5; written as a difference of antiderivatives it also holds for l up to h,
+//!   docs/theory.md §4; written as a difference of antiderivatives it also holds for l up to h,
 //!   which iGIMP domains reach when stretched (Charlton et al. 2017).
 //! - `QuadraticBSpline`: node-centred quadratic B-splines (Steffen, Kirby & Berzins 2008),
 //!   C¹ across cells, so a point crossing a face sees no jump in its gradient. Each grid
@@ -311,7 +311,7 @@ mod tests {
     use nalgebra::{Vector2, Vector3};
     use proptest::prelude::*;
 
-    /// THEORY.md §5 table (Bardenhagen & Kober 2004), h = 1, valid for l ≤ 1/2.
+    /// five-piece table of Bardenhagen & Kober (2004), h = 1, valid for l ≤ 1/2.
     fn gimp_table(d: f64, l: f64) -> (f64, f64) {
         if d <= -1.0 - l || d > 1.0 + l {
             (0.0, 0.0)

@@ -1,11 +1,14 @@
-//! Background grid of the material point method: a uniform Cartesian grid in D = 2
-//! (plane strain) or D = 3 dimensions, the basis functions that tie material points to its
-//! nodes (linear "standard MPM" and GIMP), and the per-step connectivity: which nodes each
-//! point's basis touches, which nodes are active, and which points touch each node.
+//! The background of the material point method: a uniform Cartesian grid in D = 2 (plane
+//! strain) or D = 3 dimensions, the basis functions that tie material points to its nodes
+//! (linear "standard MPM", GIMP, quadratic B-splines), the body-fitted mesh of the updated
+//! Lagrangian FEM reference, both behind [`Background`], and the per-step connectivity:
+//! which nodes each point's basis touches, which nodes are active, and which points touch
+//! each node. Also the ghost-penalty faces of cut cells, the one lexicographic numbering
+//! and the one Gauss–Legendre rule of the workspace.
 //!
 //! The grid is reset every step (updated Lagrangian MPM): it carries no state of its own.
-//! See `docs/theory.md` §5 for the basis functions (Bardenhagen & Kober 2004; iGIMP of
-//! Charlton, Coombs & Augarde 2017).
+//! See docs/theory.md §4 for the basis functions (Bardenhagen & Kober 2004; iGIMP of
+//! Charlton, Coombs & Augarde 2017) and §12 for the mesh.
 
 mod background;
 mod basis;

@@ -1,6 +1,5 @@
 //! Body-fitted finite-element mesh for the updated Lagrangian FEM reference (the seed
-//! paper compares its implicit MPM with an updated Lagrangian FEM; THEORY.md and
-//! `docs/theory.md` §12).
+//! paper compares its implicit MPM with an updated Lagrangian FEM; docs/theory.md §12).
 //!
 //! Elements are isoparametric bilinear quadrilaterals (D = 2) or trilinear hexahedra
 //! (D = 3) on structured blocks. The material points of an FEM run are the elements' Gauss

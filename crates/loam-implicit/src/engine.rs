@@ -12,9 +12,8 @@ use crate::residual::{residual, ResidualInputs};
 use crate::tangent::{assemble, PointCouplings, TangentInputs};
 use crate::StepError;
 use loam_grid::{Connectivity, GhostFace};
-use loam_kernels::{check_constraints, connect, gather_nodal, interpolate_add};
+use loam_kernels::{advance_deformation, check_constraints, connect, gather_nodal, interpolate_add};
 use loam_model::Model;
-use loam_points::stretched_half_length;
 use loam_solve::{
     norm, BlockPattern, LinearSolveError, LinearSolverKind, NewtonControl, NewtonError, NewtonReport, NewtonSettings,
     SparseDirectSolver,
@@ -256,11 +255,12 @@ impl<const D: usize> Engine<D> {
                 // Positions carry the displacement in either case (what the output reports);
                 // a geometrically linear model computes on `Model::configuration`.
                 interpolate_add(conn, p, du, x);
-                let df = trial.delta_f[p];
-                *f = df * *f;
+                let df = &trial.delta_f[p];
                 if moves {
+                    advance_deformation(df, f, l, l0);
                     *v *= df.determinant();
-                    *l = stretched_half_length(l0, f);
+                } else {
+                    *f = df * *f;
                 }
             });
         pts.stress.copy_from_slice(&trial.stress);

@@ -28,8 +28,9 @@ pub struct QuasiStaticSettings {
     pub linear_solver: Option<LinearSolverKind>,
     /// Start each step's Newton iterate on the free dofs from the last converged
     /// increment, scaled to the new load increment (node by node, through the grid or mesh
-    /// numbering), instead of from zero. Off by default; docs/verification.md (V3) gives
-    /// where it pays and where it changes the load path.
+    /// numbering), instead of from zero. Off by default: docs/theory.md §6 gives where it
+    /// pays (the geometrically linear footings) and where it changes the load path (moving
+    /// points).
     pub extrapolate: bool,
 }
 
