@@ -22,6 +22,11 @@ fn points(material: u32) -> PointStore<2> {
     points
 }
 
+/// The block on `basis` with `kinematics`, elastic, no constraints or gravity.
+fn model_on(basis: BasisKind, kinematics: Kinematics) -> Model<2> {
+    Model::new(grid(), basis, kinematics, points(0), vec![elastic()], vec![], Vector2::zeros()).unwrap()
+}
+
 fn model_with(constraints: Vec<PlaneConstraint>) -> Result<Model<2>, ModelError> {
     Model::new(
         grid(),
@@ -113,43 +118,16 @@ fn replaced_materials_keep_count_and_history_layout() {
 
 #[test]
 fn treatments_are_refused_where_they_do_not_apply() {
-    let gimp = Model::new(
-        grid(),
-        BasisKind::Gimp,
-        Kinematics::SmallStrain,
-        points(0),
-        vec![elastic()],
-        vec![],
-        Vector2::zeros(),
-    )
-    .unwrap();
+    let gimp = model_on(BasisKind::Gimp, Kinematics::SmallStrain);
     assert!(matches!(gimp.clone().with_anti_locking(AntiLocking::BBar), Err(ModelError::AntiLocking(_))));
     let linear = model_with(vec![]).unwrap();
     let bad = AntiLocking::AssumedStrain { stabilization: 0.0 };
     assert!(matches!(linear.clone().with_anti_locking(bad), Err(ModelError::AntiLocking(_))));
     assert!(linear.clone().with_anti_locking(AntiLocking::BBar).is_ok());
-    let spline = Model::new(
-        grid(),
-        BasisKind::QuadraticBSpline,
-        Kinematics::SmallStrain,
-        points(0),
-        vec![elastic()],
-        vec![],
-        Vector2::zeros(),
-    )
-    .unwrap();
+    let spline = model_on(BasisKind::QuadraticBSpline, Kinematics::SmallStrain);
     assert!(matches!(spline.with_ghost_penalty(0.1), Err(ModelError::GhostPenalty(_))));
     assert!(matches!(gimp.clone().with_ghost_penalty(-1.0), Err(ModelError::GhostPenalty(_))));
-    let finite = Model::new(
-        grid(),
-        BasisKind::Gimp,
-        Kinematics::FiniteStrain,
-        points(0),
-        vec![elastic()],
-        vec![],
-        Vector2::zeros(),
-    )
-    .unwrap();
+    let finite = model_on(BasisKind::Gimp, Kinematics::FiniteStrain);
     assert!(matches!(finite.with_geometrically_linear(), Err(ModelError::GeometricallyLinear(_))));
 }
 
