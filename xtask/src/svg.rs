@@ -2,10 +2,10 @@
 //!
 //! Linear or logarithmic axes (labelled decades, like `1e-3`, on log axes), a title, axis
 //! labels, a legend beside the plot, a distinct colour and marker per series, optional dashed
-//! lines, and optional reference-slope triangles for convergence plots. plotters has no such
-//! triangles, so they are placed here, in pixels, where they keep furthest from the data.
-//! Values that cannot be shown (NaN, infinities, non-positive values on a log axis) are
-//! dropped before plotting, so the SVG never contains NaN coordinates.
+//! lines, and optional reference slopes for convergence plots: dashed grey lines of the given
+//! slope through the last point of the first series, so the observed rate reads off against
+//! them. Values that cannot be shown (NaN, infinities, non-positive values on a log axis)
+//! are dropped before plotting, so the SVG never contains NaN coordinates.
 //!
 //! plotters is built without its `ttf` feature: text stays SVG `<text>` that the viewer sets in
 //! its own sans-serif font, and plotters' width estimate is enough to lay the chart out. So
@@ -59,8 +59,8 @@ pub struct Plot {
     pub log_y: bool,
     /// The lines.
     pub series: Vec<Series>,
-    /// Reference slopes `(slope, label)` drawn as small triangles under the
-    /// data (in log-log plots the slope is the convergence rate, e.g.
+    /// Reference slopes `(slope, label)` drawn as dashed grey lines through the last point
+    /// of the first series, on log-log plots (where the slope is the convergence rate, e.g.
     /// `(2.0, "rate 2")`).
     pub reference_slopes: Vec<(f64, String)>,
 }
@@ -170,129 +170,34 @@ where
     Ok(())
 }
 
-/// Points along the closed outline of a triangle, 8 per edge.
-fn edge_samples(tri: &[(f64, f64); 3]) -> Vec<(f64, f64)> {
-    let mut out = Vec::with_capacity(24);
-    for k in 0..3 {
-        let (a, b) = (tri[k], tri[(k + 1) % 3]);
-        for m in 0..8 {
-            let t = m as f64 / 8.0;
-            out.push((a.0 + t * (b.0 - a.0), a.1 + t * (b.1 - a.1)));
-        }
-    }
-    out
+/// A line as drawn: its points in axis units, label, colour, dash, and marker (none for
+/// the reference slopes).
+struct Drawn<'a> {
+    label: &'a str,
+    points: Vec<(f64, f64)>,
+    colour: RGBColor,
+    dashed: bool,
+    marker: Option<usize>,
 }
 
-/// Distance from `p` to the nearest of the polylines (a single point counts
-/// as a line); infinite if there are none.
-fn distance_to_lines(p: (f64, f64), lines: &[Vec<(f64, f64)>]) -> f64 {
-    let seg = |a: (f64, f64), b: (f64, f64)| {
-        let (dx, dy) = (b.0 - a.0, b.1 - a.1);
-        let len2 = dx * dx + dy * dy;
-        let t = if len2 > 0.0 { (((p.0 - a.0) * dx + (p.1 - a.1) * dy) / len2).clamp(0.0, 1.0) } else { 0.0 };
-        (p.0 - a.0 - t * dx).hypot(p.1 - a.1 - t * dy)
-    };
-    let mut d = f64::INFINITY;
-    for line in lines {
-        match line.len() {
-            0 => {}
-            1 => d = d.min(seg(line[0], line[0])),
-            _ => {
-                for w in line.windows(2) {
-                    d = d.min(seg(w[0], w[1]));
-                }
-            }
-        }
-    }
-    d
-}
-
-/// A reference triangle in pixels: its corners, and the anchor of its label beside the
-/// vertical leg (right of it when the slope is `up`, left when falling).
-struct Triangle {
-    corners: [(f64, f64); 3],
-    label_at: (f64, f64),
-    up: bool,
-    label_room: f64,
-}
-
-impl Triangle {
-    /// The triangle `w` wide and `h` high with its right angle at the bottom and the bottom of
-    /// its left edge at `(x0, y0)`; its label `label_room` pixels long.
-    fn at(x0: f64, y0: f64, w: f64, h: f64, up: bool, label_room: f64) -> Self {
-        let (corners, label_at) = if up {
-            ([(x0, y0), (x0 + w, y0 - h), (x0 + w, y0)], (x0 + w + 5.0, y0 - h / 2.0))
+/// The legend: a row per line with its stroke, marker and label.
+fn legend(area: &DrawingArea<SVGBackend, Shift>, drawn: &[Drawn]) -> Result<(), Box<dyn Error>> {
+    for (i, d) in drawn.iter().enumerate() {
+        let y = 50 + (LEGEND_ROW as usize * i) as i32;
+        let line = [(5, y), (35, y)];
+        let style = d.colour.stroke_width(if d.marker.is_some() { 2 } else { 1 });
+        if d.dashed {
+            area.draw(&DashedPathElement::new(line, 7, 4, style))?;
         } else {
-            ([(x0, y0 - h), (x0 + w, y0), (x0, y0)], (x0 - 5.0, y0 - h / 2.0))
-        };
-        Self { corners, label_at, up, label_room }
-    }
-
-    /// The segment its label covers, roughly.
-    fn label_line(&self) -> Vec<(f64, f64)> {
-        let dir = if self.up { 1.0 } else { -1.0 };
-        (0..4).map(|k| (self.label_at.0 + dir * self.label_room * k as f64 / 3.0, self.label_at.1)).collect()
-    }
-
-    /// Its clearance: the distance from its outline and label to the nearest obstacle.
-    fn clearance(&self, obstacles: &[Vec<(f64, f64)>]) -> f64 {
-        let mut samples = edge_samples(&self.corners);
-        samples.extend(self.label_line());
-        samples.iter().map(|&p| distance_to_lines(p, obstacles)).fold(f64::INFINITY, f64::min)
-    }
-}
-
-/// The plot area in pixels, `(x_left, x_right, y_top, y_bottom)`, and pixels per axis unit
-/// in x and y: where the reference triangles may go, and how steep they are.
-struct Frame {
-    area: (f64, f64, f64, f64),
-    scale: (f64, f64),
-}
-
-impl Frame {
-    /// The clearest place for a triangle of `slope` labelled `label`, away from `obstacles`
-    /// (screen polylines); `None` where the plot area has no room for it.
-    fn place_triangle(&self, slope: f64, label: &str, obstacles: &[Vec<(f64, f64)>]) -> Option<Triangle> {
-        let (left, right, top, bottom) = self.area;
-        let (pw, ph) = (right - left, bottom - top);
-        if !(slope.is_finite() && self.scale.0.is_finite() && self.scale.1.is_finite()) {
-            return None;
+            area.draw(&PathElement::new(line, style))?;
         }
-        // Screen size: width 20% of the plot, height at most 30% of it.
-        let mut w = 0.2 * pw;
-        let mut h = slope.abs() * self.scale.1 / self.scale.0 * w;
-        if h > 0.3 * ph {
-            w *= 0.3 * ph / h;
-            h = 0.3 * ph;
+        if let Some(kind) = d.marker {
+            draw_marker(area, kind, (20, y), d.colour)?;
         }
-        let label_room = 7.0 * label.chars().count() as f64 + 8.0;
-        let up = slope >= 0.0;
-        // Left edge range, leaving room for the label beside the vertical leg.
-        let (x_min, x_max) = if up {
-            (left + 10.0, right - 10.0 - w - label_room)
-        } else {
-            (left + 10.0 + label_room, right - 10.0 - w)
-        };
-        let (y_min, y_max) = (top + 10.0 + h, bottom - 10.0);
-        if x_max < x_min || y_max < y_min || !h.is_finite() {
-            return None;
-        }
-        let n = 12;
-        let mut best: Option<(Triangle, f64)> = None;
-        for i in 0..=n {
-            for j in (0..=n).rev() {
-                let x0 = x_min + (x_max - x_min) * i as f64 / n as f64;
-                let y0 = y_min + (y_max - y_min) * j as f64 / n as f64;
-                let tri = Triangle::at(x0, y0, w, h, up, label_room);
-                let score = tri.clearance(obstacles);
-                // Prefer the clearest spot; on ties, the lowest, left-most one.
-                if best.as_ref().is_none_or(|b| score > b.1 + 1e-9) {
-                    best = Some((tri, score));
-                }
-            }
-        }
-        best.map(|b| b.0)
+        let text = (FONT, TEXT_SIZE).into_font().color(&BLACK).pos(Pos::new(HPos::Left, VPos::Center));
+        area.draw(&Text::new(d.label, (43, y), text))?;
     }
+    Ok(())
 }
 
 impl Plot {
@@ -301,14 +206,35 @@ impl Plot {
         Self { title: title.into(), x_label: x_label.into(), y_label: y_label.into(), ..Self::default() }
     }
 
-    /// The visible points of each series, in axis units.
-    fn axis_points(&self) -> Vec<Vec<(f64, f64)>> {
-        self.series
+    /// What is drawn: the visible points of each series in axis units, with its colour,
+    /// whether it is dashed and has markers, and its label; then the reference slopes.
+    fn drawn(&self) -> Vec<Drawn<'_>> {
+        let mut drawn: Vec<Drawn> = self
+            .series
             .iter()
-            .map(|s| {
-                s.points.iter().filter_map(|&(x, y)| Some((to_axis(x, self.log_x)?, to_axis(y, self.log_y)?))).collect()
+            .enumerate()
+            .map(|(i, s)| Drawn {
+                label: &s.label,
+                points: s
+                    .points
+                    .iter()
+                    .filter_map(|&(x, y)| Some((to_axis(x, self.log_x)?, to_axis(y, self.log_y)?)))
+                    .collect(),
+                colour: COLOURS[i % COLOURS.len()],
+                dashed: s.dashed,
+                marker: Some(i),
             })
-            .collect()
+            .collect();
+        let anchor = drawn.first().and_then(|d| d.points.last().copied());
+        let x = axis_range(drawn.iter().flat_map(|d| d.points.iter().map(|p| p.0)), self.log_x);
+        if let (Some((xa, ya)), true) = (anchor, self.log_x && self.log_y) {
+            for (slope, label) in self.reference_slopes.iter().filter(|(s, _)| s.is_finite()) {
+                let line = [x.0, x.1].map(|xx| (xx, ya + slope * (xx - xa)));
+                let points = line.into_iter().filter(|p| p.1.abs() <= LIMIT.log10()).collect();
+                drawn.push(Drawn { label, points, colour: GREY, dashed: true, marker: None });
+            }
+        }
+        drawn
     }
 
     /// Renders the plot as a standalone SVG document.
@@ -319,37 +245,39 @@ impl Plot {
     }
 
     fn render(&self, svg: &mut String) -> Result<(), Box<dyn Error>> {
-        let data = self.axis_points();
-        let longest = self.series.iter().map(|s| s.label.chars().count()).max().unwrap_or(0);
+        let drawn = self.drawn();
+        let longest = drawn.iter().map(|d| d.label.chars().count()).max().unwrap_or(0);
         // About 6.5 px per character of 12 px sans-serif, and the line and marker before it.
         let legend_width = 60 + (6.5 * longest as f64) as u32;
-        let height = MIN_HEIGHT.max(60 + LEGEND_ROW * self.series.len() as u32);
+        let height = MIN_HEIGHT.max(60 + LEGEND_ROW * drawn.len() as u32);
         let root = SVGBackend::with_string(svg, (CHART_WIDTH + legend_width, height)).into_drawing_area();
         root.fill(&WHITE)?;
         let (chart_area, legend_area) = root.split_horizontally(CHART_WIDTH);
-        let x = axis_range(data.iter().flatten().map(|p| p.0), self.log_x);
-        let y = axis_range(data.iter().flatten().map(|p| p.1), self.log_y);
+        // The axes span the data; reference lines are clipped to them.
+        let data = &drawn[..self.series.len()];
+        let x = axis_range(data.iter().flat_map(|d| d.points.iter().map(|p| p.0)), self.log_x);
+        let y = axis_range(data.iter().flat_map(|d| d.points.iter().map(|p| p.1)), self.log_y);
         let (xr, yr) = (
             from_axis(x.0, self.log_x)..from_axis(x.1, self.log_x),
             from_axis(y.0, self.log_y)..from_axis(y.1, self.log_y),
         );
         match (self.log_x, self.log_y) {
-            (false, false) => self.chart(&chart_area, &data, (x, y), xr, yr)?,
-            (true, false) => self.chart(&chart_area, &data, (x, y), xr.log_scale(), yr)?,
-            (false, true) => self.chart(&chart_area, &data, (x, y), xr, yr.log_scale())?,
-            (true, true) => self.chart(&chart_area, &data, (x, y), xr.log_scale(), yr.log_scale())?,
+            (false, false) => self.chart(&chart_area, &drawn, (x, y), xr, yr)?,
+            (true, false) => self.chart(&chart_area, &drawn, (x, y), xr.log_scale(), yr)?,
+            (false, true) => self.chart(&chart_area, &drawn, (x, y), xr, yr.log_scale())?,
+            (true, true) => self.chart(&chart_area, &drawn, (x, y), xr.log_scale(), yr.log_scale())?,
         }
-        self.legend(&legend_area)?;
+        legend(&legend_area, &drawn)?;
         root.present()?;
         Ok(())
     }
 
-    /// Draws axes, data and reference triangles on `area`; `ranges` are the axes' ranges in
-    /// axis units, `x` and `y` the same as plotters coordinates.
+    /// Draws axes and lines on `area`; `ranges` are the axes' ranges in axis units, `x` and
+    /// `y` the same as plotters coordinates.
     fn chart<X, Y>(
         &self,
         area: &DrawingArea<SVGBackend, Shift>,
-        data: &[Vec<(f64, f64)>],
+        drawn: &[Drawn],
         ranges: ((f64, f64), (f64, f64)),
         x: X,
         y: Y,
@@ -367,21 +295,24 @@ impl Plot {
             .y_label_area_size(70)
             .build_cartesian_2d(x, y)?;
         self.axes(&mut chart, ranges)?;
-        self.lines(&mut chart, data)?;
-        let screen: Vec<Vec<(f64, f64)>> = data
-            .iter()
-            .map(|pts| {
-                let pixels = pts.iter().map(|p| chart.backend_coord(&self.to_data(p)));
-                pixels.map(|(x, y)| (x as f64, y as f64)).collect()
-            })
-            .collect();
-        let (px, py) = chart.plotting_area().get_pixel_range();
         let ((x0, x1), (y0, y1)) = ranges;
-        let frame = Frame {
-            area: (px.start as f64, px.end as f64, py.start as f64, py.end as f64),
-            scale: ((px.end - px.start) as f64 / (x1 - x0), (py.end - py.start) as f64 / (y1 - y0)),
-        };
-        self.reference_triangles(area, &frame, screen)
+        let inside = |p: &&(f64, f64)| (x0..=x1).contains(&p.0) && (y0..=y1).contains(&p.1);
+        for d in drawn {
+            let line = d.points.iter().filter(inside).map(|p| self.to_data(p));
+            let style = d.colour.stroke_width(if d.marker.is_some() { 2 } else { 1 });
+            if d.dashed {
+                chart.draw_series(DashedLineSeries::new(line, 7, 4, style))?;
+            } else {
+                chart.draw_series(LineSeries::new(line, style))?;
+            }
+            if let Some(kind) = d.marker {
+                let every = d.points.len().div_ceil(MAX_MARKERS).max(1);
+                for p in d.points.iter().step_by(every) {
+                    draw_marker(chart.plotting_area(), kind, self.to_data(p), d.colour)?;
+                }
+            }
+        }
+        Ok(())
     }
 
     /// A point in axis units back in data units.
@@ -416,66 +347,6 @@ impl Plot {
             mesh.y_max_light_lines(0);
         }
         mesh.draw()?;
-        Ok(())
-    }
-
-    /// The series' lines and markers; `data` in axis units.
-    fn lines<X: Axis, Y: Axis>(&self, chart: &mut Chart<X, Y>, data: &[Vec<(f64, f64)>]) -> Result<(), Box<dyn Error>> {
-        for (i, (s, pts)) in self.series.iter().zip(data).enumerate() {
-            let colour = COLOURS[i % COLOURS.len()];
-            let line = pts.iter().map(|p| self.to_data(p));
-            if s.dashed {
-                chart.draw_series(DashedLineSeries::new(line, 7, 4, colour.stroke_width(2)))?;
-            } else {
-                chart.draw_series(LineSeries::new(line, colour.stroke_width(2)))?;
-            }
-            let every = pts.len().div_ceil(MAX_MARKERS).max(1);
-            for p in pts.iter().step_by(every) {
-                draw_marker(chart.plotting_area(), i, self.to_data(p), colour)?;
-            }
-        }
-        Ok(())
-    }
-
-    /// Draws the reference triangles where they keep furthest from `obstacles`, the data lines
-    /// in screen pixels (and from each other), inside the plot area. `area` starts at the SVG's
-    /// origin, so its coordinates are screen pixels.
-    fn reference_triangles(
-        &self,
-        area: &DrawingArea<SVGBackend, Shift>,
-        frame: &Frame,
-        mut obstacles: Vec<Vec<(f64, f64)>>,
-    ) -> Result<(), Box<dyn Error>> {
-        let px = |(x, y): (f64, f64)| (x.round() as i32, y.round() as i32);
-        for (slope, label) in &self.reference_slopes {
-            let Some(tri) = frame.place_triangle(*slope, label, &obstacles) else { continue };
-            let mut outline: Vec<(f64, f64)> = tri.corners.to_vec();
-            outline.push(tri.corners[0]);
-            area.draw(&DashedPathElement::new(outline.iter().map(|&p| px(p)), 3, 2, GREY.stroke_width(1)))?;
-            let anchor = Pos::new(if tri.up { HPos::Left } else { HPos::Right }, VPos::Center);
-            let style = (FONT, TEXT_SIZE).into_font().color(&GREY).pos(anchor);
-            area.draw(&Text::new(label.as_str(), px(tri.label_at), style))?;
-            obstacles.push(outline);
-            obstacles.push(tri.label_line());
-        }
-        Ok(())
-    }
-
-    /// The legend: a row per series with its line, marker and label.
-    fn legend(&self, area: &DrawingArea<SVGBackend, Shift>) -> Result<(), Box<dyn Error>> {
-        for (i, s) in self.series.iter().enumerate() {
-            let colour = COLOURS[i % COLOURS.len()];
-            let y = 50 + (LEGEND_ROW as usize * i) as i32;
-            let line = [(5, y), (35, y)];
-            if s.dashed {
-                area.draw(&DashedPathElement::new(line, 7, 4, colour.stroke_width(2)))?;
-            } else {
-                area.draw(&PathElement::new(line, colour.stroke_width(2)))?;
-            }
-            draw_marker(area, i, (20, y), colour)?;
-            let style = (FONT, TEXT_SIZE).into_font().color(&BLACK).pos(Pos::new(HPos::Left, VPos::Center));
-            area.draw(&Text::new(s.label.as_str(), (43, y), style))?;
-        }
         Ok(())
     }
 
