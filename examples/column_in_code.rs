@@ -5,7 +5,7 @@
 
 use loam::grid::BasisKind;
 use loam::implicit::{Kinematics, QuasiStatic, QuasiStaticSettings};
-use loam::verification::{column_errors, column_model, Column};
+use loam_verification::{column_errors, column_model, Column};
 
 fn main() {
     let column = Column::V1C;

@@ -1,8 +1,8 @@
-//! Implicit Newmark dynamics against the closed form of the vibrating bar (VERIFICATION.md V2).
+//! Implicit Newmark dynamics against the closed form of the vibrating bar (docs/verification.md V2).
 
 use loam::grid::BasisKind;
 use loam::implicit::{Dynamic, DynamicSettings, Kinematics};
-use loam::verification::{centre_of_mass_velocity, period_from_crossings, zero_crossings, VibratingBar};
+use loam_verification::{centre_of_mass_velocity, period_from_crossings, zero_crossings, VibratingBar};
 
 struct BarRun {
     period: f64,

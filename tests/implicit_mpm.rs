@@ -4,7 +4,7 @@
 
 use loam::grid::BasisKind;
 use loam::implicit::{Kinematics, QuasiStatic, QuasiStaticSettings};
-use loam::verification::{column_errors, column_model, Column};
+use loam_verification::{column_errors, column_model, Column};
 
 fn run_column(cells: usize, steps: usize, basis: BasisKind, kin: Kinematics) -> QuasiStatic<2> {
     let c = Column::V1C;
@@ -149,7 +149,7 @@ fn an_unrecoverable_step_is_reported_not_accepted() {
 /// and the top settlement matches the layered closed form to 0.1 % (measured 7.3e-4).
 #[test]
 fn a_million_fold_stiffness_contrast_converges() {
-    use loam::verification::LayeredColumn;
+    use loam_verification::LayeredColumn;
     let layered = LayeredColumn { column: Column::V1A, contrast: 1e6 };
     let mut qs = QuasiStatic::new(
         layered.model(32, BasisKind::Gimp),

@@ -3,7 +3,7 @@
 //! exact for linear elements, independently of the MPM.
 
 use loam::implicit::{Dynamic, DynamicSettings, Kinematics, QuasiStatic, QuasiStaticSettings};
-use loam::verification::{column_errors, column_fem_model, Column, DynamicRecord, VibratingBar};
+use loam_verification::{column_errors, column_fem_model, Column, DynamicRecord, VibratingBar};
 
 fn settle(model: loam::implicit::Model<2>, load_steps: usize) -> loam::implicit::Model<2> {
     let mut qs = QuasiStatic::new(model, QuasiStaticSettings { load_steps, ..Default::default() });

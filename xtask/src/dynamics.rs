@@ -1,4 +1,4 @@
-//! Dynamic verification (VERIFICATION.md V2, V5 and the column under suddenly applied
+//! Dynamic verification (docs/verification.md V2, V5 and the column under suddenly applied
 //! gravity) and the drivers shared with `cargo xtask steps`: run an implicit or explicit
 //! analysis to its end, sampling the histories after every step and timing the steps
 //! alone (sampling costs the same per step for both schemes, so it is left out).
@@ -10,7 +10,7 @@ use loam::grid::BasisKind;
 use loam::implicit::{Dynamic, DynamicSettings, Kinematics};
 use loam::io::Analysis;
 use loam::model::Model;
-use loam::verification::{column_errors, column_model, disks_model, Column, DynamicRecord, VibratingBar};
+use loam_verification::{column_errors, column_model, disks_model, Column, DynamicRecord, VibratingBar};
 use std::fmt::Write as _;
 use std::time::{Duration, Instant};
 

@@ -7,7 +7,7 @@ use crate::{basis_name, Report, Row};
 use anyhow::Result;
 use loam::grid::BasisKind;
 use loam::implicit::{ConnectError, Kinematics, QuasiStatic, QuasiStaticSettings, StepError};
-use loam::verification::{
+use loam_verification::{
     column_errors, column_model, condition_number, softening_specimen, translated_block, Column, LayeredColumn,
 };
 use std::fmt::Write as _;

@@ -16,7 +16,7 @@ use clap::{Parser, Subcommand};
 use loam::grid::BasisKind;
 use loam::implicit::{Kinematics, QuasiStatic, QuasiStaticSettings};
 use loam::io::output::{CsvCell, CsvWriter};
-use loam::verification::{column_errors, column_fem_model, column_model, Column};
+use loam_verification::{column_errors, column_fem_model, column_model, Column};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -278,7 +278,7 @@ fn verify(quick: bool, out: &Path) -> Result<()> {
     writeln!(md, "# loam verification report\n")?;
     writeln!(
         md,
-        "Mode: {}. Columns of VERIFICATION.md V1, 2x2(x2) points per cell, ν = 0, rollers on sides and base.",
+        "Mode: {}. Columns of docs/verification.md V1, 2x2(x2) points per cell, ν = 0, rollers on sides and base.",
         if quick { "quick (CI subset)" } else { "full" }
     )?;
     writeln!(md, "e_σ = Σ|σ_yy − σ_yy(Y)|V⁰ / (ΣV⁰ ρ₀gH₀); e_u = relative error of the highest point's displacement; rate = least-squares slope of ln e_σ against ln h over the finest three meshes.\n")?;

@@ -1,4 +1,4 @@
-//! V4 slopes (VERIFICATION.md V4): the undrained 45° slope by gravity increase against
+//! V4 slopes (docs/verification.md V4): the undrained 45° slope by gravity increase against
 //! Taylor's stability number, and the Griffiths & Lane (1999) frictional slope by strength
 //! reduction against their factor of safety 1.4.
 
@@ -11,7 +11,7 @@ use loam::implicit::{
     AntiLocking, Dynamic, DynamicSettings, Kinematics, QuasiStatic, QuasiStaticSettings, StrengthReduction,
 };
 use loam::model::Model;
-use loam::verification::{slope_model, slope_model_with, SlopeGeometry};
+use loam_verification::{slope_model, slope_model_with, SlopeGeometry};
 use std::fmt::Write as _;
 use std::sync::Arc;
 use std::time::Instant;

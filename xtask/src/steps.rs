@@ -18,7 +18,7 @@ use loam::explicit::{ExplicitSettings, TimeStep};
 use loam::grid::BasisKind;
 use loam::implicit::{Kinematics, QuasiStatic, QuasiStaticSettings};
 use loam::io::output::{CsvCell, CsvWriter};
-use loam::verification::{column_errors, column_fem_model, column_model, Column, VibratingBar};
+use loam_verification::{column_errors, column_fem_model, column_model, Column, VibratingBar};
 use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
