@@ -85,7 +85,7 @@ fn the_scene_can_force_the_linear_solver() {
 
 /// The column with the updated Lagrangian FEM reference (examples/column_fem.ron): the top
 /// Gauss point's settlement matches the Hencky closed form at its initial height within
-/// 0.1 % (the FEM displacement error on 32 elements is 2e-4 in tests/ul_fem.rs), and the
+/// 0.1 % (the FEM displacement error on 32 elements is 2e-4 in tests/it/ul_fem.rs), and the
 /// run log and point output are written as for the MPM.
 #[test]
 fn column_fem_scene_runs() {
