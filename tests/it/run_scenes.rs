@@ -97,7 +97,7 @@ fn column_fem_scene_runs() {
         analysis.step().unwrap();
     }
     let col = Column::V1C;
-    let e = column_errors(&analysis.model().points(), &col, 1, |y| col.hencky_displacement(y));
+    let e = column_errors(analysis.model().points(), &col, 1, |y| col.hencky_displacement(y));
     assert!(e.top_displacement < 1e-3, "top displacement error {}", e.top_displacement);
     let summary = run_scene(&scene, dir.path(), &mut |_, _| {}).unwrap();
     assert_eq!(summary.steps, 10);
