@@ -5,8 +5,8 @@
 //! every consumer measures the same thing the same way and no two copies can drift apart.
 //!
 //! The cases (described with their sources in `docs/verification.md`):
-//! - [`column`]: V1, the self-weight column (small and large deformation), and the layered
-//!   column of the stiffness-contrast hard case;
+//! - [`column`](mod@column): V1, the self-weight column (small and large deformation),
+//!   and the layered column of the stiffness-contrast hard case;
 //! - [`bar`]: V2, the axially vibrating bar;
 //! - [`footing`]: V3, the rigid strip footing against Prandtl;
 //! - [`slope`]: V4, slopes against Taylor's chart and Griffiths & Lane;
