@@ -12,7 +12,7 @@ use loam::constitutive::Elastic;
 use loam::grid::{BasisKind, Grid};
 use loam::implicit::{Kinematics, Model, PlaneConstraint, QuasiStatic, QuasiStaticSettings};
 use loam::points::{PointStore, Shape};
-use loam::verification::{column_model, Column};
+use loam_verification::{column_model, Column};
 use nalgebra::Vector2;
 use std::hint::black_box;
 use std::sync::Arc;

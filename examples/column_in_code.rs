@@ -5,7 +5,7 @@
 
 use loam::grid::BasisKind;
 use loam::implicit::{Kinematics, QuasiStatic, QuasiStaticSettings};
-use loam::verification::{column_errors, column_model, Column};
+use loam_verification::{column_errors, column_model, Column};
 
 fn main() {
     let column = Column::V1C;
@@ -22,7 +22,7 @@ fn main() {
             );
         }
     }
-    let e = column_errors(&analysis.model().points(), &column, 1, |y| column.hencky_displacement(y));
+    let e = column_errors(analysis.model().points(), &column, 1, |y| column.hencky_displacement(y));
     println!(
         "top settlement {:.4} m (closed form {:.4} m at the top point), stress error e_sigma = {:.2e}",
         e.top_displacement_value,

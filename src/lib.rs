@@ -10,7 +10,9 @@
 //! - [`explicit`]: explicit MPM (USF, USL, MUSL) for comparison;
 //! - [`io`]: scenes, output writers.
 //!
-//! [`verification`] holds the closed-form references of the verification problems.
+//! The verification problems (closed forms, fixtures, norms, bounds) are not part of the
+//! facade: they live in the unpublished `loam-verification` crate, which the tests, the
+//! benches, the examples and `cargo xtask verify` use.
 
 pub use loam_constitutive as constitutive;
 pub use loam_explicit as explicit;
@@ -20,5 +22,3 @@ pub use loam_io as io;
 pub use loam_model as model;
 pub use loam_points as points;
 pub use loam_solve as solve;
-
-pub mod verification;

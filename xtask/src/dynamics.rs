@@ -1,4 +1,4 @@
-//! Dynamic verification (VERIFICATION.md V2, V5 and the column under suddenly applied
+//! Dynamic verification (docs/verification.md V2, V5 and the column under suddenly applied
 //! gravity) and the drivers shared with `cargo xtask steps`: run an implicit or explicit
 //! analysis to its end, sampling the histories after every step and timing the steps
 //! alone (sampling costs the same per step for both schemes, so it is left out).
@@ -10,7 +10,10 @@ use loam::grid::BasisKind;
 use loam::implicit::{Dynamic, DynamicSettings, Kinematics};
 use loam::io::Analysis;
 use loam::model::Model;
-use loam::verification::{column_errors, column_model, disks_model, Column, DynamicRecord, VibratingBar};
+use loam_verification::bar::bounds as bar_bounds;
+use loam_verification::column::bounds::{SUDDEN_GRAVITY_AMPLIFICATION, SUDDEN_GRAVITY_E_SIGMA};
+use loam_verification::disks::bounds as disk_bounds;
+use loam_verification::{column_errors, column_model, disks_model, Column, DynamicRecord, VibratingBar};
 use std::fmt::Write as _;
 use std::time::{Duration, Instant};
 
@@ -119,8 +122,13 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
             "| implicit trapezoidal | {dt} | {} | {:.5} | {reference:.5} | {err:+.2e} | {:.2e} | {:.2e} | {} | {:.3} |",
             run.steps, e.period, e.vcm_error, e.energy_drift, run.max_iterations, run.wall_s
         )?;
-        report.rows.push(Row::upper(format!("V2 implicit dt={dt}"), "period_error_vs_trapezoidal", err.abs(), 5e-3));
-        let drift_bound = if dt == 0.5 { Some((1e-2, true)) } else { None };
+        report.rows.push(Row::checked(
+            format!("V2 implicit dt={dt}"),
+            "period_error_vs_trapezoidal",
+            err.abs(),
+            bar_bounds::IMPLICIT_PERIOD_ERROR,
+        ));
+        let drift_bound = (dt == bar_bounds::ENERGY_DRIFT_TIME_STEP).then_some(bar_bounds::IMPLICIT_ENERGY_DRIFT);
         report.rows.push(Row {
             case: format!("V2 implicit dt={dt}"),
             quantity: "energy_drift".into(),
@@ -140,11 +148,11 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
             "| UL-FEM trapezoidal | {dt} | {} | {:.5} | {reference:.5} ᶠ | {err:+.2e} | {:.2e} | {:.2e} | {} | {:.3} |",
             run.steps, e.period, e.vcm_error, e.energy_drift, run.max_iterations, run.wall_s
         )?;
-        report.rows.push(Row::upper(
+        report.rows.push(Row::checked(
             format!("V2 UL-FEM dt={dt}"),
             "period_error_vs_discrete_trapezoidal",
             err.abs(),
-            5e-3,
+            bar_bounds::FEM_PERIOD_ERROR,
         ));
         report.rows.push(Row::info(format!("V2 UL-FEM dt={dt}"), "energy_drift", e.energy_drift));
         report.rows.push(Row::info(format!("V2 UL-FEM dt={dt}"), "wall_time_s", run.wall_s));
@@ -167,9 +175,14 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
         case: "V2 explicit 0.9 dt_c".into(),
         quantity: "stable (1 = ran to the end)".into(),
         value: run.failure.is_none() as u8 as f64,
-        bound: Some((1.0, false)),
+        bound: Some(bar_bounds::EXPLICIT_STABLE),
     });
-    report.rows.push(Row::upper("V2 explicit 0.9 dt_c", "period_error", err.abs(), 1e-2));
+    report.rows.push(Row::checked(
+        "V2 explicit 0.9 dt_c",
+        "period_error",
+        err.abs(),
+        bar_bounds::EXPLICIT_PERIOD_ERROR,
+    ));
     report.rows.push(Row::info("V2 explicit 0.9 dt_c", "energy_drift", e.energy_drift));
     report.rows.push(Row::info("V2 explicit 0.9 dt_c", "wall_time_s", run.wall_s));
     // MUSL with 2 points per cell is stable somewhat past h/c (its grid–point–grid transfer
@@ -191,7 +204,7 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
         case: "V2 explicit 2 dt_c".into(),
         quantity: "blow-up detected (1 = yes)".into(),
         value: detected as u8 as f64,
-        bound: Some((1.0, false)),
+        bound: Some(bar_bounds::EXPLICIT_BLOW_UP_DETECTED),
     });
 
     // V5: colliding disks.
@@ -266,12 +279,10 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
             case: format!("V5 {name}"),
             quantity: "ran to t=3 (1 = yes)".into(),
             value: run.failure.is_none() as u8 as f64,
-            bound: Some((1.0, false)),
+            bound: Some(disk_bounds::RAN_TO_END),
         });
-        report.rows.push(Row::upper(format!("V5 {name}"), "energy_loss_at_t3", loss, 0.05));
-        // "Never grows": no rise above E₀ beyond 1e-3 E₀ (round-off and the Newton
-        // tolerance of the stored energy are far below it).
-        report.rows.push(Row::upper(format!("V5 {name}"), "max_energy_growth", growth, 1e-3));
+        report.rows.push(Row::checked(format!("V5 {name}"), "energy_loss_at_t3", loss, disk_bounds::ENERGY_LOSS));
+        report.rows.push(Row::checked(format!("V5 {name}"), "max_energy_growth", growth, disk_bounds::ENERGY_GROWTH));
         plot.series.push(
             crate::svg::Series::new(
                 format!("{name}: kinetic"),
@@ -322,13 +333,18 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
     let md = &mut report.md;
     writeln!(md, "## V1a column under suddenly applied gravity (implicit trapezoidal)\n\n{cells} cells, GIMP, Δt = T₁/40 = {dt:.4} s (T₁ = 4H/c = {period:.4} s), 4 periods, {} steps, {:.3} s. A load applied at once drives an undamped oscillation about the static state: the time-averaged stress is compared with the static closed form (V1 norm e_σ), the largest settlement of the top point with twice the static one (dynamic amplification factor 2 of a step load).\n", run.steps, run.wall_s)?;
     writeln!(md, "| e_σ of the time-averaged stress | mean top settlement / static | max top settlement / static |\n|---:|---:|---:|\n| {:.3e} | {mean_ratio:.4} | {amplification:.4} |\n", errors.stress)?;
-    report.rows.push(Row::upper("V1a sudden gravity", "e_sigma_time_averaged", errors.stress, 2e-2));
+    report.rows.push(Row::checked(
+        "V1a sudden gravity",
+        "e_sigma_time_averaged",
+        errors.stress,
+        SUDDEN_GRAVITY_E_SIGMA,
+    ));
     report.rows.push(Row::info("V1a sudden gravity", "mean_settlement_ratio", mean_ratio));
     report.rows.push(Row {
         case: "V1a sudden gravity".into(),
         quantity: "|amplification - 2|".into(),
         value: (amplification - 2.0).abs(),
-        bound: Some((0.05, true)),
+        bound: Some(SUDDEN_GRAVITY_AMPLIFICATION),
     });
     if let Some(f) = run.failure {
         anyhow::bail!("the column under sudden gravity stopped: {f}");

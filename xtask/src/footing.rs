@@ -1,4 +1,4 @@
-//! V3 strip footing (VERIFICATION.md V3): q_u, read at a settlement of 0.1 B, against
+//! V3 strip footing (docs/verification.md V3): q_u, read at a settlement of 0.1 B, against
 //! Prandtl's (2 + π) c_u for von Mises and c N_c for associated Mohr–Coulomb, with the mesh
 //! sequence, plain, with B-bar and with the assumed strain (β = 0.1). The 5 % bound is
 //! checked for every law with the assumed strain on the finest mesh (16 cells per b, full
@@ -10,7 +10,8 @@ use anyhow::Result;
 use loam::constitutive::{ConstitutiveLaw, Elastic, MohrCoulomb, VonMises};
 use loam::implicit::{AntiLocking, QuasiStatic, QuasiStaticSettings};
 use loam::io::output::{CsvCell, CsvWriter};
-use loam::verification::{footing_model, prandtl_nc};
+use loam_verification::footing::bounds::{LARGEST_DROP, NEWTON_CORRECTIONS, Q_U, RUNS_STOPPED};
+use loam_verification::{footing_model, prandtl_nc};
 use std::fmt::Write as _;
 use std::sync::Arc;
 use std::time::Instant;
@@ -20,7 +21,7 @@ const C: f64 = 10.0;
 const YOUNG: f64 = 1e5;
 const POISSON: f64 = 0.3;
 /// Settlement (in b) and load steps: 0.001 b per step to 0.2 b, the 0.1 B (B = 2b) at which
-/// VERIFICATION.md V3 reads q_u. The limit load is reached between 0.005 b (undrained) and
+/// docs/verification.md V3 reads q_u. The limit load is reached between 0.005 b (undrained) and
 /// ~0.03 b (φ = 30°); small steps keep the first plastic steps from overshooting it.
 const SETTLEMENT: f64 = 0.2;
 const LOAD_STEPS: usize = 200;
@@ -123,7 +124,7 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
     let plain_meshes: &[usize] = &[2, 4];
     let assumed = AntiLocking::AssumedStrain { stabilization: STABILIZATION };
     let md = &mut report.md;
-    writeln!(md, "## V3 strip footing\n\nRigid rough footing, half-width b = 1 (B = 2b), pushed {SETTLEMENT} b = 0.1 B in {LOAD_STEPS} load steps (extrapolated start) into weightless soil; half model 10 b × 5 b, linear basis, 2×2 points per cell, small strain, geometrically linear (points held at their places, Prandtl's small-deformation setting), E = {YOUNG:e}, ν = {POISSON} (and 0.49 for the locking case), c = {C}. q = footing reaction / b; q_u = q at the settlement of 0.1 B (VERIFICATION.md V3), q(0.04 b) is shown beside it; reference (2 + π) c_u (von Mises, c_u = σ_y/√3) and c N_c (Mohr–Coulomb, associated). Plain: every point's own strain (locks); B-bar: cell-averaged dilatation; assumed strain: the cell's average strain plus β = {STABILIZATION} times each point's deviatoric deviation (docs/theory.md §13). The bound |q_u/q_ref − 1| ≤ 5 % is checked for every law with the assumed strain on the finest mesh of the full sweep ({} cells per b); every curve is checked to rise to its plateau without a drop. Curves: footing_curves.csv, footing_curves.svg.\n", assumed_meshes.last().unwrap())?;
+    writeln!(md, "## V3 strip footing\n\nRigid rough footing, half-width b = 1 (B = 2b), pushed {SETTLEMENT} b = 0.1 B in {LOAD_STEPS} load steps (extrapolated start) into weightless soil; half model 10 b × 5 b, linear basis, 2×2 points per cell, small strain, geometrically linear (points held at their places, Prandtl's small-deformation setting), E = {YOUNG:e}, ν = {POISSON} (and 0.49 for the locking case), c = {C}. q = footing reaction / b; q_u = q at the settlement of 0.1 B (docs/verification.md V3), q(0.04 b) is shown beside it; reference (2 + π) c_u (von Mises, c_u = σ_y/√3) and c N_c (Mohr–Coulomb, associated). Plain: every point's own strain (locks); B-bar: cell-averaged dilatation; assumed strain: the cell's average strain plus β = {STABILIZATION} times each point's deviatoric deviation (docs/theory.md §13). The bound |q_u/q_ref − 1| ≤ 5 % is checked for every law with the assumed strain on the finest mesh of the full sweep ({} cells per b); every curve is checked to rise to its plateau without a drop. Curves: footing_curves.csv, footing_curves.svg.\n", assumed_meshes.last().unwrap())?;
     writeln!(md, "| law | treatment | cells per b | q(0.04 b)/c | q_u/c | reference | q_u/q_ref − 1 | largest drop / q_ref | max Newton its per sub-step | max corrections to 1e-9 | cut-backs | wall [s] |\n|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")?;
     let elastic = Elastic::new(YOUNG, POISSON)?;
     // (name, legend label, law, q_ref / c)
@@ -217,41 +218,29 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
             // checked with the assumed strain on the full sweep's finest mesh.
             if let Some((cells, ratio, its, to_tolerance)) = finest.filter(|_| anti_locking == assumed) {
                 if !quick {
-                    report.rows.push(Row::upper(
+                    report.rows.push(Row::checked(
                         format!("V3 {name}, assumed strain, {cells}/b"),
                         "abs_qu_over_q_ref_minus_1",
                         ratio.abs(),
-                        0.05,
+                        Q_U,
                     ));
                 }
                 let order = order
                     .map_or(String::new(), |p| format!(" (observed order of q_u over the last three meshes: {p:.2})"));
                 verdicts.push(format!(
-                    "- {name}: {ratio:+.4} at {cells} cells per b{order} — 5 % bound {}; ≤ 8 Newton iterations per step to 1e-9 {} ({to_tolerance} corrections to 1e-9, {its} to convergence)",
-                    if ratio.abs() <= 0.05 { "met" } else { "NOT met" },
-                    if to_tolerance <= 8 { "met" } else { "NOT met" }
+                    "- {name}: {ratio:+.4} at {cells} cells per b{order} — {:.0} % bound {}; ≤ {} Newton iterations per step to 1e-9 {} ({to_tolerance} corrections to 1e-9, {its} to convergence)",
+                    100.0 * Q_U.value,
+                    if Q_U.holds(ratio.abs()) { "met" } else { "NOT met" },
+                    NEWTON_CORRECTIONS.value,
+                    if NEWTON_CORRECTIONS.holds(to_tolerance as f64) { "met" } else { "NOT met" }
                 ));
             }
         }
-        // Monotone to the plateau: the footing pressure of a perfectly plastic solid under a
-        // growing settlement never falls. Newton stops at a relative residual of 1e-9 of the
-        // force scale, so a converged curve can wobble by about that much of q_ref; 1e-6 q_ref
-        // leaves three decades for it and still catches any real fall (an unloading or a lost
-        // equilibrium moves q by percent).
-        report.rows.push(Row::upper(
-            format!("V3 {name}, every treatment and mesh"),
-            "largest_drop_over_q_ref",
-            law_drop,
-            1e-6,
-        ));
-        // A run that stops short has no q_u and hides the rest of its curve from the check
-        // above: every run must reach 0.1 B.
-        report.rows.push(Row::upper(
-            format!("V3 {name}, every treatment and mesh"),
-            "runs_stopped_before_0.1B",
-            stopped as f64,
-            0.0,
-        ));
+        // Monotone to the plateau, and every run reaching 0.1 B (a run that stops short has
+        // no q_u and hides the rest of its curve from the first check).
+        let every = format!("V3 {name}, every treatment and mesh");
+        report.rows.push(Row::checked(&every, "largest_drop_over_q_ref", law_drop, LARGEST_DROP));
+        report.rows.push(Row::checked(&every, "runs_stopped_before_0.1B", stopped as f64, RUNS_STOPPED));
     }
     plot.series.push(crate::svg::Series::new("Prandtl", vec![(0.0, 1.0), (SETTLEMENT / 2.0, 1.0)]).dashed());
     plot.write(&report.out.join("footing_curves.svg"))?;

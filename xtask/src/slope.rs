@@ -1,4 +1,4 @@
-//! V4 slopes (VERIFICATION.md V4): the undrained 45° slope by gravity increase against
+//! V4 slopes (docs/verification.md V4): the undrained 45° slope by gravity increase against
 //! Taylor's stability number, and the Griffiths & Lane (1999) frictional slope by strength
 //! reduction against their factor of safety 1.4.
 
@@ -11,7 +11,9 @@ use loam::implicit::{
     AntiLocking, Dynamic, DynamicSettings, Kinematics, QuasiStatic, QuasiStaticSettings, StrengthReduction,
 };
 use loam::model::Model;
-use loam::verification::{slope_model, slope_model_with, SlopeGeometry};
+use loam_verification::slope::bounds::{GRIFFITHS_LANE, RUNOUT_PROFILES, TAYLOR as TAYLOR_BOUND};
+use loam_verification::slope::{GRIFFITHS_LANE_FACTOR_OF_SAFETY as GL_FOS, TAYLOR_STABILITY as TAYLOR};
+use loam_verification::{slope_model, slope_model_with, SlopeGeometry};
 use std::fmt::Write as _;
 use std::sync::Arc;
 use std::time::Instant;
@@ -24,10 +26,6 @@ const POISSON: f64 = 0.3;
 /// by up to 8 halvings where Newton fails, so collapse is located to 0.1/256.
 const N_MAX: f64 = 8.0;
 const GRAVITY_STEPS: usize = 80;
-/// Taylor (1937): N_s = c_u/(γH) ≈ 0.18 for a 45° slope on a deep foundation, 1/N_s ≈ 5.5.
-const TAYLOR: f64 = 5.5;
-/// Griffiths & Lane (1999), example 1: c/(γH) = 0.05, φ = 20°, ψ = 0, F ≈ 1.4.
-const GL_FOS: f64 = 1.4;
 
 struct Collapse {
     n: f64,
@@ -113,11 +111,11 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
     )?;
     stops.push(format!("- {cells} cells per H, plain: {}", plain.stop));
     writeln!(md, "\nWhy each run stopped (the collapse criterion is a load step that Newton cannot carry after all its cut-backs; at the limit load the tangent of a perfectly plastic body turns singular, which the Cholesky factorisation reports):\n\n{}\n", stops.join("\n"))?;
-    report.rows.push(Row::upper(
+    report.rows.push(Row::checked(
         "V4a undrained slope (finest)",
         "abs_gammaH_over_cu_over_5.5_minus_1",
         finest.abs(),
-        0.10,
+        TAYLOR_BOUND,
     ));
 
     writeln!(md, "## V4b Griffiths & Lane slope: strength reduction\n\n2:1 slope (26.57°), H = 10, foundation layer H deep, 1.2 H before the toe, 2 H behind the crest; Mohr–Coulomb c = 10, φ = 20°, ψ = 0 (non-associated: sparse LU), γ = 20 (c/(γH) = 0.05), E = {YOUNG:e}, ν = {POISSON}; linear basis, B-bar. Each trial divides c and tan φ by F and applies gravity in 10 load steps (up to 4 halvings); F is bisected between a trial that holds and one that fails, to 0.005. Reference: F ≈ {GL_FOS} (Griffiths & Lane 1999; Bishop's method gives 1.38). Bound: within 5 % on the finest mesh.\n")?;
@@ -156,7 +154,12 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
         finest = rel;
     }
     writeln!(md)?;
-    report.rows.push(Row::upper("V4b Griffiths-Lane slope (finest)", "abs_fos_over_1.4_minus_1", finest.abs(), 0.05));
+    report.rows.push(Row::checked(
+        "V4b Griffiths-Lane slope (finest)",
+        "abs_fos_over_1.4_minus_1",
+        finest.abs(),
+        GRIFFITHS_LANE,
+    ));
     runout(quick, report)
 }
 
@@ -244,6 +247,11 @@ fn runout(quick: bool, report: &mut Report) -> Result<()> {
         report.rows.push(Row::info(format!("V4c run-out implicit dt={dt} {cells}/H"), "wall_time_s", wall));
     }
     writeln!(md)?;
-    report.rows.push(Row::upper(format!("V4c run-out {cells}/H"), "max_profile_difference_cells", worst, 2.0));
+    report.rows.push(Row::checked(
+        format!("V4c run-out {cells}/H"),
+        "max_profile_difference_cells",
+        worst,
+        RUNOUT_PROFILES,
+    ));
     Ok(())
 }

@@ -18,7 +18,7 @@ use loam::explicit::{ExplicitSettings, TimeStep};
 use loam::grid::BasisKind;
 use loam::implicit::{Kinematics, QuasiStatic, QuasiStaticSettings};
 use loam::io::output::{CsvCell, CsvWriter};
-use loam::verification::{column_errors, column_fem_model, column_model, Column, VibratingBar};
+use loam_verification::{column_errors, column_fem_model, column_model, Column, VibratingBar};
 use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
@@ -226,7 +226,7 @@ pub fn run(quick: bool, out: &Path) -> Result<()> {
                 }
             }
             let wall = t.elapsed().as_secs_f64();
-            let e = column_errors(&qs.model().points(), &col, 1, reference).stress;
+            let e = column_errors(qs.model().points(), &col, 1, reference).stress;
             match failed {
                 None => {
                     writeln!(md, "| {scheme} | {steps} | {steps} | {e:.3e} | {wall:.4} |")?;
@@ -262,11 +262,11 @@ pub fn run(quick: bool, out: &Path) -> Result<()> {
             wall += last_wall.elapsed().as_secs_f64();
             k += 1;
             if k.is_multiple_of(20) {
-                curve.push((wall, column_errors(&m.points(), &col, 1, reference).stress));
+                curve.push((wall, column_errors(m.points(), &col, 1, reference).stress));
             }
             last_wall = Instant::now();
         });
-        let e_final = column_errors(&last.points(), &col, 1, reference).stress;
+        let e_final = column_errors(last.points(), &col, 1, reference).stress;
         let outcome = run.failure.clone().unwrap_or_else(|| "ok".into());
         writeln!(md, "| explicit | α = {damping} | {} | {e_final:.3e} | {:.4} |", run.steps, run.wall_s)?;
         csv.row_mixed(&[

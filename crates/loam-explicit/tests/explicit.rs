@@ -1,4 +1,4 @@
-//! Explicit MPM against exact motions and the verification problems of VERIFICATION.md
+//! Explicit MPM against exact motions and the verification problems of docs/verification.md
 //! (V1a with local damping, V2, V5). Figures are printed (`--nocapture`) and bounded.
 
 mod common;
@@ -50,7 +50,7 @@ struct BarFigures {
     steps: usize,
     /// (T_measured − T) / T.
     period_error: f64,
-    /// max |v_cm − v_cm,exact(t_{n+1})| / (2v₀/π), the VERIFICATION.md V2 norm.
+    /// max |v_cm − v_cm,exact(t_{n+1})| / (2v₀/π), the V2 norm (docs/verification.md).
     vcm_error: f64,
     /// The same against the exact value at t_{n+1} ∓ Δt/2, where the velocities of the
     /// leapfrog scheme belong (− for MUSL and USL, + for USF; see `LeapfrogEnergy`).
@@ -70,8 +70,8 @@ fn vibrating_bar_figures(basis: BasisKind, scheme: UpdateScheme, safety: f64) ->
     let model = vibrating_bar(basis);
     let mass = model.points().total_mass();
     let e0 = total_energy(&model);
-    let scale = 2.0 * bar::V0 / std::f64::consts::PI;
-    let duration = 3.0 * bar::period();
+    let scale = 2.0 * BAR.amplitude / std::f64::consts::PI;
+    let duration = 3.0 * BAR.period();
     let settings = ExplicitSettings { scheme, time_step: TimeStep::Cfl { safety }, ..settings(duration) };
     let mut ex = Explicit::new(model, settings).unwrap();
     ex.check().unwrap();
@@ -83,8 +83,9 @@ fn vibrating_bar_figures(basis: BasisKind, scheme: UpdateScheme, safety: f64) ->
     let mut leapfrog = LeapfrogEnergy::new(scheme, ex.model());
     run_to_end(&mut ex, |r, m| {
         let vcm = m.points().momentum().x / mass;
-        vcm_error = vcm_error.max((vcm - bar::v_cm(r.time)).abs() / scale);
-        vcm_error_half_step = vcm_error_half_step.max((vcm - bar::v_cm(r.time + half * r.dt)).abs() / scale);
+        vcm_error = vcm_error.max((vcm - BAR.centre_of_mass_velocity(r.time)).abs() / scale);
+        vcm_error_half_step =
+            vcm_error_half_step.max((vcm - BAR.centre_of_mass_velocity(r.time + half * r.dt)).abs() / scale);
         if previous.1 * vcm < 0.0 || (vcm == 0.0 && previous.1 != 0.0) {
             crossings.push(previous.0 + (r.time - previous.0) * previous.1 / (previous.1 - vcm));
         }
@@ -96,7 +97,7 @@ fn vibrating_bar_figures(basis: BasisKind, scheme: UpdateScheme, safety: f64) ->
     let period = 2.0 * (crossings[crossings.len() - 1] - crossings[0]) / (crossings.len() - 1) as f64;
     BarFigures {
         steps: ex.steps_done(),
-        period_error: (period - bar::period()) / bar::period(),
+        period_error: (period - BAR.period()) / BAR.period(),
         vcm_error,
         vcm_error_half_step,
         energy_drift: (total_energy(ex.model()) - e0).abs() / e0,
@@ -110,9 +111,12 @@ fn vibrating_bar_figures(basis: BasisKind, scheme: UpdateScheme, safety: f64) ->
 fn check_vibrating_bar(basis: BasisKind) {
     let f = vibrating_bar_figures(basis, UpdateScheme::Musl, 0.9);
     println!("V2 {basis:?} MUSL safety 0.9, {} steps: {f:#?}", f.steps);
-    // E(0) = ρ v₀² L / 4 per unit thickness (VERIFICATION.md V2) up to the midpoint
+    // E(0) = ρ v₀² L / 4 per unit thickness (docs/verification.md V2) up to the midpoint
     // sampling of sin² by 2 points per cell: O((h/L)²) ≈ 1e-4 relative.
-    assert!((f.initial_energy - bar::RHO * bar::V0 * bar::V0 * bar::L / 4.0).abs() < 1e-3 * f.initial_energy);
+    assert!(
+        (f.initial_energy - BAR.density * BAR.amplitude * BAR.amplitude * BAR.length / 4.0).abs()
+            < 1e-3 * f.initial_energy
+    );
     // The brief's bound: period within 1 % of T = 4L/c (measured 4e-4 linear, 6e-4 GIMP).
     assert!(f.period_error.abs() < 0.01, "period error {:e}", f.period_error);
     // v_cm against t_{n+1}: leapfrog velocities lag by Δt/2, an error of ω₁Δt/2 ≈ 2.8 %
@@ -167,7 +171,7 @@ fn usl_is_unstable_above_three_quarters_of_the_cfl_step() {
             scheme: UpdateScheme::Usl,
             // Allowed above the critical step: as USL's velocities grow, the velocity term of
             // the critical step would otherwise refuse the step first.
-            time_step: TimeStep::Fixed { dt: r * 1.0 / bar::c(), allow_above_critical: true },
+            time_step: TimeStep::Fixed { dt: r * 1.0 / BAR.wave_speed(), allow_above_critical: true },
             ..settings(duration)
         };
         let mut ex = Explicit::new(vibrating_bar(BasisKind::Linear), settings).unwrap();
@@ -267,7 +271,7 @@ fn damped_column(basis: BasisKind, damping: f64) -> (f64, f64) {
     let mut peak: f64 = 0.0;
     run_to_end(&mut ex, |_, m| peak = peak.max(m.points().kinetic_energy()));
     let m = ex.model();
-    let (e, ratio) = (column_stress_error(&m.points()), m.points().kinetic_energy() / peak);
+    let (e, ratio) = (column_stress_error(m.points()), m.points().kinetic_energy() / peak);
     println!(
         "V1a column, 10 cells, {basis:?}, damping {damping}: {} steps, e_sigma = {e:.3e}, KE end / peak = {ratio:.1e}",
         ex.steps_done()

@@ -275,7 +275,8 @@ impl<const D: usize> Engine<D> {
         self.conn_current = !moves;
     }
 
-    /// Per constraint, Σ (f_int − f_ext) over its nodes on its fixed components.
+    /// Per constraint, Σ (f_int − f_ext) over its nodes on its fixed components, from the
+    /// reactions of the converged residual (one per dof).
     fn constraint_reactions(&self) -> Vec<[f64; 3]> {
         let active = self.conn.active_nodes();
         self.model
@@ -285,7 +286,7 @@ impl<const D: usize> Engine<D> {
                 let mut sum = [0.0; 3];
                 for a in self.model.constraint_nodes(active, c) {
                     for i in (0..D).filter(|&i| c.fixed[i]) {
-                        sum[i] += self.reaction.get(a * D + i).copied().unwrap_or(0.0);
+                        sum[i] += self.reaction[a * D + i];
                     }
                 }
                 sum

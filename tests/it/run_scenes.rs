@@ -85,11 +85,11 @@ fn the_scene_can_force_the_linear_solver() {
 
 /// The column with the updated Lagrangian FEM reference (examples/column_fem.ron): the top
 /// Gauss point's settlement matches the Hencky closed form at its initial height within
-/// 0.1 % (the FEM displacement error on 32 elements is 2e-4 in tests/ul_fem.rs), and the
+/// 0.1 % (the FEM displacement error on 32 elements is 2e-4 in tests/it/ul_fem.rs), and the
 /// run log and point output are written as for the MPM.
 #[test]
 fn column_fem_scene_runs() {
-    use loam::verification::{column_errors, Column};
+    use loam_verification::{column_errors, Column};
     let dir = tempfile::tempdir().unwrap();
     let scene = LoadedScene::read(Path::new("examples/column_fem.ron")).unwrap();
     let mut analysis = scene.build::<2>().unwrap();
@@ -97,7 +97,7 @@ fn column_fem_scene_runs() {
         analysis.step().unwrap();
     }
     let col = Column::V1C;
-    let e = column_errors(&analysis.model().points(), &col, 1, |y| col.hencky_displacement(y));
+    let e = column_errors(analysis.model().points(), &col, 1, |y| col.hencky_displacement(y));
     assert!(e.top_displacement < 1e-3, "top displacement error {}", e.top_displacement);
     let summary = run_scene(&scene, dir.path(), &mut |_, _| {}).unwrap();
     assert_eq!(summary.steps, 10);
@@ -106,7 +106,7 @@ fn column_fem_scene_runs() {
 
 /// The footing examples are valid scenes, and the Mohr–Coulomb one writes its load–
 /// settlement curve: the prescribed settlement grows with the load factor to 0.2 b (0.1 B,
-/// where VERIFICATION.md V3 reads q_u), the reaction stays compressive (negative) and
+/// where docs/verification.md V3 reads q_u), the reaction stays compressive (negative) and
 /// finite, and the curve never falls. q_u is within 10 % of Prandtl's c N_c (N_c = 14.835
 /// at φ = 20°): the assumed strain's discretisation error on this 4-cells-per-b mesh is
 /// +8.4 % at 0.1 B (first order with the mesh; docs/verification.md V3), and the bound
@@ -127,7 +127,7 @@ fn footing_scene_writes_the_load_settlement_curve() {
     }
     // Monotone: q never falls by more than 1e-6 q_ref from one step to the next (the
     // Newton tolerance leaves ~1e-9 q_ref of noise; the bound of `cargo xtask verify`).
-    let q_ref = 10.0 * loam::verification::prandtl_nc(20.0);
+    let q_ref = 10.0 * loam_verification::prandtl_nc(20.0);
     for w in rows.windows(2) {
         assert!(w[0][r] - w[1][r] >= -1e-6 * q_ref, "q falls from {} to {}", -w[0][r], -w[1][r]);
     }

@@ -1,8 +1,8 @@
-//! Implicit Newmark dynamics against the closed form of the vibrating bar (VERIFICATION.md V2).
+//! Implicit Newmark dynamics against the closed form of the vibrating bar (docs/verification.md V2).
 
 use loam::grid::BasisKind;
 use loam::implicit::{Dynamic, DynamicSettings, Kinematics};
-use loam::verification::{centre_of_mass_velocity, period_from_crossings, zero_crossings, VibratingBar};
+use loam_verification::{centre_of_mass_velocity, period_from_crossings, zero_crossings, VibratingBar};
 
 struct BarRun {
     period: f64,
@@ -18,12 +18,12 @@ fn run_bar(dt: f64, settings: impl Fn(DynamicSettings) -> DynamicSettings, basis
     let mut dynamic = Dynamic::new(model, settings(DynamicSettings::trapezoidal(dt, t_end))).unwrap();
     let energy = |m: &loam::implicit::Model<2>| m.points().kinetic_energy() + m.stored_energy();
     let e0 = energy(dynamic.model());
-    let (mut times, mut vcm) = (vec![0.0], vec![centre_of_mass_velocity(&dynamic.model().points(), 0)]);
+    let (mut times, mut vcm) = (vec![0.0], vec![centre_of_mass_velocity(dynamic.model().points(), 0)]);
     let (mut vcm_error, mut max_iterations) = (0.0f64, 0);
     while !dynamic.is_finished() {
         let r = dynamic.step().unwrap();
         max_iterations = max_iterations.max(r.iterations);
-        let v = centre_of_mass_velocity(&dynamic.model().points(), 0);
+        let v = centre_of_mass_velocity(dynamic.model().points(), 0);
         times.push(r.time);
         vcm.push(v);
         vcm_error = vcm_error

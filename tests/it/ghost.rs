@@ -2,7 +2,7 @@
 
 use loam::grid::BasisKind;
 use loam::implicit::{QuasiStatic, QuasiStaticSettings};
-use loam::verification::{condition_number, translated_block};
+use loam_verification::{condition_number, translated_block};
 
 /// Condition number of the block's tangent and the Newton iterations of its load step.
 fn run(overlap: f64, ghost: Option<f64>) -> (f64, usize) {

@@ -5,7 +5,7 @@
 use loam::io::{LoadedScene, SceneError};
 use std::path::Path;
 
-const GOOD: &str = include_str!("../examples/column.ron");
+const GOOD: &str = include_str!("../../examples/column.ron");
 
 fn check(source: &str) -> Result<(), SceneError> {
     let scene = LoadedScene::parse(Path::new("bad.ron"), source.to_string())?;
@@ -146,8 +146,8 @@ fn unreadable_file_names_the_path() {
 
 // ------------------------------------------------------------------ dynamic scenes
 
-const BAR: &str = include_str!("../examples/vibrating_bar.ron");
-const DISKS: &str = include_str!("../examples/disks.ron");
+const BAR: &str = include_str!("../../examples/vibrating_bar.ron");
+const DISKS: &str = include_str!("../../examples/disks.ron");
 
 fn check_text(source: &str) -> Result<(), SceneError> {
     let scene = LoadedScene::parse(Path::new("dyn.ron"), source.to_string())?;

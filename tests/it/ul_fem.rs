@@ -3,7 +3,7 @@
 //! exact for linear elements, independently of the MPM.
 
 use loam::implicit::{Dynamic, DynamicSettings, Kinematics, QuasiStatic, QuasiStaticSettings};
-use loam::verification::{column_errors, column_fem_model, Column, DynamicRecord, VibratingBar};
+use loam_verification::{column_errors, column_fem_model, Column, DynamicRecord, VibratingBar};
 
 fn settle(model: loam::implicit::Model<2>, load_steps: usize) -> loam::implicit::Model<2> {
     let mut qs = QuasiStatic::new(model, QuasiStaticSettings { load_steps, ..Default::default() });
@@ -24,7 +24,7 @@ fn small_strain_column_is_nodally_exact() {
     for n in [4, 16] {
         let model = column_fem_model::<2>(&col, col.height / n as f64, n, 2, Kinematics::SmallStrain);
         let model = settle(model, 1);
-        let e = column_errors(&model.points(), &col, 1, |y| col.small_strain_displacement(y));
+        let e = column_errors(model.points(), &col, 1, |y| col.small_strain_displacement(y));
         let top_node = model.background().mesh().unwrap().positions().iter().map(|x| x[1]).fold(f64::MIN, f64::max);
         let expected_stress = 1.0 / (2.0 * 3f64.sqrt() * n as f64);
         println!(
@@ -49,7 +49,7 @@ fn finite_strain_column_converges_to_the_hencky_solution() {
     for n in [8, 16, 32] {
         let model = column_fem_model::<2>(&col, col.height / n as f64, n, 2, Kinematics::FiniteStrain);
         let model = settle(model, 10);
-        let e = column_errors(&model.points(), &col, 1, |y| col.hencky_displacement(y));
+        let e = column_errors(model.points(), &col, 1, |y| col.hencky_displacement(y));
         let sampling = 1.0 / (2.0 * 3f64.sqrt() * n as f64);
         println!(
             "n {n}: e_σ {:.4e} (sampling {sampling:.4e}), top displacement error {:.3e}",

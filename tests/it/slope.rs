@@ -2,7 +2,7 @@
 
 use loam::constitutive::{ConstitutiveLaw, Elastic, VonMises};
 use loam::implicit::{AntiLocking, QuasiStatic, QuasiStaticSettings, StrengthReduction, StrengthReductionError};
-use loam::verification::{slope_model, SlopeGeometry};
+use loam_verification::{slope_model, SlopeGeometry};
 use std::sync::Arc;
 
 fn clay() -> Arc<dyn ConstitutiveLaw> {

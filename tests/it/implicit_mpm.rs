@@ -4,7 +4,7 @@
 
 use loam::grid::BasisKind;
 use loam::implicit::{Kinematics, QuasiStatic, QuasiStaticSettings};
-use loam::verification::{column_errors, column_model, Column};
+use loam_verification::{column_errors, column_model, Column};
 
 fn run_column(cells: usize, steps: usize, basis: BasisKind, kin: Kinematics) -> QuasiStatic<2> {
     let c = Column::V1C;
@@ -26,7 +26,7 @@ fn run_column(cells: usize, steps: usize, basis: BasisKind, kin: Kinematics) -> 
 fn gimp_column_matches_the_closed_form() {
     let c = Column::V1C;
     let qs = run_column(32, 160, BasisKind::Gimp, Kinematics::FiniteStrain);
-    let e = column_errors(&qs.model().points(), &c, 1, |y| c.hencky_displacement(y));
+    let e = column_errors(qs.model().points(), &c, 1, |y| c.hencky_displacement(y));
     assert!(e.stress < 1.5e-3, "e_sigma = {}", e.stress);
     // Top displacement within 0.2 % of the Lambert-W solution (measured 3.4e-4).
     assert!(e.top_displacement < 2e-3, "e_u = {}", e.top_displacement);
@@ -40,7 +40,7 @@ fn small_strain_column_is_linear_elastic() {
     let m = column_model::<2>(&c, c.height / 32.0, 32, 2, BasisKind::Gimp, Kinematics::SmallStrain);
     let mut qs = QuasiStatic::new(m, QuasiStaticSettings { load_steps: 1, ..Default::default() });
     qs.step().unwrap();
-    let e = column_errors(&qs.model().points(), &c, 1, |y| c.small_strain_displacement(y));
+    let e = column_errors(qs.model().points(), &c, 1, |y| c.small_strain_displacement(y));
     assert!(e.top_displacement < 1e-3, "e_u = {}", e.top_displacement);
     // Equilibrium at points: linear-in-Y stress is reproduced to the first-order GIMP
     // point-stress error h/(4H) · ½ (measured 7.8e-3 = 1/128 at 32 cells).
@@ -65,7 +65,7 @@ fn bspline_small_strain_column_is_second_order() {
         );
         let mut qs = QuasiStatic::new(m, QuasiStaticSettings { load_steps: 1, ..Default::default() });
         qs.step().unwrap();
-        column_errors(&qs.model().points(), &c, 1, |y| c.small_strain_displacement(y))
+        column_errors(qs.model().points(), &c, 1, |y| c.small_strain_displacement(y))
     };
     let (e16, e32) = (e(16), e(32));
     let rate = (e16.stress / e32.stress).log2();
@@ -96,7 +96,7 @@ fn one_or_many_threads_give_identical_results() {
 fn linear_basis_stagnates_on_the_column() {
     let c = Column::V1C;
     let qs = run_column(32, 40, BasisKind::Linear, Kinematics::FiniteStrain);
-    let e = column_errors(&qs.model().points(), &c, 1, |y| c.hencky_displacement(y));
+    let e = column_errors(qs.model().points(), &c, 1, |y| c.hencky_displacement(y));
     assert!(e.stress > 1e-2, "e_sigma = {}", e.stress);
 }
 
@@ -119,7 +119,7 @@ fn a_failed_step_is_cut_back_and_recovers() {
     let most = r.most_iterations();
     assert!((1..=3).contains(&most) && most * r.substeps >= r.iterations, "{r:?}");
     assert!(*r.hardest_residuals.last().unwrap() <= 1e-9, "{r:?}");
-    let e = column_errors(&qs.model().points(), &c, 1, |y| c.hencky_displacement(y));
+    let e = column_errors(qs.model().points(), &c, 1, |y| c.hencky_displacement(y));
     // 16 cells: e_σ 3.7e-3 in the verify sweep; the path differs, so allow 2x.
     assert!(e.stress < 8e-3, "e_sigma = {}", e.stress);
 }
@@ -149,7 +149,7 @@ fn an_unrecoverable_step_is_reported_not_accepted() {
 /// and the top settlement matches the layered closed form to 0.1 % (measured 7.3e-4).
 #[test]
 fn a_million_fold_stiffness_contrast_converges() {
-    use loam::verification::LayeredColumn;
+    use loam_verification::LayeredColumn;
     let layered = LayeredColumn { column: Column::V1A, contrast: 1e6 };
     let mut qs = QuasiStatic::new(
         layered.model(32, BasisKind::Gimp),
@@ -162,7 +162,7 @@ fn a_million_fold_stiffness_contrast_converges() {
         r.iterations,
         r.final_residual()
     );
-    let e = column_errors(&qs.model().points(), &layered.column, 1, |y| layered.displacement(y));
+    let e = column_errors(qs.model().points(), &layered.column, 1, |y| layered.displacement(y));
     assert!(e.stress < 1e-2, "e_sigma = {}", e.stress);
     assert!(e.top_displacement < 1e-3, "e_u = {} (u = {})", e.top_displacement, e.top_displacement_value);
 }

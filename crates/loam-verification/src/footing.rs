@@ -1,0 +1,112 @@
+//! V3: a rigid rough strip footing pressed into weightless soil (`docs/verification.md`
+//! V3). Prandtl's mechanism gives the limit pressure in closed form: q_u = (2 + π) c_u for
+//! undrained (von Mises / Tresca) soil and q_u = c N_c for associated Mohr–Coulomb, with
+//! N_q = e^{π tan φ} tan²(45° + φ/2) and N_c = (N_q − 1) cot φ. The run reads q_u at a
+//! settlement of 0.1 B, before geometric hardening dominates.
+
+use crate::bound::Bound;
+use loam_constitutive::ConstitutiveLaw;
+use loam_grid::{BasisKind, Grid};
+use loam_model::{AntiLocking, Kinematics, Model, PlaneConstraint};
+use loam_points::{PointStore, Shape};
+use nalgebra::Vector2;
+use std::sync::Arc;
+
+/// The bounds `cargo xtask verify` checks on the footings (`docs/verification.md` V3).
+pub mod bounds {
+    use super::Bound;
+
+    /// |q_u / q_ref − 1| with the assumed strain on the finest mesh of the full sweep, for
+    /// every law (issue 5's ν = 0.49 anti-locking case among them).
+    pub const Q_U: Bound = Bound::upper(0.05, "docs/verification.md V3: |q_u/q_ref - 1| <= 5 % on the finest mesh");
+    /// The largest fall of a load–settlement curve from one step to the next, over q_ref:
+    /// a perfectly plastic solid's pressure never falls; Newton's 1e-9 relative residual
+    /// leaves ~1e-9 q_ref of wobble, three decades below the bound, while a real fall (an
+    /// unloading, a lost equilibrium) moves q by percent.
+    pub const LARGEST_DROP: Bound = Bound::upper(1e-6, "docs/verification.md V3: the curve is monotone to the plateau");
+    /// Runs that stopped before 0.1 B: such a run has no q_u and hides the rest of its
+    /// curve from the monotonicity check.
+    pub const RUNS_STOPPED: Bound = Bound::upper(0.0, "docs/verification.md V3: every run reaches 0.1 B");
+    /// Newton corrections per step until the relative residual is first ≤ 1e-9, in the
+    /// hardest sub-step; reported as a verdict on the finest mesh, not enforced (the
+    /// count grows with the mesh, see the docs).
+    pub const NEWTON_CORRECTIONS: Bound =
+        Bound::upper(8.0, "docs/verification.md V3: the issue's <= 8 Newton iterations per step to 1e-9");
+}
+
+/// V3: a rigid rough strip footing on weightless soil, half model by symmetry. Footing
+/// half-width `b` = 1, domain `width`·b wide and `depth`·b deep, `cells_per_b` cells per
+/// b, 2×2 points per cell, linear basis, small strain and geometrically linear (Prandtl's
+/// small-deformation setting: moving the points under small-strain stresses makes the load
+/// fall after its peak and jump where points cross a cell, docs/verification.md V3);
+/// rollers on the symmetry plane x = 0 and the far side, the base fixed; the top nodes
+/// 0 ≤ x ≤ b pushed down by `settlement` at full load and held horizontally (rough). The
+/// footing pressure is −(reaction of constraint 0)_y / b.
+pub fn footing_model(
+    law: Arc<dyn ConstitutiveLaw>,
+    cells_per_b: usize,
+    width: usize,
+    depth: usize,
+    settlement: f64,
+    anti_locking: AntiLocking,
+) -> Model<2> {
+    let b = 1.0;
+    let h = b / cells_per_b as f64;
+    let (nx, ny) = (width * cells_per_b, depth * cells_per_b);
+    // One empty row of cells above the surface keeps the top node plane inside the grid.
+    let grid = Grid::new(Vector2::zeros(), Vector2::new(h, h), [nx, ny + 1]).expect("valid footing grid");
+    let mut points = PointStore::new();
+    let top = depth as f64 * b;
+    points
+        .fill(&grid, &Shape::Box { min: Vector2::zeros(), max: Vector2::new(width as f64 * b, top) }, 2, 1.0, 0)
+        .expect("soil fits the grid");
+    let constraints = vec![
+        PlaneConstraint::new(1, ny, [true, true, false])
+            .displaced([0.0, -settlement, 0.0])
+            .within([0.0, top, 0.0], [b, top, 0.0]),
+        PlaneConstraint::new(0, 0, [true, false, false]),
+        PlaneConstraint::new(0, nx, [true, false, false]),
+        PlaneConstraint::new(1, 0, [true, true, false]),
+    ];
+    Model::new(grid, BasisKind::Linear, Kinematics::SmallStrain, points, vec![law], constraints, Vector2::zeros())
+        .and_then(|m| m.with_anti_locking(anti_locking))
+        .and_then(|m| m.with_geometrically_linear())
+        .expect("valid footing model")
+}
+
+/// Prandtl's bearing capacity factor N_c = (N_q − 1) cot φ with N_q = e^{π tan φ} tan²(45° + φ/2),
+/// and 2 + π at φ = 0 (the limit).
+pub fn prandtl_nc(friction_deg: f64) -> f64 {
+    if friction_deg == 0.0 {
+        return 2.0 + std::f64::consts::PI;
+    }
+    let phi = friction_deg.to_radians();
+    let nq = (std::f64::consts::PI * phi.tan()).exp() * (std::f64::consts::FRAC_PI_4 + phi / 2.0).tan().powi(2);
+    (nq - 1.0) / phi.tan()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Prandtl's N_c against the values bearing-capacity tables give to three decimals
+    /// (quoted in `docs/verification.md` V3): 8.345, 14.835, 30.140 at φ = 10°, 20°, 30°.
+    /// Small φ approaches 2 + π, the φ = 0 value, without a jump.
+    #[test]
+    fn prandtl_nc_matches_the_tabulated_values() {
+        for (phi, nc) in [(10.0, 8.345), (20.0, 14.835), (30.0, 30.140)] {
+            // the table's last decimal
+            let got = prandtl_nc(phi);
+            assert!((got - nc).abs() < 5e-4, "φ = {phi}: {got}");
+        }
+        assert_eq!(prandtl_nc(0.0), 2.0 + std::f64::consts::PI);
+        // Expanding e^{π tan φ} tan²(π/4 + φ/2) = 1 + (2 + π) φ + (π²/2 + 2π + 2) φ² + O(φ³)
+        // gives N_c = 2 + π + (π²/2 + 2π + 2) φ + O(φ²). At φ = 1e-6 rad the O(φ²) term and
+        // the round-off of (N_q − 1)/tan φ (≈ 1e-16/φ) are both below 1e-8.
+        let pi = std::f64::consts::PI;
+        let phi = 1e-6;
+        let linear = 2.0 + pi + (pi * pi / 2.0 + 2.0 * pi + 2.0) * phi;
+        let got = prandtl_nc(phi.to_degrees());
+        assert!((got - linear).abs() < 1e-8, "{got} vs {linear}");
+    }
+}

@@ -1,0 +1,16 @@
+//! The root crate's integration tests, one module per subject, in one test binary: each
+//! binary links the whole of loam again, so one binary instead of nine saves most of the
+//! link time of `cargo test` and runs every test in one parallel pool. None needs a
+//! process of its own (no test sets global state: rayon pools are built per test, outputs
+//! go to temporary folders), so there is no reason to split.
+
+mod docs;
+mod geostatic;
+mod ghost;
+mod implicit_dynamics;
+mod implicit_mpm;
+mod prescribed_displacement;
+mod run_scenes;
+mod scene_errors;
+mod slope;
+mod ul_fem;
