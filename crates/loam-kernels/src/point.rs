@@ -34,6 +34,7 @@ pub struct PointUpdate {
 /// [`embed`]) from its committed deformation gradient `f`, elastic strain state and
 /// history `h_n` (the new history goes to `h_out`): finite strain through b^e and the
 /// logarithmic strain with J = det ΔF det F, small strain through ε^e + sym ∇Δu.
+#[inline]
 pub fn update_point(
     kinematics: Kinematics,
     law: &dyn ConstitutiveLaw,
