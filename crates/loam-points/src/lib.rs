@@ -6,7 +6,7 @@
 //! shape covers (the usual MPM initialisation; Sulsky et al. 1994), each with the volume of
 //! its sub-cell, so that the initial GIMP domains tile the body exactly.
 
-use loam_grid::Grid;
+use loam_grid::{lexicographic_coords, Grid};
 use nalgebra::{Matrix3, SVector, Vector2};
 
 /// GIMP half-lengths of a deformed point, l = l₀ ⊙ diag(U) with U = √(FᵀF) the right
@@ -226,7 +226,8 @@ impl<const D: usize> PointStore<D> {
     }
 
     /// Fill `shape` with `points_per_cell`^D points per grid cell, at the centres of the
-    /// sub-cells whose centre lies inside the shape. Returns the number of points added.
+    /// sub-cells whose centre lies inside the shape. Returns the number of points added; a
+    /// failing fill leaves the store unchanged.
     pub fn fill(
         &mut self,
         grid: &Grid<D>,
@@ -241,64 +242,54 @@ impl<const D: usize> PointStore<D> {
         if !(density.is_finite() && density > 0.0) {
             return Err(PointsError::Density(density));
         }
-        let (lo, hi) = shape.bounds()?;
-        let h = grid.cell_size();
         let n = points_per_cell;
-        let sub = h / n as f64;
+        let sub = grid.cell_size() / n as f64;
         let volume = grid.cell_volume() / (n.pow(D as u32)) as f64;
-        let half = sub / 2.0;
-        // Sub-cell index ranges covering the shape's bounding box (clipped to the grid;
-        // a shape beyond the grid is caught below by testing the shape's own extent).
-        let mut first = [0i64; D];
-        let mut last = [0i64; D];
-        for a in 0..D {
-            first[a] = ((lo[a] - grid.origin()[a]) / sub[a] - 0.5).ceil() as i64;
-            last[a] = ((hi[a] - grid.origin()[a]) / sub[a] - 0.5).floor() as i64;
-        }
-        let gmin = grid.origin();
-        let gmax = grid.extent_max();
-        // Collected first so that a failing fill leaves the store unchanged.
-        let mut new_points = Vec::new();
-        let mut idx = first;
-        if (0..D).any(|a| first[a] > last[a]) {
-            return Err(PointsError::EmptyRegion(format!("bounds {:?} to {:?}", lo.as_slice(), hi.as_slice())));
-        }
-        loop {
-            let x = SVector::<f64, D>::from_fn(|a, _| gmin[a] + (idx[a] as f64 + 0.5) * sub[a]);
-            if shape.contains(&x) {
-                if !grid.contains(&x) {
-                    return Err(PointsError::OutsideGrid {
-                        position: x.iter().copied().collect(),
-                        min: gmin.iter().copied().collect(),
-                        max: gmax.iter().copied().collect(),
-                    });
-                }
-                new_points.push(x);
-            }
-            let mut a = 0;
-            loop {
-                idx[a] += 1;
-                if idx[a] <= last[a] {
-                    break;
-                }
-                idx[a] = first[a];
-                a += 1;
-                if a == D {
-                    break;
-                }
-            }
-            if a == D {
-                break;
-            }
-        }
-        if new_points.is_empty() {
-            return Err(PointsError::EmptyRegion(format!("bounds {:?} to {:?}", lo.as_slice(), hi.as_slice())));
-        }
+        let new_points = sub_cell_centres(grid, shape, &sub)?;
         for &x in &new_points {
-            self.push(x, volume, density, half, material);
+            self.push(x, volume, density, sub / 2.0, material);
         }
         Ok(new_points.len())
     }
+}
+
+/// The centres of the sub-cells of size `sub` (aligned with the grid) that lie inside
+/// `shape`, axis 0 fastest; an error when there is none or one lies outside the grid.
+fn sub_cell_centres<const D: usize>(
+    grid: &Grid<D>,
+    shape: &Shape<D>,
+    sub: &SVector<f64, D>,
+) -> Result<Vec<SVector<f64, D>>, PointsError> {
+    let (lo, hi) = shape.bounds()?;
+    let empty = || PointsError::EmptyRegion(format!("bounds {:?} to {:?}", lo.as_slice(), hi.as_slice()));
+    let origin = grid.origin();
+    // Sub-cell index ranges covering the shape's bounding box (a shape beyond the grid is
+    // caught by testing each centre).
+    let first: [i64; D] = std::array::from_fn(|a| ((lo[a] - origin[a]) / sub[a] - 0.5).ceil() as i64);
+    let last: [i64; D] = std::array::from_fn(|a| ((hi[a] - origin[a]) / sub[a] - 0.5).floor() as i64);
+    if (0..D).any(|a| first[a] > last[a]) {
+        return Err(empty());
+    }
+    let dims: [usize; D] = std::array::from_fn(|a| (last[a] - first[a] + 1) as usize);
+    let mut centres = Vec::new();
+    for k in 0..dims.iter().product() {
+        let ijk = lexicographic_coords(k, dims);
+        let x = SVector::<f64, D>::from_fn(|a, _| origin[a] + ((first[a] + ijk[a] as i64) as f64 + 0.5) * sub[a]);
+        if shape.contains(&x) {
+            if !grid.contains(&x) {
+                return Err(PointsError::OutsideGrid {
+                    position: x.iter().copied().collect(),
+                    min: origin.iter().copied().collect(),
+                    max: grid.extent_max().iter().copied().collect(),
+                });
+            }
+            centres.push(x);
+        }
+    }
+    if centres.is_empty() {
+        return Err(empty());
+    }
+    Ok(centres)
 }
 
 #[cfg(test)]
