@@ -1,4 +1,5 @@
-//! Small-cut stabilisation: the face ghost penalty on the translated block (issue 5).
+//! Small-cut stabilisation: the face ghost penalty on the translated block (docs/theory.md
+//! §15, docs/verification.md §H).
 
 use loam::grid::BasisKind;
 use loam::implicit::{QuasiStatic, QuasiStaticSettings};

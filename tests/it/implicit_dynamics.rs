@@ -52,7 +52,7 @@ fn vibrating_bar_period_follows_the_trapezoidal_factor() {
     }
 }
 
-/// Energy over 3 periods at Δt = 0.5 with lumped mass drifts ≤ 1 % (issue 3 bound): the
+/// Energy over 3 periods at Δt = 0.5 with lumped mass drifts ≤ 1 % (docs/verification.md §V2): the
 /// trapezoidal rule conserves energy on the grid; what is lost is the point–grid transfer.
 #[test]
 fn vibrating_bar_conserves_energy() {

@@ -1,4 +1,4 @@
-//! The updated Lagrangian FEM reference (issue 3, item 6): the points are the Gauss points
+//! The updated Lagrangian FEM reference (docs/theory.md §12): the points are the Gauss points
 //! of a body-fitted mesh that moves with the body. Checked against closed forms that are
 //! exact for linear elements, independently of the MPM.
 

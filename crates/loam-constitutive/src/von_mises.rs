@@ -224,7 +224,7 @@ mod tests {
 
     /// Central differences of the stress along the six symmetric unit directions. The
     /// step is relative to the strain (1e-6 ‖ε‖): truncation ~(1e-6)² and round-off
-    /// ~1e-16/1e-6 of the tangent, both far below the 1e-6 tolerance of the brief.
+    /// ~1e-16/1e-6 of the tangent, both far below the 1e-6 tolerance of the tangent checks (docs/theory.md §16).
     fn fd_tangent(law: &VonMises, eps: &Matrix3<f64>, h_n: &[f64]) -> Tensor4 {
         central_difference(|e| law.update(e, h_n, &mut [0.0]).unwrap().stress, eps, 1e-6 * eps.norm())
     }

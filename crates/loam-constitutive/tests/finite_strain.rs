@@ -13,7 +13,7 @@ use proptest::prelude::*;
 /// FD step for the directional derivative: truncation ~ε²·|τ'''| ≈ 1e-12 relative, round-off
 /// of the eigen-decomposition ~1e-16/ε ≈ 1e-10 relative; both far below the 1e-6 tolerance.
 const FD_EPS: f64 = 1e-6;
-/// Tolerance from the brief: relative difference ≤ 1e-6.
+/// The tangent-check tolerance of docs/theory.md §16: relative difference ≤ 1e-6.
 const TOL: f64 = 1e-6;
 
 fn rel(a: &Matrix3<f64>, b: &Matrix3<f64>) -> f64 {

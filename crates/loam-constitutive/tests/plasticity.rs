@@ -4,9 +4,9 @@
 //! edges, and closed-form oedometer / triaxial / Tresca paths.
 //!
 //! Tolerances used throughout (each assertion says which one applies):
-//! - `FD_TOL` = 1e-6, from the brief: relative difference between the tangent and the
+//! - `FD_TOL` = 1e-6 (docs/theory.md §16): relative difference between the tangent and the
 //!   central-difference derivative.
-//! - `F_TOL` = 1e-10, from the brief: f(σ) ≤ 1e-10 · scale after return, where scale is the
+//! - `F_TOL` = 1e-10 (docs/theory.md §16): f(σ) ≤ 1e-10 · scale after return, where scale is the
 //!   largest |trial principal stress| or the strength (c, σ_y) whichever is larger.
 //! - Round-off bounds (1e-12 … 1e-10 relative) where the result is a closed form evaluated
 //!   with a handful of operations.
@@ -153,8 +153,8 @@ fn von_mises_rotation_invariance() {
 /// Derivation: dev ε = −ε (−1/3, −1/3, 2/3), s = 2G dev ε, so
 /// q = √(3/2) ‖s‖ = √(3/2) · 2Gε · √(6)/3 = 2Gε. Yield at q = σ_y:
 /// ε_y = σ_y / (2G) = σ_y (1 + ν) / E. (The axial stress there is
-/// M ε_y = σ_y (1 − ν)/(1 − 2ν), with M = E(1−ν)/((1+ν)(1−2ν)); the brief's
-/// "ε = σ_y(1 − ν)/(E(1 − 2ν))" is this stress divided by E, not the yield strain.)
+/// M ε_y = σ_y (1 − ν)/(1 − 2ν), with M = E(1−ν)/((1+ν)(1−2ν)); the often
+/// quoted "ε = σ_y(1 − ν)/(E(1 − 2ν))" is this stress divided by E, not the yield strain.)
 /// Elastic branch: σ_zz = −M ε, σ_xx = −λ ε. Plastic branch: q stays σ_y, the mean stress
 /// is −K ε, so σ_zz = −K ε − (2/3) σ_y and dσ_zz/dε = −K (bulk modulus), and
 /// σ_xx = σ_zz + σ_y.

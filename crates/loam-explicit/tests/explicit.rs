@@ -117,7 +117,7 @@ fn check_vibrating_bar(basis: BasisKind) {
         (f.initial_energy - BAR.density * BAR.amplitude * BAR.amplitude * BAR.length / 4.0).abs()
             < 1e-3 * f.initial_energy
     );
-    // The brief's bound: period within 1 % of T = 4L/c (measured 4e-4 linear, 6e-4 GIMP).
+    // docs/verification.md §V2: explicit period within 1 % of T = 4L/c.
     assert!(f.period_error.abs() < 0.01, "period error {:e}", f.period_error);
     // v_cm against t_{n+1}: leapfrog velocities lag by Δt/2, an error of ω₁Δt/2 ≈ 2.8 %
     // of the amplitude by itself; plus the phase error of 3 periods (2π·3·|period error|
@@ -361,7 +361,7 @@ fn an_observer_error_stops_the_run() {
 }
 
 /// (7) V5 colliding disks (Sulsky et al. 1994), MUSL, CFL 0.5, to t = 3: total energy
-/// (kinetic + stored Hencky) loses at most 5 % (the brief's bound; measured 0.3 %) and,
+/// (kinetic + stored Hencky) loses at most 5 % (docs/verification.md §V5) and,
 /// read as the leapfrog energy, never grows by more than 0.5 % (measured below; read at one
 /// time level it oscillates by O(ωΔt) during the impact, measured ≈ 2.6 %, reported only).
 #[test]

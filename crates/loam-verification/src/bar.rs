@@ -25,25 +25,26 @@ pub mod bounds {
     /// Implicit MPM (trapezoidal, lumped mass): |period / trapezoidal period − 1|; what is
     /// left is the spatial error of 25 cells, ~5e-4.
     pub const IMPLICIT_PERIOD_ERROR: Bound =
-        Bound::upper(5e-3, "issue 3: the period sits on the trapezoidal curve within 0.5 %");
+        Bound::upper(5e-3, "docs/verification.md §V2: the period sits on the trapezoidal curve within 0.5 %");
     /// Implicit MPM: energy drift over 3 periods, checked at [`ENERGY_DRIFT_TIME_STEP`]:
     /// the trapezoidal rule conserves energy on the grid, the point–grid transfer loses
-    /// a little (measured 1.2e-3).
+    /// a little.
     pub const IMPLICIT_ENERGY_DRIFT: Bound =
-        Bound::upper(1e-2, "issue 3: energy drift <= 1 % over 3 periods at dt = 0.5, lumped mass");
+        Bound::upper(1e-2, "docs/verification.md §V2: energy drift <= 1 % over 3 periods at dt = 0.5, lumped mass");
     /// The time step at which [`IMPLICIT_ENERGY_DRIFT`] is checked.
     pub const ENERGY_DRIFT_TIME_STEP: f64 = 0.5;
     /// UL-FEM (trapezoidal, lumped mass): |period / discrete trapezoidal period − 1|, the
-    /// implicit MPM's bound applied to the FEM reference (measured ≤ 2.1e-4).
+    /// implicit MPM's bound applied to the FEM reference.
     pub const FEM_PERIOD_ERROR: Bound =
-        Bound::upper(5e-3, "issue 3: as the implicit MPM, against the lumped FEM's discrete period");
+        Bound::upper(5e-3, "docs/verification.md §V2: as the implicit MPM, against the lumped FEM's discrete period");
     /// Explicit MUSL at 0.9 of the critical step runs to the end (1 = yes).
-    pub const EXPLICIT_STABLE: Bound = Bound::lower(1.0, "docs/verification.md V2: stable below the critical step");
-    /// Explicit MUSL at 0.9 of the critical step: |period / T − 1| (measured 4e-4).
-    pub const EXPLICIT_PERIOD_ERROR: Bound = Bound::upper(1e-2, "explicit MPM brief: period within 1 % of T = 4L/c");
+    pub const EXPLICIT_STABLE: Bound = Bound::lower(1.0, "docs/verification.md §V2: stable below the critical step");
+    /// Explicit MUSL at 0.9 of the critical step: |period / T − 1|.
+    pub const EXPLICIT_PERIOD_ERROR: Bound =
+        Bound::upper(1e-2, "docs/verification.md §V2: period within 1 % of T = 4L/c");
     /// Explicit MUSL at twice the critical step is stopped as unstable (1 = yes).
     pub const EXPLICIT_BLOW_UP_DETECTED: Bound =
-        Bound::lower(1.0, "docs/verification.md V2: a step above the limit is detected, never silent");
+        Bound::lower(1.0, "docs/verification.md §V2: a step above the limit is detected, never silent");
 }
 
 /// V2: the axially vibrating bar. Fixed at x = 0, free at x = L, ν = 0, initial velocity

@@ -17,21 +17,22 @@ pub mod bounds {
     use super::Bound;
 
     /// |q_u / q_ref − 1| with the assumed strain on the finest mesh of the full sweep, for
-    /// every law (issue 5's ν = 0.49 anti-locking case among them).
-    pub const Q_U: Bound = Bound::upper(0.05, "docs/verification.md V3: |q_u/q_ref - 1| <= 5 % on the finest mesh");
+    /// every law (the ν = 0.49 locking case among them).
+    pub const Q_U: Bound = Bound::upper(0.05, "docs/verification.md §V3: |q_u/q_ref - 1| <= 5 % on the finest mesh");
     /// The largest fall of a load–settlement curve from one step to the next, over q_ref:
     /// a perfectly plastic solid's pressure never falls; Newton's 1e-9 relative residual
     /// leaves ~1e-9 q_ref of wobble, three decades below the bound, while a real fall (an
     /// unloading, a lost equilibrium) moves q by percent.
-    pub const LARGEST_DROP: Bound = Bound::upper(1e-6, "docs/verification.md V3: the curve is monotone to the plateau");
+    pub const LARGEST_DROP: Bound =
+        Bound::upper(1e-6, "docs/verification.md §V3: the curve is monotone to the plateau");
     /// Runs that stopped before 0.1 B: such a run has no q_u and hides the rest of its
     /// curve from the monotonicity check.
-    pub const RUNS_STOPPED: Bound = Bound::upper(0.0, "docs/verification.md V3: every run reaches 0.1 B");
+    pub const RUNS_STOPPED: Bound = Bound::upper(0.0, "docs/verification.md §V3: every run reaches 0.1 B");
     /// Newton corrections per step until the relative residual is first ≤ 1e-9, in the
     /// hardest sub-step; reported as a verdict on the finest mesh, not enforced (the
     /// count grows with the mesh, see the docs).
     pub const NEWTON_CORRECTIONS: Bound =
-        Bound::upper(8.0, "docs/verification.md V3: the issue's <= 8 Newton iterations per step to 1e-9");
+        Bound::upper(8.0, "docs/verification.md §V3: the issue's <= 8 Newton iterations per step to 1e-9");
 }
 
 /// V3: a rigid rough strip footing on weightless soil, half model by symmetry. Footing

@@ -1,4 +1,4 @@
-//! The hard cases (issue 5; `docs/verification.md`, "Hard cases"): where implicit MPM
+//! The hard cases (docs/verification.md §H): where implicit MPM
 //! usually breaks, shown rather than hidden. Most have no closed form and are reported as
 //! figures; what is bounded is that the method copes: a 10⁶ stiffness contrast converges
 //! (the layered column, `column::LayeredColumn`), a point leaving the grid is reported with
@@ -19,22 +19,23 @@ pub mod bounds {
     use super::Bound;
 
     /// H1: Newton iterations of the one load step of the layered column at a 10⁶ contrast
-    /// (measured 2 at any contrast: the tangent's condition grows by the contrast, far
-    /// from double precision's limit).
+    ///.
     pub const CONTRAST_NEWTON_ITERATIONS: Bound =
-        Bound::upper(2.0, "issue 5: a 1e6 stiffness contrast converges in <= 2 Newton iterations");
+        Bound::upper(2.0, "docs/verification.md §H: a 1e6 stiffness contrast converges in <= 2 Newton iterations");
     /// H4: a point leaving the grid is reported as such, with the last converged state and
     /// every point kept (1 = yes).
     pub const POINT_LEAVING_THE_GRID_REPORTED: Bound =
-        Bound::lower(1.0, "issue 5: a point leaving the grid is reported, the last state kept");
+        Bound::lower(1.0, "docs/verification.md §H: a point leaving the grid is reported, the last state kept");
     /// H5: Newton failures of the translated block with the ghost penalty, over every
     /// overlap and both penalties.
     pub const GHOST_NEWTON_FAILURES: Bound =
-        Bound::upper(0.0, "issue 5: with the ghost penalty Newton converges at every overlap");
+        Bound::upper(0.0, "docs/verification.md §H: with the ghost penalty Newton converges at every overlap");
     /// H5: the largest condition number with the ghost penalty (γ = 0.1) over the well-cut
-    /// block's (measured within 1.15: 3.9e2–4.3e2 against 3.85e2).
-    pub const GHOST_CONDITION_RATIO: Bound =
-        Bound::upper(1.5, "issue 5: with the ghost penalty the condition stays within 1.5x of the well-cut block's");
+    /// block's.
+    pub const GHOST_CONDITION_RATIO: Bound = Bound::upper(
+        1.5,
+        "docs/verification.md §H: with the ghost penalty the condition stays within 1.5x of the well-cut block's",
+    );
 }
 
 /// A hard case: plane-strain compression of a softening von Mises specimen (1 × 2, quarter

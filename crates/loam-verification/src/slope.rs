@@ -26,14 +26,14 @@ pub mod bounds {
     use super::Bound;
 
     /// V4a: |γH/c_u at collapse / [`super::TAYLOR_STABILITY`] − 1| on the finest mesh.
-    pub const TAYLOR: Bound = Bound::upper(0.10, "docs/verification.md V4: within 10 % of Taylor's 5.5, finest mesh");
+    pub const TAYLOR: Bound = Bound::upper(0.10, "docs/verification.md §V4: within 10 % of Taylor's 5.5, finest mesh");
     /// V4b: |F / [`super::GRIFFITHS_LANE_FACTOR_OF_SAFETY`] − 1| on the finest mesh.
     pub const GRIFFITHS_LANE: Bound =
-        Bound::upper(0.05, "docs/verification.md V4: within 5 % of Griffiths & Lane's 1.4, finest mesh");
+        Bound::upper(0.05, "docs/verification.md §V4: within 5 % of Griffiths & Lane's 1.4, finest mesh");
     /// V4c: the largest difference between the implicit and explicit run-out profiles,
-    /// in cells (measured 0.02–0.1: a margin of about 20).
+    /// in cells.
     pub const RUNOUT_PROFILES: Bound =
-        Bound::upper(2.0, "docs/verification.md V4: implicit and explicit profiles within two cells");
+        Bound::upper(2.0, "docs/verification.md §V4: implicit and explicit profiles within two cells");
 }
 
 /// The geometry of a V4 slope, in units of the slope height H: the foundation layer
