@@ -150,7 +150,7 @@ impl<const D: usize> Analysis<D> {
         }
     }
 
-    /// The linear solver, or "none" for explicit analysis.
+    /// The linear solver, or that explicit analysis has none.
     pub fn solver(&self) -> String {
         match self {
             Analysis::QuasiStatic(a) => a.linear_solver_kind().to_string(),

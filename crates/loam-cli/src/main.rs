@@ -99,15 +99,15 @@ fn check(scene: &Path) -> anyhow::Result<()> {
     let (points, dofs) = match loaded.scene.dimension {
         3 => {
             let a = loaded.build::<3>()?;
-            (a.model().points().len(), a.model().grid().num_nodes() * 3)
+            (a.model().points().len(), a.model().background().num_nodes() * 3)
         }
         _ => {
             let a = loaded.build::<2>()?;
-            (a.model().points().len(), a.model().grid().num_nodes() * 2)
+            (a.model().points().len(), a.model().background().num_nodes() * 2)
         }
     };
     println!(
-        "{}: ok — {}D, {points} material points, grid of {dofs} nodal dofs at most",
+        "{}: ok — {}D, {points} material points, {dofs} nodal dofs at most",
         scene.display(),
         loaded.scene.dimension
     );

@@ -61,3 +61,16 @@ fn missing_scene_is_an_error_naming_the_file() {
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(stderr.starts_with("error:") && stderr.contains("no_such_scene.ron"), "stderr: {stderr}");
 }
+
+/// `loam check` counts the nodes of the background the run uses: the column's grid of
+/// 2 × 34 nodes (1 × 33 cells), and for the FEM reference the mesh of 2 × 33 nodes (one
+/// element per cell over the body's 32 cells), not the grid that only places its planes.
+#[test]
+fn check_counts_the_background_that_runs() {
+    for (scene, dofs) in [("column.ron", 2 * 2 * 34), ("column_fem.ron", 2 * 2 * 33)] {
+        let o = loam(&["check".as_ref(), example(scene).as_os_str()]);
+        let stdout = String::from_utf8_lossy(&o.stdout);
+        assert!(o.status.success(), "{scene}: {}", String::from_utf8_lossy(&o.stderr));
+        assert!(stdout.contains(&format!("128 material points, {dofs} nodal dofs at most")), "{scene}: {stdout}");
+    }
+}

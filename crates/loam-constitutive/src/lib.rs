@@ -42,6 +42,8 @@ pub enum ConstitutiveError {
     NonFinite { what: &'static str },
     #[error("non-positive Jacobian J = {j}")]
     NonPositiveJacobian { j: f64 },
+    #[error("the deformation-gradient increment cannot be inverted (det = {det:e})")]
+    SingularIncrement { det: f64 },
     #[error("tensor is not positive definite (smallest eigenvalue {min_eigenvalue})")]
     NotPositiveDefinite { min_eigenvalue: f64 },
     #[error("symmetric eigen-decomposition did not converge")]

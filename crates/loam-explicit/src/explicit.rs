@@ -4,9 +4,9 @@ use crate::{ExplicitError, ExplicitSettings, TimeStep, UpdateScheme};
 use loam_grid::{BasisError, Connectivity, PointBasisError};
 use loam_kernels::{
     advance_deformation, check_constraints, connect, embed, gather_internal_force, gather_nodal, internal_force,
-    interpolate, update_point, ConnectError, PointUpdate, RunError,
+    interpolate_pair, update_point, ConnectError, RunError,
 };
-use loam_model::{Kinematics, Model};
+use loam_model::{Kinematics, Model, StateFields};
 use nalgebra::{Matrix3, SMatrix, SVector};
 use rayon::prelude::*;
 use std::time::{Duration, Instant};
@@ -51,25 +51,24 @@ struct NodalScratch {
 /// Per-point trial state of one step, committed only when the whole step succeeded.
 #[derive(Debug, Default)]
 struct PointScratch<const D: usize> {
-    position: Vec<SVector<f64, D>>,
-    velocity: Vec<SVector<f64, D>>,
+    /// New position, velocity, stress, elastic strain and history, exchanged with the
+    /// model's at the commit; the history `max(history_stride, 1)` per point so that every
+    /// point has its own chunk.
+    fields: StateFields<D>,
     delta_f: Vec<Matrix3<f64>>,
     volume: Vec<f64>,
-    stress: Vec<Matrix3<f64>>,
-    elastic_strain: Vec<Matrix3<f64>>,
-    /// `max(history_stride, 1)` per point so that every point has its own chunk.
-    history: Vec<f64>,
 }
 
 impl<const D: usize> PointScratch<D> {
     fn resize(&mut self, n: usize, history_stride: usize) {
-        self.position.resize(n, SVector::zeros());
-        self.velocity.resize(n, SVector::zeros());
+        let f = &mut self.fields;
+        f.position.resize(n, SVector::zeros());
+        f.velocity.resize(n, SVector::zeros());
+        f.stress.resize(n, Matrix3::zeros());
+        f.elastic_strain.resize(n, Matrix3::zeros());
+        f.history.resize(n * history_stride.max(1), 0.0);
         self.delta_f.resize(n, Matrix3::identity());
         self.volume.resize(n, 0.0);
-        self.stress.resize(n, Matrix3::zeros());
-        self.elastic_strain.resize(n, Matrix3::zeros());
-        self.history.resize(n * history_stride.max(1), 0.0);
     }
 }
 
@@ -298,7 +297,7 @@ impl<const D: usize> Explicit<D> {
             UpdateScheme::Usf => return Ok(()),
             UpdateScheme::Usl => update_stress(model, conn, &nodes.velocity, dt, &mut self.points),
             UpdateScheme::Musl => {
-                remap_momentum(model, conn, &self.points.velocity, &mut nodes.strain_velocity);
+                remap_momentum(model, conn, &self.points.fields.velocity, &mut nodes.strain_velocity);
                 momentum_to_velocity::<D>(&nodes.gathered, &self.constrained, m_min, &mut nodes.strain_velocity);
                 update_stress(model, conn, &nodes.strain_velocity, dt, &mut self.points)
             }
@@ -311,7 +310,7 @@ impl<const D: usize> Explicit<D> {
         match failure {
             PointFailure::Unstable(reason) => ExplicitError::Unstable { step, time: self.time, point, reason },
             PointFailure::Outside => {
-                let source = outside_error(&self.model, point, &self.points.position[point]);
+                let source = outside_error(&self.model, point, &self.points.fields.position[point]);
                 ConnectError::PointOutsideGrid { step, source }.into()
             }
         }
@@ -335,12 +334,7 @@ impl<const D: usize> Explicit<D> {
                 advance_deformation(df, f, l, l0);
                 *v = *v_new;
             });
-        pts.position.copy_from_slice(&sc.position);
-        pts.velocity.copy_from_slice(&sc.velocity);
-        pts.stress.copy_from_slice(&sc.stress);
-        pts.elastic_strain.copy_from_slice(&sc.elastic_strain);
-        let n = pts.history.len();
-        pts.history.copy_from_slice(&sc.history[..n]);
+        self.model.swap_state(&mut self.points.fields);
     }
 
     /// Run every remaining step, calling `on_step` after each.
@@ -417,7 +411,7 @@ fn negative_internal_force<const D: usize>(
     let pts = model.points();
     gather_internal_force(conn, out, |p, a| {
         let v = if finite { sc.volume[p] } else { pts.volume[p] };
-        -internal_force(v, &sc.stress[p], &conn.support_gradients(p)[a], None)
+        -internal_force(v, &sc.fields.stress[p], &conn.support_gradients(p)[a], None)
     });
 }
 
@@ -495,13 +489,14 @@ fn grid_to_points<const D: usize>(
 ) -> PointResult {
     let pts = model.points();
     let grid = model.grid();
-    let failure = sc
+    let fields = &mut sc.fields;
+    let failure = fields
         .position
         .par_iter_mut()
-        .zip(sc.velocity.par_iter_mut())
+        .zip(fields.velocity.par_iter_mut())
         .enumerate()
         .filter_map(|(p, (x, v))| {
-            let (vi, ai) = (interpolate(conn, p, velocity), interpolate(conn, p, acceleration));
+            let (vi, ai) = interpolate_pair(conn, p, velocity, acceleration);
             *v = (pts.velocity[p] + ai * dt) * flip + vi * (1.0 - flip);
             *x = pts.position[p] + vi * dt;
             if !(v.iter().all(|c| c.is_finite()) && x.iter().all(|c| c.is_finite())) {
@@ -534,19 +529,17 @@ fn update_stress<const D: usize>(
     let failure = (
         sc.delta_f.par_iter_mut(),
         sc.volume.par_iter_mut(),
-        sc.stress.par_iter_mut(),
-        sc.elastic_strain.par_iter_mut(),
+        sc.fields.stress.par_iter_mut(),
+        sc.fields.elastic_strain.par_iter_mut(),
     )
         .into_par_iter()
-        .zip(sc.history.par_chunks_mut(hs.max(1)))
+        .zip(sc.fields.history.par_chunks_mut(hs.max(1)))
         .enumerate()
         .filter_map(|(p, ((delta_f, volume, stress, elastic), h_out))| {
             match point_stress(model, conn, velocity, dt, p, &mut h_out[..hs]) {
-                Ok((update, det)) => {
-                    *stress = update.stress;
-                    *elastic = update.elastic_strain;
-                    *delta_f = update.delta_f;
-                    *volume = det * pts.volume[p];
+                Ok(state) => {
+                    (*delta_f, *stress, *elastic) = (state.delta_f, state.stress, state.elastic_strain);
+                    *volume = state.det * pts.volume[p];
                     None
                 }
                 Err(reason) => Some((p, PointFailure::Unstable(reason))),
@@ -556,9 +549,18 @@ fn update_stress<const D: usize>(
     failure.map_or(Ok(()), Err)
 }
 
+/// What the explicit step keeps of a point's update (it has no use for the tangent).
+struct PointState {
+    delta_f: Matrix3<f64>,
+    /// det ΔF.
+    det: f64,
+    stress: Matrix3<f64>,
+    elastic_strain: Matrix3<f64>,
+}
+
 /// Point `p`'s update from the nodal velocities: ΔF = I + Δt Σ_I v_I ⊗ ∇N_I, checked for
 /// a blow-up (non-finite, inverted or torn apart within the step), then the shared point
-/// kernel; with det ΔF, or why the point became unstable.
+/// kernel; or why the point became unstable.
 fn point_stress<const D: usize>(
     model: &Model<D>,
     conn: &Connectivity<D>,
@@ -566,7 +568,7 @@ fn point_stress<const D: usize>(
     dt: f64,
     p: usize,
     h_out: &mut [f64],
-) -> Result<(PointUpdate, f64), String> {
+) -> Result<PointState, String> {
     let mut l = SMatrix::<f64, D, D>::zeros();
     for (&node, g) in conn.support_nodes(p).iter().zip(conn.support_gradients(p)) {
         let k = node as usize * D;
@@ -590,7 +592,7 @@ fn point_stress<const D: usize>(
     if !update.stress.iter().chain(update.elastic_strain.iter()).all(|c| c.is_finite()) {
         return Err("stress update failed: non-finite stress".into());
     }
-    Ok((update, det))
+    Ok(PointState { delta_f: update.delta_f, det, stress: update.stress, elastic_strain: update.elastic_strain })
 }
 
 #[cfg(test)]

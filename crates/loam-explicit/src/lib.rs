@@ -4,7 +4,7 @@
 //! One step, updated Lagrangian with the grid reset every step:
 //!
 //! 1. Connectivity (basis values and gradients) at the committed point positions.
-//! 2. Point → grid by a deterministic per-node gather (`loam_solve::gather_nodal`):
+//! 2. Point → grid by a deterministic per-node gather (`loam_kernels::gather_nodal`):
 //!    m_I = Σ_p N_I m_p, p_I = Σ_p N_I m_p v_p, f_I = Σ_p N_I f_ext,p − Σ_p v_p σ_p ∇N_I.
 //!    Nodes with m_I ≤ 1e-12 · max m_I are empty (zero velocity and acceleration);
 //!    constrained dofs get zero momentum and force.

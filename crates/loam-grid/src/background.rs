@@ -5,7 +5,7 @@
 //! nodes on a plane, move with the body — is answered here and no analysis branches on
 //! which background it has.
 
-use crate::{BasisKind, Connectivity, ElementError, FeMesh, Grid, PointBasisError};
+use crate::{ActiveNodes, BasisKind, Connectivity, ElementError, FeMesh, Grid, PointBasisError, INACTIVE};
 use nalgebra::SVector;
 
 /// Why the points could not be connected to the background.
@@ -118,11 +118,17 @@ impl<const D: usize> Background<D> {
             })
     }
 
-    /// Move the nodes that move with the body by `du(node)`, the converged increment of a
-    /// step; the grid, reset every step, stays where it is.
-    pub fn displace(&mut self, du: impl Fn(usize) -> SVector<f64, D>) {
+    /// Move the nodes that move with the body by the converged increment of a step, `du`
+    /// (D values per active node of `active`); the grid, reset every step, stays where it
+    /// is. Every mesh node belongs to an element, so every one is active.
+    pub fn displace(&mut self, active: &ActiveNodes, du: &[f64]) {
         if let Some(mesh) = &mut self.mesh {
-            mesh.displace(du);
+            let g2a = &active.grid_to_active;
+            mesh.displace(|n| {
+                let a = g2a[n];
+                assert_ne!(a, INACTIVE, "mesh node {n} belongs to no element");
+                SVector::from_fn(|i, _| du[a as usize * D + i])
+            });
         }
     }
 }

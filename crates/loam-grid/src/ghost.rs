@@ -14,8 +14,8 @@
 //! node to its neighbours through the stiffness of the cells next to it. The caller scales
 //! it by γ times a modulus (`Model::with_ghost_penalty`).
 
-use crate::gauss::GaussLegendre;
 use crate::index::cell_corner;
+use crate::GaussLegendre;
 use crate::Grid;
 
 /// One ghost face: the nodes of its two cells (grid indices, ascending) and the scalar

@@ -13,7 +13,7 @@
 mod background;
 mod basis;
 mod connectivity;
-pub mod gauss;
+mod gauss;
 mod ghost;
 mod index;
 mod mesh;
@@ -21,6 +21,7 @@ mod mesh;
 pub use background::{Background, LocateError};
 pub use basis::{bspline_greville, BasisError, BasisKind};
 pub use connectivity::{ActiveNodes, Connectivity, NodePointAdjacency, PointBasisError, INACTIVE};
+pub use gauss::GaussLegendre;
 pub use ghost::{ghost_faces, GhostFace, CUT_FILL};
 pub use index::{lexicographic_coords, lexicographic_index};
 pub use mesh::{ElementError, FeMesh, MeshError};

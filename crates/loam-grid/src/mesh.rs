@@ -8,8 +8,8 @@
 //! change with the current node positions. Everything downstream (laws, assembly, Newton,
 //! Newmark) is shared with the MPM through [`Connectivity`](crate::Connectivity).
 
-use crate::gauss::GaussLegendre;
 use crate::index::cell_corner;
+use crate::GaussLegendre;
 use crate::{lexicographic_coords, lexicographic_index};
 use nalgebra::{Matrix3, SVector};
 

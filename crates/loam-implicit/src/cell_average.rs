@@ -53,7 +53,7 @@ pub(crate) fn cell_averaged_gradients<const D: usize>(
     let pts = model.points();
     let n = pts.len();
     let stride = conn.stride();
-    let mut order: Vec<(usize, usize)> = (0..n).map(|p| (model.averaging_cell(p), p)).collect();
+    let mut order: Vec<(usize, usize)> = (0..n).map(|p| (model.averaging_group(p), p)).collect();
     order.sort_unstable();
     out.clear();
     out.resize(n * stride, SVector::zeros());
@@ -73,7 +73,8 @@ pub(crate) fn cell_averaged_gradients<const D: usize>(
         }
         for &(_, p) in group {
             for (k, node) in conn.support_nodes(p).iter().enumerate() {
-                let s = sums.iter().find(|(m, _)| m == node).map_or(SVector::zeros(), |(_, s)| *s);
+                // Every support node of the group's points was summed above.
+                let s = sums.iter().find(|(m, _)| m == node).expect("a node of the group").1;
                 out[p * stride + k] = s / volume;
             }
         }

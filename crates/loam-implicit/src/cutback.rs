@@ -24,12 +24,12 @@ pub(crate) struct CutBack {
     /// Halvings of the current sub-step, and converged sub-steps since the last change.
     depth: usize,
     streak: usize,
-    done: Advanced,
+    done: Tally,
 }
 
-/// What advancing to one step's target took.
+/// What reaching one step's target took so far.
 #[derive(Debug, Default)]
-struct Advanced {
+struct Tally {
     substeps: usize,
     cutbacks: usize,
     iterations: usize,
@@ -43,7 +43,7 @@ struct Advanced {
 impl CutBack {
     /// Control a step from `position` to `target`.
     pub fn new(position: f64, target: f64, scale: f64, max_cutbacks: usize) -> Self {
-        Self { full: target - position, target, scale, max_cutbacks, depth: 0, streak: 0, done: Advanced::default() }
+        Self { full: target - position, target, scale, max_cutbacks, depth: 0, streak: 0, done: Tally::default() }
     }
 
     /// The size of the next attempt from `position`, or `None` once the target is reached.

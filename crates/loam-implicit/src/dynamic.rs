@@ -23,7 +23,7 @@ use crate::engine::Engine;
 use crate::inertia::Inertia;
 use crate::points::PointUpdateError;
 use crate::{StepError, StepReport};
-use loam_kernels::{gather_internal_force, gather_nodal, internal_force, interpolate};
+use loam_kernels::{gather_internal_force, gather_nodal, internal_force, interpolate, interpolate_pair};
 use loam_model::Model;
 use loam_solve::{LinearSolverKind, NewtonError, NewtonReport, NewtonSettings};
 use rayon::prelude::*;
@@ -174,8 +174,9 @@ impl<const D: usize> Dynamic<D> {
         self.engine.check(self.step + 1)
     }
 
-    /// Advance one time step, cutting back as needed: connect, then attempt the step; a
-    /// failed attempt is retried from the committed state with half the time step.
+    /// Advance one time step, cutting back as needed: before the first step the points take
+    /// the equilibrium acceleration; then connect and attempt the step, a failed attempt
+    /// retried from the committed state with half the time step.
     pub fn step(&mut self) -> Result<StepReport, StepError> {
         if self.is_finished() {
             return Err(StepError::Finished(self.step));
@@ -188,11 +189,16 @@ impl<const D: usize> Dynamic<D> {
         if self.settings.duration - target < 1e-6 * dt {
             target = self.settings.duration;
         }
+        if !self.started {
+            self.engine.connect(step)?;
+            self.initial_acceleration();
+            self.started = true;
+        }
         let mut control = CutBack::new(self.time, target, dt, self.settings.max_cutbacks);
         while let Some(size) = control.next(self.time) {
             self.engine.connect(step)?;
             let h = size.min(target - self.time);
-            match self.time_step(h) {
+            match self.attempt(h) {
                 Ok(report) => control.converged(report, self.engine.conn.active_nodes().len()),
                 Err(e) => {
                     let reason = format!("at time {:.6e} with time step {h:.3e}: {e}", self.time);
@@ -209,11 +215,7 @@ impl<const D: usize> Dynamic<D> {
     /// One attempt at a time step of length `dt` from the committed state, on the
     /// connectivity of that state: the algorithm of an implicit dynamic step, stage by
     /// stage. On success the state is committed; on failure nothing changes.
-    fn time_step(&mut self, dt: f64) -> Result<NewtonReport, NewtonError<PointUpdateError>> {
-        if !self.started {
-            self.initial_acceleration();
-            self.started = true;
-        }
+    fn attempt(&mut self, dt: f64) -> Result<NewtonReport, NewtonError<PointUpdateError>> {
         self.map_to_nodes();
         self.engine.external_forces(1.0);
         self.predict(dt);
@@ -261,8 +263,9 @@ impl<const D: usize> Dynamic<D> {
         }
     }
 
-    /// Equilibrium acceleration of the committed state, a = M_L⁻¹ (f_ext − f_int), onto the
-    /// points (a_p = Σ N_I a_I).
+    /// Before the first step: the equilibrium acceleration of the committed state,
+    /// a = M_L⁻¹ (f_ext − f_int), onto the points (a_p = Σ N_I a_I); nodes that persist keep
+    /// the nodal mass, velocity and acceleration gathered here.
     fn initial_acceleration(&mut self) {
         self.gather_nodal_motion();
         self.engine.external_forces(1.0);
@@ -326,12 +329,10 @@ impl<const D: usize> Dynamic<D> {
                 *a = *an;
             }
             let (vel, acc) = (&self.inertia.velocity, &self.acceleration);
-            (pts.velocity.par_iter_mut(), pts.acceleration.par_iter_mut()).into_par_iter().enumerate().for_each(
-                |(p, (v, a))| {
-                    *v = interpolate(conn, p, vel);
-                    *a = interpolate(conn, p, acc);
-                },
-            );
+            (pts.velocity.par_iter_mut(), pts.acceleration.par_iter_mut())
+                .into_par_iter()
+                .enumerate()
+                .for_each(|(p, (v, a))| (*v, *a) = interpolate_pair(conn, p, vel, acc));
         } else {
             (pts.velocity.par_iter_mut(), pts.acceleration.par_iter_mut()).into_par_iter().enumerate().for_each(
                 |(p, (v, a))| {

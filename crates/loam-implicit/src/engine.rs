@@ -268,9 +268,7 @@ impl<const D: usize> Engine<D> {
         let n = pts.history.len();
         pts.history.copy_from_slice(&trial.history[..n]);
         if moves {
-            // Every mesh node belongs to an element, so all are active; the grid stays.
-            let g2a = &conn.active_nodes().grid_to_active;
-            self.model.displace_background(|n| SVector::from_fn(|i, _| du[g2a[n] as usize * D + i]));
+            self.model.displace_background(conn.active_nodes(), du);
         }
         self.conn_current = !moves;
     }

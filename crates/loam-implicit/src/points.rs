@@ -172,10 +172,10 @@ fn finite_strain_point<const D: usize>(
     )?;
     let det_df = upd.delta_f.determinant();
     // det ΔF > 0 was checked by the update, so ΔF is invertible unless it is numerically
-    // singular, which is an error like a negative Jacobian, not a case to paper over.
+    // singular: an error, not a case to paper over.
     let inv = (SMatrix::<f64, D, D>::identity() + g)
         .try_inverse()
-        .ok_or(ConstitutiveError::NonPositiveJacobian { j: det_df })?;
+        .ok_or(ConstitutiveError::SingularIncrement { det: det_df })?;
     for (x, grad) in slot.grad_x.iter_mut().zip(grads) {
         *x = inv.transpose() * grad;
     }

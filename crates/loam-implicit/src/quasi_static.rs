@@ -2,7 +2,7 @@
 //! per step, automatic cut-back, commit of the converged state.
 //!
 //! [`QuasiStatic::step`] advances one load step through the cut-back control;
-//! [`QuasiStatic::increment`] is one attempt, the algorithm stage by stage.
+//! [`QuasiStatic::attempt`] is one attempt at a sub-step, the algorithm stage by stage.
 
 use crate::cutback::CutBack;
 use crate::engine::Engine;
@@ -121,7 +121,7 @@ impl<const D: usize> QuasiStatic<D> {
         while let Some(size) = control.next(self.load_factor) {
             self.engine.connect(step)?;
             let lambda = (self.load_factor + size).min(target);
-            match self.increment(lambda) {
+            match self.attempt(lambda) {
                 Ok(report) => control.converged(report, self.engine.conn.active_nodes().len()),
                 Err(e) => control.failed(step, self.load_factor, lambda, e.to_string(), &e.report().residuals)?,
             }
@@ -134,7 +134,7 @@ impl<const D: usize> QuasiStatic<D> {
     /// One attempt to reach load factor `lambda` from the committed state, on the
     /// connectivity of that state: the algorithm of a quasi-static step, stage by stage.
     /// On success the state is committed; on failure nothing changes.
-    fn increment(&mut self, lambda: f64) -> Result<NewtonReport, NewtonError<PointUpdateError>> {
+    fn attempt(&mut self, lambda: f64) -> Result<NewtonReport, NewtonError<PointUpdateError>> {
         self.engine.external_forces(lambda);
         self.prescribe(lambda);
         let report = self.engine.newton(None)?;

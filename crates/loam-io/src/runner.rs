@@ -295,7 +295,7 @@ fn factor_of_safety<const D: usize>(
     Ok(fos?)
 }
 
-/// Flattened per-point fields shared by the VTU and CSV writers.
+/// Flattened per-point fields of a VTU frame.
 struct Fields {
     position: Vec<f64>,
     displacement: Vec<f64>,

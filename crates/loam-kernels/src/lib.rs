@@ -5,7 +5,8 @@
 //!   active nodes, mark the constrained dofs; [`check_constraints`] before a first step.
 //! - [`gather_nodal`]: point → node transfer, node by node in ascending point order, so
 //!   that the sums are bitwise the same on any number of threads.
-//! - [`interpolate`], [`interpolate_add`]: node → point transfer, Σ_I N_I(x_p) u_I.
+//! - [`interpolate`], [`interpolate_add`], [`interpolate_pair`]: node → point transfer,
+//!   Σ_I N_I(x_p) u_I.
 //! - [`internal_force`] and [`gather_internal_force`]: f_int,I = Σ_p v_p σ_p ∂N_I/∂x.
 //! - [`embed`], [`update_point`], [`advance_deformation`]: point kinematics — the
 //!   increment ΔF = I + ∇Δu, the law driven in small or finite strain, and the committed
@@ -22,4 +23,4 @@ pub use connect::{check_constraints, connect};
 pub use error::{ConnectError, RunError};
 pub use force::{gather_internal_force, internal_force};
 pub use point::{advance_deformation, embed, update_point, PointUpdate};
-pub use transfer::{gather_nodal, interpolate, interpolate_add};
+pub use transfer::{gather_nodal, interpolate, interpolate_add, interpolate_pair};

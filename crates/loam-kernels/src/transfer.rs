@@ -37,6 +37,26 @@ pub fn interpolate_add<const D: usize>(conn: &Connectivity<D>, p: usize, field: 
     }
 }
 
+/// Σ_I N_I u_I and Σ_I N_I w_I at point `p` of two nodal fields in one pass over its
+/// support (the grid update's velocity and acceleration).
+#[inline]
+pub fn interpolate_pair<const D: usize>(
+    conn: &Connectivity<D>,
+    p: usize,
+    u: &[f64],
+    w: &[f64],
+) -> (SVector<f64, D>, SVector<f64, D>) {
+    let (mut up, mut wp) = (SVector::zeros(), SVector::zeros());
+    for (&node, &n) in conn.support_nodes(p).iter().zip(conn.support_values(p)) {
+        let k = node as usize * D;
+        for i in 0..D {
+            up[i] += n * u[k + i];
+            wp[i] += n * w[k + i];
+        }
+    }
+    (up, wp)
+}
+
 /// Σ_I N_I(x_p) u_I at point `p` of the nodal field `field` (D values per active node).
 #[inline]
 pub fn interpolate<const D: usize>(conn: &Connectivity<D>, p: usize, field: &[f64]) -> SVector<f64, D> {

@@ -14,7 +14,7 @@ impl<const D: usize> Model<D> {
         (0..pts.len())
             .into_par_iter()
             .map(|p| {
-                let law = &self.materials[pts.material[p] as usize];
+                let law = self.law(p);
                 let eps = match self.kinematics {
                     Kinematics::SmallStrain => pts.elastic_strain[p],
                     Kinematics::FiniteStrain => match sym_log(&pts.elastic_strain[p]) {

@@ -85,7 +85,7 @@ impl<const D: usize> Model<D> {
         h_out: &mut [f64],
     ) -> Result<Matrix3<f64>, ModelError> {
         let pts = &self.points;
-        let law = &self.materials[pts.material[p] as usize];
+        let law = self.law(p);
         let Some(elastic) = law.elasticity() else {
             return Err(ModelError::Geostatic(format!(
                 "material {} ({}) has no isotropic elasticity to carry an initial stress",

@@ -16,11 +16,11 @@ mod points_mut;
 
 pub use constraint::PlaneConstraint;
 pub use energy::ExternalWork;
-pub use points_mut::PointsMut;
+pub use points_mut::{PointsMut, StateFields};
 
 use loam_constitutive::ConstitutiveLaw;
 use loam_grid::{ActiveNodes, Background, BasisKind, FeMesh, Grid};
-use loam_points::PointStore;
+use loam_points::{PointStore, PointsError};
 use nalgebra::{Matrix3, SVector};
 use std::sync::Arc;
 
@@ -84,6 +84,12 @@ impl AntiLocking {
 pub enum ModelError {
     #[error("the model has no material points")]
     NoPoints,
+    #[error("material points: {0}")]
+    Points(#[from] PointsError),
+    #[error("point {0} starts with a stress or a deformation; a model starts unstrained (give a geostatic initial stress with Model::geostatic_stress)")]
+    Prestrained(usize),
+    #[error("constraint {index}: its {what} must be finite")]
+    ConstraintValue { index: usize, what: &'static str },
     #[error("point {point} uses material {material}, but only {count} materials are defined")]
     MissingMaterial { point: usize, material: u32, count: usize },
     #[error("constraint {index} is on axis {axis}, but a {dimension}D model has axes 0..{dimension}")]
@@ -155,6 +161,12 @@ impl<const D: usize> Model<D> {
     ) -> Result<Self, ModelError> {
         if points.is_empty() {
             return Err(ModelError::NoPoints);
+        }
+        points.check()?;
+        if let Some(p) = (0..points.len())
+            .find(|&p| points.stress[p] != Matrix3::zeros() || points.deformation_gradient[p] != Matrix3::identity())
+        {
+            return Err(ModelError::Prestrained(p));
         }
         check_materials(&points, &materials)?;
         check_constraints(background.grid(), &constraints)?;
@@ -344,10 +356,30 @@ impl<const D: usize> Model<D> {
         PointsMut::new(&mut self.points)
     }
 
-    /// Move the background's nodes by `du(node)` where they move with the body (the mesh
-    /// of the FEM reference, after a converged step); a grid, reset every step, stays.
-    pub fn displace_background(&mut self, du: impl Fn(usize) -> SVector<f64, D>) {
-        self.background.displace(du);
+    /// Move the background's nodes by the converged increment `du` (D values per node of
+    /// `active`) where they move with the body (the mesh of the FEM reference); a grid,
+    /// reset every step, stays.
+    pub fn displace_background(&mut self, active: &ActiveNodes, du: &[f64]) {
+        self.background.displace(active, du);
+    }
+
+    /// Exchange the points' position, velocity, stress, elastic strain and (where the laws
+    /// keep one) history with `fields`, each holding one value per point (the history in the
+    /// laws' layout). O(1), and the model's invariants hold: a field of another length is
+    /// a bug of the analysis, and panics.
+    pub fn swap_state(&mut self, fields: &mut StateFields<D>) {
+        let n = self.points.len();
+        let pts = &mut self.points;
+        let lengths = [fields.position.len(), fields.velocity.len(), fields.stress.len(), fields.elastic_strain.len()];
+        assert!(lengths.iter().all(|&l| l == n), "swap_state: fields of {lengths:?} values for {n} points");
+        std::mem::swap(&mut pts.position, &mut fields.position);
+        std::mem::swap(&mut pts.velocity, &mut fields.velocity);
+        std::mem::swap(&mut pts.stress, &mut fields.stress);
+        std::mem::swap(&mut pts.elastic_strain, &mut fields.elastic_strain);
+        if pts.history_stride() > 0 {
+            assert_eq!(fields.history.len(), pts.history.len(), "swap_state: history of another layout");
+            std::mem::swap(&mut pts.history, &mut fields.history);
+        }
     }
 
     /// The points' velocities, to set an initial condition.
@@ -400,7 +432,7 @@ impl<const D: usize> Model<D> {
 
     /// The volume-averaging group of every point for B-bar: its grid cell (the face rule
     /// of the basis: a cell owns [x_i, x_{i+1})), or its element in the FEM reference.
-    pub fn averaging_cell(&self, p: usize) -> usize {
+    pub fn averaging_group(&self, p: usize) -> usize {
         self.background.averaging_group(p, &self.configuration()[p])
     }
 
@@ -505,9 +537,17 @@ fn check_materials<const D: usize>(
     }
 }
 
-/// Every constraint must lie on an axis of the model and a node plane of the grid.
+/// Every constraint must lie on an axis of the model and a node plane of the grid, with
+/// finite displacements and box.
 fn check_constraints<const D: usize>(grid: &Grid<D>, constraints: &[PlaneConstraint]) -> Result<(), ModelError> {
     for (index, c) in constraints.iter().enumerate() {
+        if !c.displacement.iter().all(|u| u.is_finite()) {
+            return Err(ModelError::ConstraintValue { index, what: "displacement" });
+        }
+        // The box may be unbounded (±∞ on an axis it does not limit) but not NaN.
+        if c.within.is_some_and(|(lo, hi)| lo.iter().chain(&hi).any(|x| x.is_nan())) {
+            return Err(ModelError::ConstraintValue { index, what: "box (within)" });
+        }
         if c.axis >= D {
             return Err(ModelError::ConstraintAxis { index, axis: c.axis, dimension: D });
         }

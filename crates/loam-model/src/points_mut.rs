@@ -1,8 +1,9 @@
 //! The evolving state of a model's points, open to the analyses that advance it: slices
 //! (so no point can be added or removed) of everything that changes from step to step,
-//! beside read-only slices of what a point keeps for ever (mass, material, initial
-//! position, volume and domain). A model's invariants — every point's material exists,
-//! the history layout is the laws' — hold whatever an analysis writes through it.
+//! beside the initial GIMP domains the current ones stretch from. What a point keeps for
+//! ever (mass, material, initial position and volume) is not writable through it, so a
+//! model's invariants — every point's material exists, the history layout is the laws' —
+//! hold whatever an analysis writes.
 
 use loam_points::PointStore;
 use nalgebra::{Matrix3, SVector};
@@ -17,25 +18,31 @@ pub struct PointsMut<'a, const D: usize> {
     pub half_length: &'a mut [SVector<f64, D>],
     pub stress: &'a mut [Matrix3<f64>],
     pub elastic_strain: &'a mut [Matrix3<f64>],
-    /// Every point's history, `history_stride` values each.
+    /// Every point's history, the laws' history length each.
     pub history: &'a mut [f64],
-    pub history_stride: usize,
-    pub position0: &'a [SVector<f64, D>],
-    pub volume0: &'a [f64],
+    /// The initial GIMP half-lengths, which the current ones stretch from.
     pub half_length0: &'a [SVector<f64, D>],
-    pub mass: &'a [f64],
-    pub material: &'a [u32],
+}
+
+/// Whole fields of the points' evolving state, exchanged with a model's in O(1) by
+/// [`Model::swap_state`](crate::Model::swap_state): an explicit step computes them anew
+/// for every point and commits by exchange, with no copy.
+#[derive(Debug, Default)]
+pub struct StateFields<const D: usize> {
+    pub position: Vec<SVector<f64, D>>,
+    pub velocity: Vec<SVector<f64, D>>,
+    pub stress: Vec<Matrix3<f64>>,
+    pub elastic_strain: Vec<Matrix3<f64>>,
+    /// The laws' history values per point, or anything (not exchanged) where the laws keep
+    /// none.
+    pub history: Vec<f64>,
 }
 
 impl<'a, const D: usize> PointsMut<'a, D> {
     pub(crate) fn new(points: &'a mut PointStore<D>) -> Self {
-        let history_stride = points.history_stride();
         let PointStore {
             position,
-            position0,
             volume,
-            volume0,
-            mass,
             velocity,
             acceleration,
             deformation_gradient,
@@ -43,7 +50,6 @@ impl<'a, const D: usize> PointsMut<'a, D> {
             stress,
             half_length0,
             half_length,
-            material,
             history,
             ..
         } = points;
@@ -57,12 +63,7 @@ impl<'a, const D: usize> PointsMut<'a, D> {
             stress,
             elastic_strain,
             history,
-            history_stride,
-            position0,
-            volume0,
             half_length0,
-            mass,
-            material,
         }
     }
 

@@ -3,7 +3,7 @@
 
 use super::*;
 use loam_constitutive::{Elastic, VonMises};
-use loam_points::Shape;
+use loam_points::{PointsError, Shape};
 use nalgebra::Vector2;
 
 fn elastic() -> Arc<dyn ConstitutiveLaw> {
@@ -166,4 +166,36 @@ fn the_mutable_view_writes_state_and_keeps_the_points() {
     view.velocity.iter_mut().for_each(|v| *v = Vector2::new(1.0, 0.0));
     assert_eq!(model.points().stress[0], Matrix3::identity());
     assert_eq!(model.points().momentum(), Vector2::new(model.points().total_mass(), 0.0));
+}
+
+/// A store whose fields disagree in length, a point with no volume, a point that starts
+/// stressed and a constraint with a NaN displacement are refused with what is wrong, not
+/// indexed into a panic later.
+#[test]
+fn inconsistent_points_and_constraint_values_are_refused() {
+    let build = |points: PointStore<2>, constraints: Vec<PlaneConstraint>| {
+        Model::new(
+            grid(),
+            BasisKind::Linear,
+            Kinematics::SmallStrain,
+            points,
+            vec![elastic()],
+            constraints,
+            Vector2::zeros(),
+        )
+    };
+    let mut short = points(0);
+    short.mass.pop();
+    assert!(matches!(build(short, vec![]), Err(ModelError::Points(PointsError::FieldLength { field: "mass", .. }))));
+    let mut empty = points(0);
+    empty.volume[3] = 0.0;
+    assert!(matches!(build(empty, vec![]), Err(ModelError::Points(PointsError::Point { point: 3, .. }))));
+    let mut stressed = points(0);
+    stressed.stress[5][(0, 0)] = -1.0;
+    assert_eq!(build(stressed, vec![]).unwrap_err(), ModelError::Prestrained(5));
+    let nan = PlaneConstraint::new(1, 0, [false, true, false]).displaced([0.0, f64::NAN, 0.0]);
+    assert_eq!(
+        build(points(0), vec![nan]).unwrap_err(),
+        ModelError::ConstraintValue { index: 0, what: "displacement" }
+    );
 }

@@ -39,6 +39,10 @@ pub enum PointsError {
     PolygonDimension,
     #[error("box min {min:?} is not below max {max:?} on every axis")]
     BoxOrder { min: Vec<f64>, max: Vec<f64> },
+    #[error("the store holds {points} points but {found} values of `{field}`; every field needs one per point")]
+    FieldLength { field: &'static str, points: usize, found: usize },
+    #[error("point {point}: {what}")]
+    Point { point: usize, what: String },
 }
 
 /// A region of space that points fill.
@@ -200,6 +204,41 @@ impl<const D: usize> PointStore<D> {
     /// The largest distance a point has moved from its initial position.
     pub fn max_displacement(&self) -> f64 {
         self.position.iter().zip(&self.position0).map(|(x, x0)| (x - x0).norm()).fold(0.0, f64::max)
+    }
+
+    /// Check what every user of the store indexes: one value of every field per point, and
+    /// each point's position, volume and mass finite, volume and mass positive, velocity
+    /// finite.
+    pub fn check(&self) -> Result<(), PointsError> {
+        let n = self.len();
+        let lengths = [
+            ("position0", self.position0.len()),
+            ("volume", self.volume.len()),
+            ("volume0", self.volume0.len()),
+            ("mass", self.mass.len()),
+            ("velocity", self.velocity.len()),
+            ("acceleration", self.acceleration.len()),
+            ("deformation_gradient", self.deformation_gradient.len()),
+            ("elastic_strain", self.elastic_strain.len()),
+            ("stress", self.stress.len()),
+            ("half_length0", self.half_length0.len()),
+            ("half_length", self.half_length.len()),
+            ("material", self.material.len()),
+        ];
+        if let Some(&(field, found)) = lengths.iter().find(|(_, len)| *len != n) {
+            return Err(PointsError::FieldLength { field, points: n, found });
+        }
+        let bad = |point: usize, what: String| Err(PointsError::Point { point, what });
+        for p in 0..n {
+            if !(self.position[p].iter().chain(self.velocity[p].iter()).all(|c| c.is_finite())) {
+                return bad(p, "its position and velocity must be finite".into());
+            }
+            let (v, m) = (self.volume[p], self.mass[p]);
+            if !(v.is_finite() && v > 0.0 && m.is_finite() && m > 0.0) {
+                return bad(p, format!("volume {v} and mass {m}; both must be positive and finite"));
+            }
+        }
+        Ok(())
     }
 
     /// Kinetic energy ½ Σ m_p |v_p|².

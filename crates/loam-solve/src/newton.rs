@@ -153,10 +153,6 @@ impl NewtonControl {
         NewtonError::Problem { source, report: self.report.clone() }
     }
 
-    pub fn report(&self) -> &NewtonReport {
-        &self.report
-    }
-
     pub fn into_report(self) -> NewtonReport {
         self.report
     }

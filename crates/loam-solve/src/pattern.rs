@@ -206,8 +206,9 @@ impl BlockPattern {
 
     /// `y = A x` for a matrix with this pattern.
     pub fn mul_vec(&self, values: &[f64], x: &[f64], y: &mut [f64]) {
+        assert_eq!(x.len(), self.num_dofs(), "mul_vec: x has one value per dof");
         y.iter_mut().for_each(|v| *v = 0.0);
-        for (c, xc) in x.iter().enumerate().take(self.num_dofs()) {
+        for (c, xc) in x.iter().enumerate() {
             for idx in self.col_ptr[c]..self.col_ptr[c + 1] {
                 y[self.row_idx[idx]] += values[idx] * xc;
             }

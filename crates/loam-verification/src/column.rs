@@ -10,7 +10,7 @@
 
 use crate::bound::Bound;
 use loam_constitutive::{ConstitutiveLaw, Elastic};
-use loam_grid::gauss::GaussLegendre;
+use loam_grid::GaussLegendre;
 use loam_grid::{BasisKind, FeMesh, Grid};
 use loam_model::{Kinematics, Model, PlaneConstraint};
 use loam_points::{PointStore, Shape};
