@@ -3,7 +3,7 @@
 //! analysis to its end, sampling the histories after every step and timing the steps
 //! alone (sampling costs the same per step for both schemes, so it is left out).
 
-use crate::{Report, Row};
+use crate::report::{Report, Row};
 use anyhow::Result;
 use loam::explicit::{Explicit, ExplicitSettings, LeapfrogEnergy, TimeStep};
 use loam::grid::BasisKind;
@@ -129,12 +129,7 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
             bar_bounds::IMPLICIT_PERIOD_ERROR,
         ));
         let drift_bound = (dt == bar_bounds::ENERGY_DRIFT_TIME_STEP).then_some(bar_bounds::IMPLICIT_ENERGY_DRIFT);
-        report.rows.push(Row {
-            case: format!("V2 implicit dt={dt}"),
-            quantity: "energy_drift".into(),
-            value: e.energy_drift,
-            bound: drift_bound,
-        });
+        report.rows.push(Row::new(format!("V2 implicit dt={dt}"), "energy_drift", e.energy_drift, drift_bound));
         report.rows.push(Row::info(format!("V2 implicit dt={dt}"), "wall_time_s", run.wall_s));
     }
     for dt in [0.1, 0.5, 1.0] {
@@ -171,12 +166,12 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
         e.energy_drift,
         run.wall_s
     )?;
-    report.rows.push(Row {
-        case: "V2 explicit 0.9 dt_c".into(),
-        quantity: "stable (1 = ran to the end)".into(),
-        value: run.failure.is_none() as u8 as f64,
-        bound: Some(bar_bounds::EXPLICIT_STABLE),
-    });
+    report.rows.push(Row::checked(
+        "V2 explicit 0.9 dt_c",
+        "stable (1 = ran to the end)",
+        run.failure.is_none() as u8 as f64,
+        bar_bounds::EXPLICIT_STABLE,
+    ));
     report.rows.push(Row::checked(
         "V2 explicit 0.9 dt_c",
         "period_error",
@@ -200,12 +195,12 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
             None => "NOT detected — ran to the end".into(),
         }
     )?;
-    report.rows.push(Row {
-        case: "V2 explicit 2 dt_c".into(),
-        quantity: "blow-up detected (1 = yes)".into(),
-        value: detected as u8 as f64,
-        bound: Some(bar_bounds::EXPLICIT_BLOW_UP_DETECTED),
-    });
+    report.rows.push(Row::checked(
+        "V2 explicit 2 dt_c",
+        "blow-up detected (1 = yes)",
+        detected as u8 as f64,
+        bar_bounds::EXPLICIT_BLOW_UP_DETECTED,
+    ));
 
     // V5: colliding disks.
     let md = &mut report.md;
@@ -275,12 +270,12 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
         if let Some(f) = &run.failure {
             writeln!(md, "\n{name} stopped: {f}\n")?;
         }
-        report.rows.push(Row {
-            case: format!("V5 {name}"),
-            quantity: "ran to t=3 (1 = yes)".into(),
-            value: run.failure.is_none() as u8 as f64,
-            bound: Some(disk_bounds::RAN_TO_END),
-        });
+        report.rows.push(Row::checked(
+            format!("V5 {name}"),
+            "ran to t=3 (1 = yes)",
+            run.failure.is_none() as u8 as f64,
+            disk_bounds::RAN_TO_END,
+        ));
         report.rows.push(Row::checked(format!("V5 {name}"), "energy_loss_at_t3", loss, disk_bounds::ENERGY_LOSS));
         report.rows.push(Row::checked(format!("V5 {name}"), "max_energy_growth", growth, disk_bounds::ENERGY_GROWTH));
         plot.series.push(
@@ -340,12 +335,12 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
         SUDDEN_GRAVITY_E_SIGMA,
     ));
     report.rows.push(Row::info("V1a sudden gravity", "mean_settlement_ratio", mean_ratio));
-    report.rows.push(Row {
-        case: "V1a sudden gravity".into(),
-        quantity: "|amplification - 2|".into(),
-        value: (amplification - 2.0).abs(),
-        bound: Some(SUDDEN_GRAVITY_AMPLIFICATION),
-    });
+    report.rows.push(Row::checked(
+        "V1a sudden gravity",
+        "|amplification - 2|",
+        (amplification - 2.0).abs(),
+        SUDDEN_GRAVITY_AMPLIFICATION,
+    ));
     if let Some(f) = run.failure {
         anyhow::bail!("the column under sudden gravity stopped: {f}");
     }

@@ -5,7 +5,7 @@
 //! sweep), and every curve's rise to its plateau is checked for drops. The load–settlement
 //! curves go to `footing_curves.csv` and `footing_curves.svg`.
 
-use crate::{Report, Row};
+use crate::report::{Report, Row};
 use anyhow::Result;
 use loam::constitutive::{ConstitutiveLaw, Elastic, MohrCoulomb, VonMises};
 use loam::implicit::{AntiLocking, QuasiStatic, QuasiStaticSettings};

@@ -3,7 +3,8 @@
 //! for Newton, points leaving the grid. Figures, not bounds, except that the contrast case
 //! must converge.
 
-use crate::{basis_name, Report, Row};
+use crate::columns::basis_name;
+use crate::report::{Report, Row};
 use anyhow::Result;
 use loam::grid::BasisKind;
 use loam::implicit::{ConnectError, Kinematics, QuasiStatic, QuasiStaticSettings, StepError};
@@ -150,12 +151,12 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
     let s = softening(8, 0.0);
     writeln!(md, "- the run stops with: `{}`; the model holds the last converged step's state ({:.4} shortening): {}, with {} of its {} points.\n", s.stop, s.reached, if s.kept_last_state { "unchanged" } else { "CHANGED" }, s.points.1, s.points.0)?;
     let reported = s.left_grid && s.kept_last_state && s.points.0 == s.points.1;
-    report.rows.push(Row {
-        case: "H4 point leaving the grid".into(),
-        quantity: "reported as such, last state kept (1 = yes)".into(),
-        value: reported as u8 as f64,
-        bound: Some(POINT_LEAVING_THE_GRID_REPORTED),
-    });
+    report.rows.push(Row::checked(
+        "H4 point leaving the grid",
+        "reported as such, last state kept (1 = yes)",
+        reported as u8 as f64,
+        POINT_LEAVING_THE_GRID_REPORTED,
+    ));
     small_cuts(report)?;
     let md = &mut report.md;
     writeln!(md, "An explicit step above the critical one is the remaining hard case; V2 above shows it detected (the explicit row at 2 Δt_c), and a scene asking for one is refused unless `allow_above_critical`.\n")?;

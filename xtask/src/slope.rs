@@ -2,7 +2,7 @@
 //! Taylor's stability number, and the Griffiths & Lane (1999) frictional slope by strength
 //! reduction against their factor of safety 1.4.
 
-use crate::{Report, Row};
+use crate::report::{Report, Row};
 use anyhow::Result;
 use loam::constitutive::{ConstitutiveLaw, Elastic, MohrCoulomb, VonMises};
 use loam::explicit::{Explicit, ExplicitSettings, TimeStep};
