@@ -11,7 +11,7 @@
 //!
 //! Writes `steps.md`, `steps.csv` and SVG plots into the output folder.
 
-use crate::dynamics::{bar_explicit, bar_fem_implicit, bar_implicit, run_explicit, DynRun};
+use crate::dynamics::{bar_explicit, bar_fem_implicit, bar_implicit, explicit, run_analysis, DynRun};
 use crate::svg::{Plot, Series};
 use anyhow::{Context, Result};
 use loam::explicit::{ExplicitSettings, TimeStep};
@@ -258,7 +258,7 @@ pub fn run(quick: bool, out: &Path) -> Result<()> {
         let mut wall = 0.0;
         let mut last_wall = Instant::now();
         let mut k = 0usize;
-        let (run, last) = run_explicit(model(), settings, |_, m| {
+        let (run, last) = run_analysis(explicit(model(), settings), |_, m| {
             wall += last_wall.elapsed().as_secs_f64();
             k += 1;
             if k.is_multiple_of(20) {
