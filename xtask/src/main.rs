@@ -10,6 +10,7 @@ mod footing;
 mod hard_cases;
 mod report;
 mod slope;
+mod soil;
 mod steps;
 mod svg;
 
