@@ -3,10 +3,11 @@
 //! for Newton, points leaving the grid. Figures, not bounds, except that the contrast case
 //! must converge.
 
-use crate::{basis_name, Report, Row};
+use crate::columns::basis_name;
+use crate::report::{Report, Row};
 use anyhow::Result;
 use loam::grid::BasisKind;
-use loam::implicit::{ConnectError, Kinematics, QuasiStatic, QuasiStaticSettings, StepError};
+use loam::implicit::{ConnectError, Kinematics, QuasiStatic, QuasiStaticSettings, StepError, StepReport};
 use loam_verification::hard_cases::bounds::{
     CONTRAST_NEWTON_ITERATIONS, GHOST_CONDITION_RATIO, GHOST_NEWTON_FAILURES, POINT_LEAVING_THE_GRID_REPORTED,
 };
@@ -16,7 +17,7 @@ use loam_verification::{
 use std::fmt::Write as _;
 use std::time::Instant;
 
-/// The softening specimen pushed to 4 % shortening in 80 steps: peak and last load, how
+/// The softening specimen pushed to `SHORTENING` in 80 steps: peak and last load, how
 /// far it got and why it stopped.
 struct Softening {
     peak: f64,
@@ -34,8 +35,20 @@ struct Softening {
     kept_last_state: bool,
 }
 
+const SHORTENING: f64 = 0.04;
+
+impl Softening {
+    /// Take in a converged step.
+    fn record(&mut self, r: StepReport) {
+        self.last = -r.reactions[0][1];
+        self.peak = self.peak.max(self.last);
+        self.reached = r.load_factor * SHORTENING;
+        self.max_iterations = self.max_iterations.max(r.most_iterations());
+        self.cutbacks += r.cutbacks;
+    }
+}
+
 fn softening(cells: usize, margin: f64) -> Softening {
-    const SHORTENING: f64 = 0.04;
     let mut qs = QuasiStatic::new(
         softening_specimen(cells, margin, SHORTENING),
         QuasiStaticSettings { load_steps: 80, ..Default::default() },
@@ -59,11 +72,7 @@ fn softening(cells: usize, margin: f64) -> Softening {
         match qs.step() {
             Ok(r) => {
                 last_state.clone_from(&qs.model().points().position);
-                out.last = -r.reactions[0][1];
-                out.peak = out.peak.max(out.last);
-                out.reached = r.load_factor * SHORTENING;
-                out.max_iterations = out.max_iterations.max(r.most_iterations());
-                out.cutbacks += r.cutbacks;
+                out.record(r);
             }
             Err(e) => {
                 out.left_grid = matches!(e, StepError::Connect(ConnectError::PointOutsideGrid { .. }));
@@ -78,13 +87,23 @@ fn softening(cells: usize, margin: f64) -> Softening {
     out
 }
 
+/// The hard-case section, one subsection per case.
 pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
-    let md = &mut report.md;
-    writeln!(md, "## Hard cases\n")?;
+    writeln!(report.md, "## Hard cases\n")?;
+    stiffness_contrast(report)?;
+    softening_section(quick, report)?;
+    one_big_step(report)?;
+    leaving_the_grid(report)?;
+    small_cuts(report)?;
+    writeln!(report.md, "An explicit step above the critical one is the remaining hard case; V2 above shows it detected (the explicit row at 2 Δt_c), and a scene asking for one is refused unless `allow_above_critical`.\n")?;
+    Ok(())
+}
 
-    writeln!(md, "### Stiffness contrast\n\nThe V1a column (small strain, one load step, 32 cells) with its upper half `contrast` times softer than the lower; the interface on a cell face. The stress is the weight above whatever the stiffness; the displacement integrates σ/E per layer.\n")?;
+/// H1: the V1a column with a soft upper half; Newton's iterations at a 10⁶ contrast are bounded.
+fn stiffness_contrast(report: &mut Report) -> Result<()> {
+    writeln!(report.md, "### Stiffness contrast\n\nThe V1a column (small strain, one load step, 32 cells) with its upper half `contrast` times softer than the lower; the interface on a cell face. The stress is the weight above whatever the stiffness; the displacement integrates σ/E per layer.\n")?;
     writeln!(
-        md,
+        report.md,
         "| basis | contrast | Newton its | final residual | e_σ | e_u (top) |\n|---|---:|---:|---:|---:|---:|"
     )?;
     for basis in [BasisKind::Gimp, BasisKind::QuadraticBSpline] {
@@ -95,7 +114,7 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
             let r = qs.step()?;
             let e = column_errors(qs.model().points(), &layered.column, 1, |y| layered.displacement(y));
             writeln!(
-                md,
+                report.md,
                 "| {} | {contrast:.0e} | {} | {:.1e} | {:.3e} | {:.3e} |",
                 basis_name(basis),
                 r.iterations,
@@ -104,26 +123,27 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
                 e.top_displacement
             )?;
             if contrast == 1e6 {
-                report.rows.push(Row::checked(
-                    format!("H1 contrast 1e6 {}", basis_name(basis)),
-                    "newton_iterations",
-                    r.iterations as f64,
-                    CONTRAST_NEWTON_ITERATIONS,
-                ));
+                let case = format!("H1 contrast 1e6 {}", basis_name(basis));
+                let its = r.iterations as f64;
+                report.rows.push(Row::checked(case, "newton_iterations", its, CONTRAST_NEWTON_ITERATIONS));
             }
         }
     }
-    writeln!(md, "\nThe contrast costs Newton nothing (two iterations to round-off) and GIMP nothing in accuracy. Quadratic B-splines are C¹, so their strain is continuous across the interface where the true strain jumps by the contrast: the stress error near it is O(1) and e_σ reaches 0.1 (theory.md §4). Use GIMP or the tent across strong material interfaces.\n")?;
+    writeln!(report.md, "\nThe contrast costs Newton nothing (two iterations to round-off) and GIMP nothing in accuracy. Quadratic B-splines are C¹, so their strain is continuous across the interface where the true strain jumps by the contrast: the stress error near it is O(1) and e_σ reaches 0.1 (theory.md §4). Use GIMP or the tent across strong material interfaces.\n")?;
+    Ok(())
+}
 
+/// H2: the softening specimen on refined meshes, its post-peak response shown, not bounded.
+fn softening_section(quick: bool, report: &mut Report) -> Result<()> {
     let meshes: &[usize] = if quick { &[8, 16] } else { &[8, 16, 32] };
-    writeln!(md, "### Strain softening under mesh refinement\n\nPlane-strain compression of a 1 × 2 von Mises specimen softening from σ_y = 100 to 30 (H = −500, E = 1e4, ν = 0.3), a weaker corner (σ_y = 90) seeding the band; linear basis, B-bar, top pushed 4 % in 80 steps, LU (a softening tangent is indefinite: Cholesky stops at its first negative pivot). Local softening has no length scale, so the band is one cell wide and the post-peak response depends on the mesh. Shown, not hidden:\n")?;
-    writeln!(md, "| cells across | peak load | last load | shortening reached | max Newton its per sub-step | cut-backs | wall [s] |\n|---:|---:|---:|---:|---:|---:|---:|")?;
+    writeln!(report.md, "### Strain softening under mesh refinement\n\nPlane-strain compression of a 1 × 2 von Mises specimen softening from σ_y = 100 to 30 (H = −500, E = 1e4, ν = 0.3), a weaker corner (σ_y = 90) seeding the band; linear basis, B-bar, top pushed 4 % in 80 steps, LU (a softening tangent is indefinite: Cholesky stops at its first negative pivot). Local softening has no length scale, so the band is one cell wide and the post-peak response depends on the mesh. Shown, not hidden:\n")?;
+    writeln!(report.md, "| cells across | peak load | last load | shortening reached | max Newton its per sub-step | cut-backs | wall [s] |\n|---:|---:|---:|---:|---:|---:|---:|")?;
     let mut stops = Vec::new();
     for &cells in meshes {
         eprintln!("verify: hard case, softening, {cells} cells across");
         let s = softening(cells, 0.5);
         writeln!(
-            md,
+            report.md,
             "| {cells} | {:.2} | {:.2} | {:.4} | {} | {} | {:.2} |",
             s.peak, s.last, s.reached, s.max_iterations, s.cutbacks, s.wall_s
         )?;
@@ -131,9 +151,14 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
         report.rows.push(Row::info(format!("H2 softening {cells} cells"), "peak_load", s.peak));
         report.rows.push(Row::info(format!("H2 softening {cells} cells"), "shortening_reached", s.reached));
     }
-    writeln!(md, "\nWhy each run stopped:\n\n{}\n\nThe coarse mesh follows the softening branch down towards the residual strength. The finer meshes stop soon after the peak with Newton finding no equilibrium. Their band is narrower and the specimen unloads faster: most likely a snap-back, which displacement control cannot follow and arc-length control (not built) would. The peak itself is mesh-independent to 2 %. A regularised law (non-local or gradient plasticity) is what makes the post-peak branch objective; loam does not have one.\n", stops.join("\n"))?;
+    writeln!(report.md, "\nWhy each run stopped:\n\n{}\n\nThe coarse mesh follows the softening branch down towards the residual strength. The finer meshes stop soon after the peak with Newton finding no equilibrium. Their band is narrower and the specimen unloads faster: most likely a snap-back, which displacement control cannot follow and arc-length control (not built) would. The peak itself is mesh-independent to 2 %. A regularised law (non-local or gradient plasticity) is what makes the post-peak branch objective; loam does not have one.\n", stops.join("\n"))?;
+    Ok(())
+}
 
-    writeln!(md, "### A load step too large for Newton\n\nThe V1c column (GIMP, 16 cells, finite strain) given its whole load in one step with at most 3 Newton iterations per attempt:\n")?;
+/// H3: V1c's whole load in one step with 3 Newton iterations per attempt: the cut-backs
+/// carry it.
+fn one_big_step(report: &mut Report) -> Result<()> {
+    writeln!(report.md, "### A load step too large for Newton\n\nThe V1c column (GIMP, 16 cells, finite strain) given its whole load in one step with at most 3 Newton iterations per attempt:\n")?;
     let c = Column::V1C;
     let mut settings = QuasiStaticSettings { load_steps: 1, ..Default::default() };
     settings.newton.max_iterations = 3;
@@ -143,22 +168,21 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
     );
     let r = qs.step()?;
     let e = column_errors(qs.model().points(), &c, 1, |y| c.hencky_displacement(y));
-    writeln!(md, "- {} failed attempts (cut-backs), {} converged sub-steps with {} Newton iterations (the sub-step halves on a failure and doubles after two successes); load factor {:.3} reached; e_σ = {:.3e} (3.7e-3 with 40 load steps). run_log.csv records the cut-backs and sub-steps of every step.\n", r.cutbacks, r.substeps, r.iterations, r.load_factor, e.stress)?;
+    writeln!(report.md, "- {} failed attempts (cut-backs), {} converged sub-steps with {} Newton iterations (the sub-step halves on a failure and doubles after two successes); load factor {:.3} reached; e_σ = {:.3e} (3.7e-3 with 40 load steps). run_log.csv records the cut-backs and sub-steps of every step.\n", r.cutbacks, r.substeps, r.iterations, r.load_factor, e.stress)?;
     report.rows.push(Row::info("H3 one-step V1c, 3 iterations max", "cutbacks", r.cutbacks as f64));
+    Ok(())
+}
 
-    writeln!(md, "### Points leaving the grid\n\nThe softening specimen (8 cells across) on a grid that ends at its right side, where it bulges:\n")?;
+/// H4: the softening specimen bulging out of a grid that ends at its side: the stop is
+/// reported as such and the last converged state kept.
+fn leaving_the_grid(report: &mut Report) -> Result<()> {
+    writeln!(report.md, "### Points leaving the grid\n\nThe softening specimen (8 cells across) on a grid that ends at its right side, where it bulges:\n")?;
     let s = softening(8, 0.0);
-    writeln!(md, "- the run stops with: `{}`; the model holds the last converged step's state ({:.4} shortening): {}, with {} of its {} points.\n", s.stop, s.reached, if s.kept_last_state { "unchanged" } else { "CHANGED" }, s.points.1, s.points.0)?;
+    writeln!(report.md, "- the run stops with: `{}`; the model holds the last converged step's state ({:.4} shortening): {}, with {} of its {} points.\n", s.stop, s.reached, if s.kept_last_state { "unchanged" } else { "CHANGED" }, s.points.1, s.points.0)?;
     let reported = s.left_grid && s.kept_last_state && s.points.0 == s.points.1;
-    report.rows.push(Row {
-        case: "H4 point leaving the grid".into(),
-        quantity: "reported as such, last state kept (1 = yes)".into(),
-        value: reported as u8 as f64,
-        bound: Some(POINT_LEAVING_THE_GRID_REPORTED),
-    });
-    small_cuts(report)?;
-    let md = &mut report.md;
-    writeln!(md, "An explicit step above the critical one is the remaining hard case; V2 above shows it detected (the explicit row at 2 Δt_c), and a scene asking for one is refused unless `allow_above_critical`.\n")?;
+    let quantity = "reported as such, last state kept (1 = yes)";
+    let case = "H4 point leaving the grid";
+    report.rows.push(Row::checked(case, quantity, reported as u8 as f64, POINT_LEAVING_THE_GRID_REPORTED));
     Ok(())
 }
 

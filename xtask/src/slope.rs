@@ -2,13 +2,16 @@
 //! Taylor's stability number, and the Griffiths & Lane (1999) frictional slope by strength
 //! reduction against their factor of safety 1.4.
 
-use crate::{Report, Row};
+use crate::report::{Report, Row};
+use crate::soil::{self, COHESION, POISSON, YOUNG};
 use anyhow::Result;
-use loam::constitutive::{ConstitutiveLaw, Elastic, MohrCoulomb, VonMises};
+use loam::analysis::Analysis;
+use loam::constitutive::{ConstitutiveLaw, Elastic, MohrCoulomb};
 use loam::explicit::{Explicit, ExplicitSettings, TimeStep};
 use loam::grid::BasisKind;
 use loam::implicit::{
-    AntiLocking, Dynamic, DynamicSettings, Kinematics, QuasiStatic, QuasiStaticSettings, StrengthReduction,
+    AntiLocking, Dynamic, DynamicSettings, FactorOfSafety, Kinematics, QuasiStatic, QuasiStaticSettings,
+    StrengthReduction,
 };
 use loam::model::Model;
 use loam_verification::slope::bounds::{GRIFFITHS_LANE, RUNOUT_PROFILES, TAYLOR as TAYLOR_BOUND};
@@ -18,10 +21,9 @@ use std::fmt::Write as _;
 use std::sync::Arc;
 use std::time::Instant;
 
-/// Undrained strength c_u, E, ν (E/c_u = 10⁴; the collapse load does not depend on E).
-const C_U: f64 = 10.0;
-const YOUNG: f64 = 1e5;
-const POISSON: f64 = 0.3;
+/// The soil's cohesion as the undrained strength c_u (E/c_u = 10⁴; the collapse load does
+/// not depend on E).
+const C_U: f64 = COHESION;
 /// γH/c_u reached at load factor 1, and the load steps to get there: 0.1 per step, refined
 /// by up to 8 halvings where Newton fails, so collapse is located to 0.1/256.
 const N_MAX: f64 = 8.0;
@@ -40,7 +42,7 @@ struct Collapse {
 /// Gravity increase on the undrained slope: γH/c_u at the last load the slope carried.
 fn undrained(cells: usize, anti_locking: AntiLocking) -> Result<Collapse> {
     let g = SlopeGeometry::UNDRAINED;
-    let law: Arc<dyn ConstitutiveLaw> = Arc::new(VonMises::new(Elastic::new(YOUNG, POISSON)?, 3f64.sqrt() * C_U, 0.0)?);
+    let law = soil::undrained(Elastic::new(YOUNG, POISSON)?, C_U)?;
     let gamma = N_MAX * C_U / g.height;
     let model = slope_model(&g, law, gamma / 10.0, 10.0, cells, anti_locking);
     let mut qs = QuasiStatic::new(model, QuasiStaticSettings { load_steps: GRAVITY_STEPS, ..Default::default() });
@@ -57,26 +59,37 @@ fn undrained(cells: usize, anti_locking: AntiLocking) -> Result<Collapse> {
             }
         }
     }
-    // Settlement of the crest edge: the point nearest the top of the slope face.
-    let p = &qs.model().points();
-    let (cx, cy) = ((g.toe + g.run) * g.height, (g.depth + 1.0) * g.height);
-    let distance = |a: usize| (p.position0[a][0] - cx).hypot(p.position0[a][1] - cy);
-    let k = (0..p.len()).min_by(|&a, &b| distance(a).total_cmp(&distance(b))).unwrap_or(0);
     Ok(Collapse {
         n: qs.load_factor() * N_MAX,
         carried,
         max_iterations,
-        crest_settlement: p.position0[k][1] - p.position[k][1],
+        crest_settlement: crest_settlement(qs.model(), &g),
         stop,
         wall_s: t.elapsed().as_secs_f64(),
     })
 }
 
+/// Settlement of the crest edge: the point nearest the top of the slope face.
+fn crest_settlement(model: &Model<2>, g: &SlopeGeometry) -> f64 {
+    let p = model.points();
+    let (cx, cy) = ((g.toe + g.run) * g.height, (g.depth + 1.0) * g.height);
+    let distance = |a: usize| (p.position0[a][0] - cx).hypot(p.position0[a][1] - cy);
+    let k = (0..p.len()).min_by(|&a, &b| distance(a).total_cmp(&distance(b))).unwrap_or(0);
+    p.position0[k][1] - p.position[k][1]
+}
+
+/// The V4 sections: V4a, V4b and the V4c run-out.
 pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
     let meshes: &[usize] = if quick { &[5, 10] } else { &[5, 10, 20] };
-    let md = &mut report.md;
-    writeln!(md, "## V4a undrained slope: gravity increase\n\n45° slope, H = 10, on a foundation layer H deep (Taylor's depth factor 2), 2 H of ground before the toe and behind the crest; base fixed, sides on rollers; von Mises with c_u = {C_U} (σ_y = √3 c_u), E = {YOUNG:e}, ν = {POISSON}; linear basis, 2×2 points per cell, small strain, B-bar. Gravity grows by γH/c_u = 0.1 per load step (up to 8 halvings of a step that fails); collapse is the last load the slope carried. Reference: Taylor's 1/N_s ≈ {TAYLOR} (N_s ≈ 0.18 for 45°, deep foundation). Bound: within 10 % on the finest mesh.\n")?;
-    writeln!(md, "| cells per H | treatment | γH/c_u at collapse | /5.5 − 1 | crest settlement before collapse [m] | max Newton its per sub-step | wall [s] |\n|---:|---|---:|---:|---:|---:|---:|")?;
+    undrained_section(meshes, report)?;
+    griffiths_lane_section(meshes, report)?;
+    runout(quick, report)
+}
+
+/// V4a: B-bar on every mesh, plain on the second; the bound on the finest B-bar run.
+fn undrained_section(meshes: &[usize], report: &mut Report) -> Result<()> {
+    writeln!(report.md, "## V4a undrained slope: gravity increase\n\n45° slope, H = 10, on a foundation layer H deep (Taylor's depth factor 2), 2 H of ground before the toe and behind the crest; base fixed, sides on rollers; von Mises with c_u = {C_U} (σ_y = √3 c_u), E = {YOUNG:e}, ν = {POISSON}; linear basis, 2×2 points per cell, small strain, B-bar. Gravity grows by γH/c_u = 0.1 per load step (up to 8 halvings of a step that fails); collapse is the last load the slope carried. Reference: Taylor's 1/N_s ≈ {TAYLOR} (N_s ≈ 0.18 for 45°, deep foundation). Bound: within 10 % on the finest mesh.\n")?;
+    writeln!(report.md, "| cells per H | treatment | γH/c_u at collapse | /5.5 − 1 | crest settlement before collapse [m] | max Newton its per sub-step | wall [s] |\n|---:|---|---:|---:|---:|---:|---:|")?;
     let mut finest = f64::NAN;
     let mut stops = Vec::new();
     for &cells in meshes {
@@ -86,54 +99,42 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
             !r.carried,
             "V4a: the B-bar slope at {cells} cells per H carried γH/c_u = {N_MAX} without collapsing"
         );
-        let rel = r.n / TAYLOR - 1.0;
-        writeln!(
-            md,
-            "| {cells} | B-bar | {:.3} | {rel:+.3} | {:.4} | {} | {:.2} |",
-            r.n, r.crest_settlement, r.max_iterations, r.wall_s
-        )?;
+        finest = collapse_row(&mut report.md, cells, "B-bar", &r)?;
         stops.push(format!("- {cells} cells per H: {}", r.stop));
         report.rows.push(Row::info(format!("V4a undrained slope {cells}/H"), "gammaH_over_cu_at_collapse", r.n));
-        finest = rel;
     }
     let cells = meshes[1];
     eprintln!("verify: V4a undrained slope, plain, {cells} cells per H");
     let plain = undrained(cells, AntiLocking::None)?;
-    let at_least = if plain.carried { "> " } else { "" };
+    collapse_row(&mut report.md, cells, "plain", &plain)?;
+    stops.push(format!("- {cells} cells per H, plain: {}", plain.stop));
+    writeln!(report.md, "\nWhy each run stopped (the collapse criterion is a load step that Newton cannot carry after all its cut-backs; at the limit load the tangent of a perfectly plastic body turns singular, which the Cholesky factorisation reports):\n\n{}\n", stops.join("\n"))?;
+    let quantity = "abs_gammaH_over_cu_over_5.5_minus_1";
+    report.rows.push(Row::checked("V4a undrained slope (finest)", quantity, finest.abs(), TAYLOR_BOUND));
+    Ok(())
+}
+
+/// A V4a row; returns γH/c_u at collapse over Taylor's − 1. A run that carried the whole
+/// load shows it as a lower bound ("> ").
+fn collapse_row(md: &mut String, cells: usize, treatment: &str, r: &Collapse) -> Result<f64> {
+    let at_least = if r.carried { "> " } else { "" };
+    let rel = r.n / TAYLOR - 1.0;
     writeln!(
         md,
-        "| {cells} | plain | {at_least}{:.3} | {at_least}{:+.3} | {:.4} | {} | {:.2} |",
-        plain.n,
-        plain.n / TAYLOR - 1.0,
-        plain.crest_settlement,
-        plain.max_iterations,
-        plain.wall_s
+        "| {cells} | {treatment} | {at_least}{:.3} | {at_least}{rel:+.3} | {:.4} | {} | {:.2} |",
+        r.n, r.crest_settlement, r.max_iterations, r.wall_s
     )?;
-    stops.push(format!("- {cells} cells per H, plain: {}", plain.stop));
-    writeln!(md, "\nWhy each run stopped (the collapse criterion is a load step that Newton cannot carry after all its cut-backs; at the limit load the tangent of a perfectly plastic body turns singular, which the Cholesky factorisation reports):\n\n{}\n", stops.join("\n"))?;
-    report.rows.push(Row::checked(
-        "V4a undrained slope (finest)",
-        "abs_gammaH_over_cu_over_5.5_minus_1",
-        finest.abs(),
-        TAYLOR_BOUND,
-    ));
+    Ok(rel)
+}
 
-    writeln!(md, "## V4b Griffiths & Lane slope: strength reduction\n\n2:1 slope (26.57°), H = 10, foundation layer H deep, 1.2 H before the toe, 2 H behind the crest; Mohr–Coulomb c = 10, φ = 20°, ψ = 0 (non-associated: sparse LU), γ = 20 (c/(γH) = 0.05), E = {YOUNG:e}, ν = {POISSON}; linear basis, B-bar. Each trial divides c and tan φ by F and applies gravity in 10 load steps (up to 4 halvings); F is bisected between a trial that holds and one that fails, to 0.005. Reference: F ≈ {GL_FOS} (Griffiths & Lane 1999; Bishop's method gives 1.38). Bound: within 5 % on the finest mesh.\n")?;
-    writeln!(md, "| cells per H | F (bracket) | /1.4 − 1 | trials | largest displacement at the last stable trial [m] | wall [s] |\n|---:|---:|---:|---:|---:|---:|")?;
+/// V4b: the factor of safety on every mesh; the bound on the finest.
+fn griffiths_lane_section(meshes: &[usize], report: &mut Report) -> Result<()> {
+    writeln!(report.md, "## V4b Griffiths & Lane slope: strength reduction\n\n2:1 slope (26.57°), H = 10, foundation layer H deep, 1.2 H before the toe, 2 H behind the crest; Mohr–Coulomb c = 10, φ = 20°, ψ = 0 (non-associated: sparse LU), γ = 20 (c/(γH) = 0.05), E = {YOUNG:e}, ν = {POISSON}; linear basis, B-bar. Each trial divides c and tan φ by F and applies gravity in 10 load steps (up to 4 halvings); F is bisected between a trial that holds and one that fails, to 0.005. Reference: F ≈ {GL_FOS} (Griffiths & Lane 1999; Bishop's method gives 1.38). Bound: within 5 % on the finest mesh.\n")?;
+    writeln!(report.md, "| cells per H | F (bracket) | /1.4 − 1 | trials | largest displacement at the last stable trial [m] | wall [s] |\n|---:|---:|---:|---:|---:|---:|")?;
     let mut finest = f64::NAN;
     for &cells in meshes {
         eprintln!("verify: V4b Griffiths & Lane slope, {cells} cells per H");
-        let g = SlopeGeometry::GRIFFITHS_LANE;
-        let law: Arc<dyn ConstitutiveLaw> =
-            Arc::new(MohrCoulomb::from_degrees(Elastic::new(YOUNG, POISSON)?, 10.0, 20.0, 0.0)?);
-        let model = slope_model(&g, law, 2.0, 10.0, cells, AntiLocking::BBar);
-        let srf = StrengthReduction {
-            trial: QuasiStaticSettings { load_steps: 10, max_cutbacks: 4, ..Default::default() },
-            bracket: (1.0, 2.0),
-            tolerance: 0.005,
-        };
-        let t = Instant::now();
-        let fos = srf.factor_of_safety(&model, |_| {})?;
+        let (fos, wall) = griffiths_lane(cells)?;
         let last_stable = fos
             .trials
             .iter()
@@ -142,25 +143,37 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
             .map_or(f64::NAN, |t| t.max_displacement);
         let rel = fos.value() / GL_FOS - 1.0;
         writeln!(
-            md,
-            "| {cells} | {:.3} ({:.4}–{:.4}) | {rel:+.3} | {} | {last_stable:.3} | {:.1} |",
+            report.md,
+            "| {cells} | {:.3} ({:.4}–{:.4}) | {rel:+.3} | {} | {last_stable:.3} | {wall:.1} |",
             fos.value(),
             fos.stable,
             fos.failed,
-            fos.trials.len(),
-            t.elapsed().as_secs_f64()
+            fos.trials.len()
         )?;
         report.rows.push(Row::info(format!("V4b Griffiths-Lane slope {cells}/H"), "factor_of_safety", fos.value()));
         finest = rel;
     }
-    writeln!(md)?;
-    report.rows.push(Row::checked(
-        "V4b Griffiths-Lane slope (finest)",
-        "abs_fos_over_1.4_minus_1",
-        finest.abs(),
-        GRIFFITHS_LANE,
-    ));
-    runout(quick, report)
+    writeln!(report.md)?;
+    let quantity = "abs_fos_over_1.4_minus_1";
+    report.rows.push(Row::checked("V4b Griffiths-Lane slope (finest)", quantity, finest.abs(), GRIFFITHS_LANE));
+    Ok(())
+}
+
+/// Strength reduction on the Griffiths & Lane slope, F bracketed in [1, 2] to 0.005, and
+/// its wall time.
+fn griffiths_lane(cells: usize) -> Result<(FactorOfSafety, f64)> {
+    let g = SlopeGeometry::GRIFFITHS_LANE;
+    let law: Arc<dyn ConstitutiveLaw> =
+        Arc::new(MohrCoulomb::from_degrees(Elastic::new(YOUNG, POISSON)?, 10.0, 20.0, 0.0)?);
+    let model = slope_model(&g, law, 2.0, 10.0, cells, AntiLocking::BBar);
+    let srf = StrengthReduction {
+        trial: QuasiStaticSettings { load_steps: 10, max_cutbacks: 4, ..Default::default() },
+        bracket: (1.0, 2.0),
+        tolerance: 0.005,
+    };
+    let t = Instant::now();
+    let fos = srf.factor_of_safety(&model, |_| {})?;
+    Ok((fos, t.elapsed().as_secs_f64()))
 }
 
 /// The surface after run-out: the highest point in each column of cells.
@@ -182,76 +195,81 @@ fn heave(profile: &[f64], h: f64, g: &SlopeGeometry) -> f64 {
     profile[..toe].iter().fold(f64::NEG_INFINITY, |m, &y| m.max(y)) - g.depth * g.height
 }
 
+/// V4c's slope: γH/c_u = 8 (well past collapse), a softer E, released under full gravity.
+const N_RUNOUT: f64 = 8.0;
+const YOUNG_RUNOUT: f64 = 1e4;
+const DURATION: f64 = 4.0;
+
+/// A run-out to `DURATION`: its steps, the range of its time steps, its Newton iterations
+/// and cut-backs in all, its wall time and the final profile.
+struct Runout {
+    steps: usize,
+    dt: (f64, f64),
+    iterations: usize,
+    cutbacks: usize,
+    wall_s: f64,
+    profile: Vec<f64>,
+}
+
+/// Run an analysis of the run-out to its end; the wall time includes setting it up.
+fn run_out(start: impl FnOnce() -> Result<Analysis<2>>) -> Result<Runout> {
+    let t = Instant::now();
+    let mut a = start()?;
+    let mut out =
+        Runout { steps: 0, dt: (f64::INFINITY, 0.0), iterations: 0, cutbacks: 0, wall_s: 0.0, profile: vec![] };
+    while !a.is_finished() {
+        let r = a.step()?;
+        out.steps += 1;
+        out.dt = (out.dt.0.min(r.increment), out.dt.1.max(r.increment));
+        out.iterations += r.iterations;
+        out.cutbacks += r.cutbacks;
+    }
+    out.wall_s = t.elapsed().as_secs_f64();
+    out.profile = profile(a.model());
+    Ok(out)
+}
+
 /// V4c: the undrained slope at γH/c_u = 8 (well past collapse) released under full gravity,
 /// in large deformation, by implicit dynamics and by explicit MPM on the same mesh.
 fn runout(quick: bool, report: &mut Report) -> Result<()> {
-    const N_RUNOUT: f64 = 8.0;
-    const YOUNG_RUNOUT: f64 = 1e4;
-    const DURATION: f64 = 4.0;
     let cells = if quick { 5 } else { 10 };
     let g = SlopeGeometry::UNDRAINED;
-    let law: Arc<dyn ConstitutiveLaw> =
-        Arc::new(VonMises::new(Elastic::new(YOUNG_RUNOUT, POISSON)?, 3f64.sqrt() * C_U, 0.0)?);
+    let law = soil::undrained(Elastic::new(YOUNG_RUNOUT, POISSON)?, C_U)?;
     let gamma = N_RUNOUT * C_U / g.height;
     let model =
         || slope_model_with(&g, law.clone(), gamma / 10.0, 10.0, cells, BasisKind::Gimp, Kinematics::FiniteStrain);
     let h = g.height / cells as f64;
-    let md = &mut report.md;
-    writeln!(md, "## V4c run-out of the undrained slope: implicit and explicit side by side\n\nThe V4a slope with γH/c_u = {N_RUNOUT} (collapse is at 5.4), E = {YOUNG_RUNOUT:e}, released under full gravity at t = 0 and followed for {DURATION} s (the kinetic energy has fallen by two orders by then); GIMP, finite strain (no anti-locking: B-bar is small-strain only), {cells} cells per H (h = {h}), 2×2 points per cell. Implicit: trapezoidal Newmark, lumped mass. Explicit: MUSL, FLIP, CFL safety 0.5. Profile = highest point per column of cells; crest height = the profile where the crest was (initially {}), heave = the largest rise of the ground in front of the toe (a base failure lifts it). Bound: the implicit and explicit final profiles agree within two cells.\n", (g.depth + 1.0) * g.height)?;
-    writeln!(md, "| scheme | Δt [s] | steps | Newton its | cut-backs | wall [s] | crest height [m] | heave before the toe [m] | max profile difference from explicit [cells] |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|")?;
+    writeln!(report.md, "## V4c run-out of the undrained slope: implicit and explicit side by side\n\nThe V4a slope with γH/c_u = {N_RUNOUT} (collapse is at 5.4), E = {YOUNG_RUNOUT:e}, released under full gravity at t = 0 and followed for {DURATION} s (the kinetic energy has fallen by two orders by then); GIMP, finite strain (no anti-locking: B-bar is small-strain only), {cells} cells per H (h = {h}), 2×2 points per cell. Implicit: trapezoidal Newmark, lumped mass. Explicit: MUSL, FLIP, CFL safety 0.5. Profile = highest point per column of cells; crest height = the profile where the crest was (initially {}), heave = the largest rise of the ground in front of the toe (a base failure lifts it). Bound: the implicit and explicit final profiles agree within two cells.\n", (g.depth + 1.0) * g.height)?;
+    writeln!(report.md, "| scheme | Δt [s] | steps | Newton its | cut-backs | wall [s] | crest height [m] | heave before the toe [m] | max profile difference from explicit [cells] |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|")?;
     eprintln!("verify: V4c run-out, explicit, {cells} cells per H");
-    let t = Instant::now();
-    let mut ex = Explicit::new(
-        model(),
-        ExplicitSettings { time_step: TimeStep::Cfl { safety: 0.5 }, ..ExplicitSettings::new(DURATION) },
-    )?;
-    let (mut steps, mut dt_min, mut dt_max) = (0, f64::INFINITY, 0.0f64);
-    while !ex.is_finished() {
-        let r = ex.step()?;
-        steps += 1;
-        dt_min = dt_min.min(r.dt);
-        dt_max = dt_max.max(r.dt);
-    }
-    let wall = t.elapsed().as_secs_f64();
-    let explicit = profile(ex.model());
+    let settings = ExplicitSettings { time_step: TimeStep::Cfl { safety: 0.5 }, ..ExplicitSettings::new(DURATION) };
+    let ex = run_out(|| Ok(Analysis::Explicit(Explicit::new(model(), settings)?)))?;
     let crest_i = ((g.toe + g.run) * g.height / h) as usize;
+    let (dt_min, dt_max) = ex.dt;
+    let (crest, heave_ex) = (ex.profile[crest_i], heave(&ex.profile, h, &g));
     writeln!(
-        md,
-        "| explicit | {dt_min:.2e}–{dt_max:.2e} | {steps} | – | – | {wall:.2} | {:.2} | {:.2} | 0 |",
-        explicit[crest_i],
-        heave(&explicit, h, &g)
+        report.md,
+        "| explicit | {dt_min:.2e}–{dt_max:.2e} | {} | – | – | {:.2} | {crest:.2} | {heave_ex:.2} | 0 |",
+        ex.steps, ex.wall_s
     )?;
-    report.rows.push(Row::info(format!("V4c run-out explicit {cells}/H"), "wall_time_s", wall));
+    report.rows.push(Row::info(format!("V4c run-out explicit {cells}/H"), "wall_time_s", ex.wall_s));
     let mut worst = 0.0f64;
     for dt in [0.02, 0.05] {
         eprintln!("verify: V4c run-out, implicit Δt = {dt}, {cells} cells per H");
-        let t = Instant::now();
-        let mut im = Dynamic::new(model(), DynamicSettings::trapezoidal(dt, DURATION))?;
-        let (mut steps, mut its, mut cutbacks) = (0, 0, 0);
-        while !im.is_finished() {
-            let r = im.step()?;
-            steps += 1;
-            its += r.iterations;
-            cutbacks += r.cutbacks;
-        }
-        let wall = t.elapsed().as_secs_f64();
-        let implicit = profile(im.model());
-        let diff = explicit.iter().zip(&implicit).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max) / h;
+        let settings = DynamicSettings::trapezoidal(dt, DURATION);
+        let im = run_out(|| Ok(Analysis::Dynamic(Dynamic::new(model(), settings)?)))?;
+        let diff = ex.profile.iter().zip(&im.profile).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max) / h;
         worst = worst.max(diff);
+        let (crest, heave_im) = (im.profile[crest_i], heave(&im.profile, h, &g));
         writeln!(
-            md,
-            "| implicit | {dt} | {steps} | {its} | {cutbacks} | {wall:.2} | {:.2} | {:.2} | {diff:.3} |",
-            implicit[crest_i],
-            heave(&implicit, h, &g)
+            report.md,
+            "| implicit | {dt} | {} | {} | {} | {:.2} | {crest:.2} | {heave_im:.2} | {diff:.3} |",
+            im.steps, im.iterations, im.cutbacks, im.wall_s
         )?;
-        report.rows.push(Row::info(format!("V4c run-out implicit dt={dt} {cells}/H"), "wall_time_s", wall));
+        report.rows.push(Row::info(format!("V4c run-out implicit dt={dt} {cells}/H"), "wall_time_s", im.wall_s));
     }
-    writeln!(md)?;
-    report.rows.push(Row::checked(
-        format!("V4c run-out {cells}/H"),
-        "max_profile_difference_cells",
-        worst,
-        RUNOUT_PROFILES,
-    ));
+    writeln!(report.md)?;
+    let case = format!("V4c run-out {cells}/H");
+    report.rows.push(Row::checked(case, "max_profile_difference_cells", worst, RUNOUT_PROFILES));
     Ok(())
 }

@@ -1,0 +1,85 @@
+//! The verification report being written: its markdown, the rows of its bounds table and
+//! the folder it goes to; and, once every section has run, the bounds table itself in the
+//! markdown and in `summary.csv`.
+
+use anyhow::Result;
+use loam::io::output::{CsvCell, CsvWriter};
+use loam_verification::Bound;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// One row of the bounds table: a figure of one case, checked or not.
+pub(crate) struct Row {
+    case: String,
+    quantity: String,
+    value: f64,
+    /// The bound the value is checked against; each is declared beside its case in
+    /// loam-verification, so the report writer holds no numbers of its own.
+    bound: Option<Bound>,
+}
+
+impl Row {
+    /// A value checked against `bound` where there is one.
+    pub fn new(case: impl Into<String>, quantity: impl Into<String>, value: f64, bound: Option<Bound>) -> Self {
+        Self { case: case.into(), quantity: quantity.into(), value, bound }
+    }
+
+    /// A value checked against `bound`.
+    pub fn checked(case: impl Into<String>, quantity: impl Into<String>, value: f64, bound: Bound) -> Self {
+        Self::new(case, quantity, value, Some(bound))
+    }
+
+    /// A measured figure without a bound.
+    pub fn info(case: impl Into<String>, quantity: impl Into<String>, value: f64) -> Self {
+        Self::new(case, quantity, value, None)
+    }
+
+    /// The bound as the table shows it ("<=0.05") and the verdict ("pass", "FAIL", "n/a").
+    fn verdict(&self) -> (String, &'static str) {
+        match self.bound {
+            Some(b) => (format!("{}{}", b.relation(), b.value), if b.holds(self.value) { "pass" } else { "FAIL" }),
+            None => (String::new(), "n/a"),
+        }
+    }
+}
+
+/// The verification report being written: markdown, the bounds table's rows, the folder.
+pub(crate) struct Report {
+    pub md: String,
+    pub rows: Vec<Row>,
+    pub out: PathBuf,
+}
+
+impl Report {
+    /// An empty report under its title, to be written into `out`.
+    pub fn new(out: &Path) -> Result<Self> {
+        let mut md = String::new();
+        writeln!(md, "# loam verification report\n")?;
+        Ok(Self { md, rows: Vec::new(), out: out.to_owned() })
+    }
+
+    /// Append the bounds table (the checked rows) to the markdown and write every row to
+    /// `summary.csv`; returns the rows that failed their bound, one line each.
+    pub fn bounds_table(&mut self) -> Result<Vec<String>> {
+        writeln!(self.md, "## Bounds\n\n| case | quantity | value | bound | pass |\n|---|---|---:|---:|---|")?;
+        let mut csv = CsvWriter::create(self.out.join("summary.csv"), &["case", "quantity", "value", "bound", "pass"])?;
+        let mut failed = Vec::new();
+        for r in &self.rows {
+            let (bound_s, pass_s) = r.verdict();
+            if pass_s == "FAIL" {
+                failed.push(format!("{} {} = {:.4e} (bound {bound_s})", r.case, r.quantity, r.value));
+            }
+            csv.row_mixed(&[
+                CsvCell::Text(&r.case),
+                CsvCell::Text(&r.quantity),
+                CsvCell::Float(r.value),
+                CsvCell::Text(&bound_s),
+                CsvCell::Text(pass_s),
+            ])?;
+            if r.bound.is_some() {
+                writeln!(self.md, "| {} | {} | {:.4e} | {bound_s} | {pass_s} |", r.case, r.quantity, r.value)?;
+            }
+        }
+        Ok(failed)
+    }
+}
