@@ -316,7 +316,7 @@ fn run_row(
 }
 
 /// The assumed strain's verdict on a law from its finest run. Every law's bound, the
-/// anti-locking bound of issue 5 (ν = 0.49) among them, is checked there on the full sweep.
+/// anti-locking bound of the ν = 0.49 case among them, is checked there on the full sweep.
 fn verdict(
     quick: bool,
     report: &mut Report,

@@ -1,4 +1,4 @@
-//! The hard-case suite (issue 5): what a user sees where implicit MPM usually breaks — a
+//! The hard-case suite (docs/verification.md §H): what a user sees where implicit MPM usually breaks — a
 //! 10⁶ stiffness contrast, strain softening under mesh refinement, a load step too large
 //! for Newton, points leaving the grid. Figures, not bounds, except that the contrast case
 //! must converge.
