@@ -62,7 +62,7 @@ fn a_bracket_that_does_not_bracket_is_reported() {
     );
     assert!(matches!(
         srf((2.0, 1.0)).factor_of_safety(&model, |_| {}),
-        Err(StrengthReductionError::InvalidSettings { .. })
+        Err(StrengthReductionError::InvalidSettings(_))
     ));
 }
 

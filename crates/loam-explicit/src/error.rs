@@ -1,13 +1,13 @@
 //! Why an explicit step or run stopped.
 
-use loam_kernels::ConnectError;
+use loam_kernels::{ConnectError, InvalidSetting};
 
 /// Errors of an explicit analysis. A step that fails leaves the model's committed state as
 /// it was after the last successful step.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ExplicitError {
-    #[error("invalid explicit setting `{field}` = {value}: valid is {valid}")]
-    InvalidSettings { field: &'static str, value: f64, valid: &'static str },
+    #[error("explicit analysis: {0}")]
+    InvalidSettings(InvalidSetting),
     #[error(
         "step {step}: the fixed time step {dt:e} exceeds the critical time step {critical:e} \
          (h / (c_p + |v_p|), docs/theory.md §10); use TimeStep::Cfl, a smaller dt, or \

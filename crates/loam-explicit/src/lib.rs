@@ -47,6 +47,6 @@ mod settings;
 pub use energy::LeapfrogEnergy;
 pub use error::ExplicitError;
 pub use explicit::{Explicit, ExplicitStepReport};
-pub use loam_kernels::{ConnectError, RunError};
+pub use loam_kernels::{ConnectError, InvalidSetting, RunError};
 pub use loam_model::{Kinematics, Model, ModelError, PlaneConstraint};
 pub use settings::{ExplicitSettings, TimeStep, UpdateScheme};

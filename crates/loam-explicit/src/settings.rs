@@ -1,6 +1,7 @@
 //! Settings of an explicit analysis and their validation.
 
 use crate::ExplicitError;
+use loam_kernels::InvalidSetting;
 
 /// When the point stresses are updated relative to the grid momentum update
 /// (Bardenhagen 2002; Nairn 2003; Buzzi et al. 2008 compare the three).
@@ -67,7 +68,7 @@ impl ExplicitSettings {
 
     /// Check every setting; the error names the first invalid field and its valid range.
     pub fn validate(&self) -> Result<(), ExplicitError> {
-        let invalid = |field, value, valid| Err(ExplicitError::InvalidSettings { field, value, valid });
+        let invalid = |field, value, valid| Err(ExplicitError::InvalidSettings(InvalidSetting { field, value, valid }));
         if !(self.flip >= 0.0 && self.flip <= 1.0) {
             return invalid("flip", self.flip, "[0, 1] (1 = pure FLIP, 0 = pure PIC)");
         }
@@ -99,7 +100,7 @@ mod tests {
 
     fn field_of(s: &ExplicitSettings) -> Option<&'static str> {
         match s.validate() {
-            Err(ExplicitError::InvalidSettings { field, .. }) => Some(field),
+            Err(ExplicitError::InvalidSettings(e)) => Some(e.field),
             Err(e) => panic!("unexpected error {e}"),
             Ok(()) => None,
         }

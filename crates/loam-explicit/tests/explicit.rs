@@ -340,8 +340,8 @@ fn invalid_settings_are_refused_by_new() {
     ];
     for (s, name) in cases {
         match Explicit::new(moving_block(BasisKind::Linear, Vector2::zeros()), s) {
-            Err(e @ ExplicitError::InvalidSettings { field, .. }) => {
-                assert_eq!(field, name);
+            Err(ExplicitError::InvalidSettings(e)) => {
+                assert_eq!(e.field, name);
                 assert!(e.to_string().contains(name), "{e}");
             }
             Err(e) => panic!("{name}: unexpected error {e}"),

@@ -23,7 +23,9 @@ use crate::engine::Engine;
 use crate::inertia::Inertia;
 use crate::points::PointUpdateError;
 use crate::{StepError, StepReport};
-use loam_kernels::{gather_internal_force, gather_nodal, internal_force, interpolate, interpolate_pair};
+use loam_kernels::{
+    gather_internal_force, gather_nodal, internal_force, interpolate, interpolate_pair, InvalidSetting,
+};
 use loam_model::Model;
 use loam_solve::{LinearSolverKind, NewtonError, NewtonReport, NewtonSettings};
 use rayon::prelude::*;
@@ -86,7 +88,7 @@ impl DynamicSettings {
 
     fn validate(&self) -> Result<(), StepError> {
         let bad = |field: &'static str, value: f64, valid: &'static str| {
-            Err(StepError::InvalidSettings { field, value, valid })
+            Err(StepError::InvalidSettings(InvalidSetting { field, value, valid }))
         };
         if !(self.time_step.is_finite() && self.time_step > 0.0) {
             return bad("time_step", self.time_step, "a positive number");
@@ -409,7 +411,7 @@ mod tests {
         let bossak = DynamicSettings::trapezoidal(0.1, 1.0).bossak(-0.2);
         assert!((bossak.beta - 0.36).abs() < 1e-15 && (bossak.gamma - 0.7).abs() < 1e-15);
         let refused = |s: DynamicSettings| match Dynamic::new(falling_block(), s) {
-            Err(StepError::InvalidSettings { field, .. }) => field,
+            Err(StepError::InvalidSettings(e)) => e.field,
             other => panic!("accepted: {:?}", other.map(|_| ())),
         };
         let base = DynamicSettings::trapezoidal(0.1, 1.0);

@@ -26,7 +26,7 @@ mod strength_reduction;
 mod tangent;
 
 pub use dynamic::{Dynamic, DynamicSettings, MassMatrix};
-pub use loam_kernels::{ConnectError, RunError};
+pub use loam_kernels::{ConnectError, InvalidSetting, RunError};
 pub use loam_model::{AntiLocking, Kinematics, Model, ModelError, PlaneConstraint};
 pub use points::PointUpdateError;
 pub use quasi_static::{QuasiStatic, QuasiStaticSettings};

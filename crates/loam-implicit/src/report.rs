@@ -1,6 +1,6 @@
 //! What an implicit step reports, and why one stops.
 
-use loam_kernels::ConnectError;
+use loam_kernels::{ConnectError, InvalidSetting};
 use std::time::Duration;
 
 /// What one load or time step did.
@@ -52,8 +52,8 @@ pub enum StepError {
     Connect(#[from] ConnectError),
     #[error("step {step} did not converge at load factor {load_factor:.6} after {cutbacks} cut-backs: {reason}")]
     NotConverged { step: usize, load_factor: f64, cutbacks: usize, reason: String, residuals: Vec<f64> },
-    #[error("invalid analysis setting {field} = {value}: valid is {valid}")]
-    InvalidSettings { field: &'static str, value: f64, valid: &'static str },
+    #[error("analysis: {0}")]
+    InvalidSettings(InvalidSetting),
     #[error("constraint {index} prescribes a non-zero displacement; displacements follow the load factor of a quasi-static analysis and are not applied in dynamics")]
     DisplacementInDynamics { index: usize },
     #[error("the analysis is already finished ({0} steps)")]

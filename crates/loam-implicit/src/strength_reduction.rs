@@ -11,7 +11,7 @@
 
 use crate::{QuasiStatic, QuasiStaticSettings, StepError};
 use loam_constitutive::ConstitutiveLaw;
-use loam_kernels::ConnectError;
+use loam_kernels::{ConnectError, InvalidSetting};
 use loam_model::{Model, ModelError};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -63,8 +63,8 @@ impl FactorOfSafety {
 /// Why a strength-reduction analysis could not give a factor.
 #[derive(Debug, thiserror::Error)]
 pub enum StrengthReductionError {
-    #[error("invalid strength-reduction setting {field} = {value}: valid is {valid}")]
-    InvalidSettings { field: &'static str, value: f64, valid: &'static str },
+    #[error("strength reduction: {0}")]
+    InvalidSettings(InvalidSetting),
     #[error("the slope already fails at the lower bracket factor F = {0}: lower it")]
     FailsAtLower(f64),
     #[error("the slope still holds at the upper bracket factor F = {0}: raise it")]
@@ -87,25 +87,25 @@ impl StrengthReduction {
     ) -> Result<FactorOfSafety, StrengthReductionError> {
         let (lo, hi) = self.bracket;
         if !(lo.is_finite() && lo > 0.0) {
-            return Err(StrengthReductionError::InvalidSettings {
+            return Err(StrengthReductionError::InvalidSettings(InvalidSetting {
                 field: "bracket.0",
                 value: lo,
                 valid: "a positive number",
-            });
+            }));
         }
         if !(hi.is_finite() && hi > lo) {
-            return Err(StrengthReductionError::InvalidSettings {
+            return Err(StrengthReductionError::InvalidSettings(InvalidSetting {
                 field: "bracket.1",
                 value: hi,
                 valid: "a number above the lower factor",
-            });
+            }));
         }
         if !(self.tolerance.is_finite() && self.tolerance > 0.0) {
-            return Err(StrengthReductionError::InvalidSettings {
+            return Err(StrengthReductionError::InvalidSettings(InvalidSetting {
                 field: "tolerance",
                 value: self.tolerance,
                 valid: "a positive number",
-            });
+            }));
         }
         let mut trials = Vec::new();
         let mut run = |factor: f64| -> Result<bool, StrengthReductionError> {

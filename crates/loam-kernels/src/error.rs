@@ -25,6 +25,17 @@ impl ConnectError {
     }
 }
 
+/// A setting of an analysis outside its valid range: the field, its value and what would
+/// be valid (the one shape of the quasi-static, dynamic, explicit and strength-reduction
+/// settings' refusals).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("invalid setting `{field}` = {value}: valid is {valid}")]
+pub struct InvalidSetting {
+    pub field: &'static str,
+    pub value: f64,
+    pub valid: &'static str,
+}
+
 /// A run stopped by the analysis's step error `S` or by its step observer's error `E`
 /// (an output that could not be written, say).
 #[derive(Debug, thiserror::Error)]

@@ -11,7 +11,7 @@
 //! - [`embed`], [`update_point`], [`advance_deformation`]: point kinematics — the
 //!   increment ΔF = I + ∇Δu, the law driven in small or finite strain, and the committed
 //!   F and GIMP domain.
-//! - [`ConnectError`] and [`RunError`]: what the integrators' errors share.
+//! - [`ConnectError`], [`InvalidSetting`] and [`RunError`]: what the analyses' errors share.
 
 mod connect;
 mod error;
@@ -20,7 +20,7 @@ mod point;
 mod transfer;
 
 pub use connect::{check_constraints, connect};
-pub use error::{ConnectError, RunError};
+pub use error::{ConnectError, InvalidSetting, RunError};
 pub use force::{gather_internal_force, internal_force};
 pub use point::{advance_deformation, embed, update_point, PointUpdate};
 pub use transfer::{gather_nodal, interpolate, interpolate_add, interpolate_pair};

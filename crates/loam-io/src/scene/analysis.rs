@@ -8,9 +8,9 @@ use super::solver::Solver;
 use super::{AnalysisSpec, LoadedScene, MethodSpec, SceneError, StrengthReductionSpec};
 use loam_analysis::Analysis;
 use loam_explicit::{Explicit, ExplicitError, ExplicitSettings, TimeStep};
-use loam_implicit::{
-    has_strength, ConnectError, Dynamic, DynamicSettings, Model, QuasiStatic, QuasiStaticSettings, StepError,
-};
+use loam_implicit::{has_strength, Dynamic, DynamicSettings, QuasiStatic, QuasiStaticSettings, StepError};
+use loam_kernels::{ConnectError, InvalidSetting};
+use loam_model::Model;
 
 /// The path of the analysis's `key`.
 fn analysis_key(key: &str) -> [Seg<'_>; 2] {
@@ -90,7 +90,7 @@ impl LoadedScene {
     fn dynamic<const D: usize>(&self, model: Model<D>, settings: DynamicSettings) -> Result<Analysis<D>, SceneError> {
         match Dynamic::new(model, settings) {
             Ok(d) => Ok(Analysis::Dynamic(d)),
-            Err(StepError::InvalidSettings { field, value, valid }) => {
+            Err(StepError::InvalidSettings(InvalidSetting { field, value, valid })) => {
                 Err(self.error(&analysis_key(field), format!("{field} is {value}; valid: {valid}")))
             }
             Err(e) => Err(self.error(&[Seg::Key("analysis")], e.to_string())),
@@ -104,7 +104,7 @@ impl LoadedScene {
         }
         match Explicit::new(model, settings) {
             Ok(e) => Ok(Analysis::Explicit(e)),
-            Err(ExplicitError::InvalidSettings { field, value, valid }) => {
+            Err(ExplicitError::InvalidSettings(InvalidSetting { field, value, valid })) => {
                 let key = if field.starts_with("time_step") { "time_step" } else { field };
                 Err(self.error(&analysis_key(key), format!("{field} is {value}; valid: {valid}")))
             }

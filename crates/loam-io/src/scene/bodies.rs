@@ -5,7 +5,7 @@
 use super::locate::Seg;
 use super::{BodySpec, LoadedScene, MethodSpec, SceneError, ShapeSpec, VelocitySpec};
 use loam_grid::{FeMesh, Grid, MeshError};
-use loam_implicit::Model;
+use loam_model::Model;
 use loam_points::{PointStore, Shape};
 use nalgebra::{SVector, Vector2};
 

@@ -5,7 +5,7 @@
 use super::locate::Seg;
 use super::{AnalysisSpec, Axis, ConstraintSpec, LoadedScene, RegionSpec, SceneError};
 use loam_grid::Grid;
-use loam_implicit::PlaneConstraint;
+use loam_model::PlaneConstraint;
 use nalgebra::SVector;
 
 impl LoadedScene {

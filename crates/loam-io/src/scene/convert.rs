@@ -6,7 +6,8 @@
 use super::schema::{AntiLockingSpec, BasisSpec, KinematicsSpec, LinearSpec, MassSpec, SchemeSpec, TimeStepSpec};
 use loam_explicit::{TimeStep, UpdateScheme};
 use loam_grid::BasisKind;
-use loam_implicit::{AntiLocking, Kinematics, MassMatrix};
+use loam_implicit::MassMatrix;
+use loam_model::{AntiLocking, Kinematics};
 use loam_solve::LinearSolverKind;
 
 impl From<BasisSpec> for BasisKind {

@@ -7,7 +7,7 @@ use super::locate::Seg;
 use super::{AnalysisSpec, InitialStressSpec, LoadedScene, SceneError};
 use loam_constitutive::ConstitutiveLaw;
 use loam_grid::Grid;
-use loam_implicit::{Model, ModelError, PlaneConstraint};
+use loam_model::{Model, ModelError, PlaneConstraint};
 use nalgebra::SVector;
 use std::sync::Arc;
 
