@@ -1,4 +1,4 @@
-//! Implicit Newmark dynamics against the closed form of the vibrating bar (docs/verification.md V2).
+//! Implicit Newmark dynamics against the closed form of the vibrating bar (docs/verification.md §V2).
 
 use loam::grid::BasisKind;
 use loam::implicit::{Dynamic, DynamicSettings, Kinematics};

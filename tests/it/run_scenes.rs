@@ -106,10 +106,10 @@ fn column_fem_scene_runs() {
 
 /// The footing examples are valid scenes, and the Mohr–Coulomb one writes its load–
 /// settlement curve: the prescribed settlement grows with the load factor to 0.2 b (0.1 B,
-/// where docs/verification.md V3 reads q_u), the reaction stays compressive (negative) and
+/// where docs/verification.md §V3 reads q_u), the reaction stays compressive (negative) and
 /// finite, and the curve never falls. q_u is within 10 % of Prandtl's c N_c (N_c = 14.835
 /// at φ = 20°): the assumed strain's discretisation error on this 4-cells-per-b mesh is
-/// +8.4 % at 0.1 B (first order with the mesh; docs/verification.md V3), and the bound
+/// +8.4 % at 0.1 B (first order with the mesh; docs/verification.md §V3), and the bound
 /// would catch the locked answers (+30 % with B-bar, +53 % plain).
 #[test]
 fn footing_scene_writes_the_load_settlement_curve() {

@@ -192,7 +192,7 @@ fn observed_rate(runs: &[&ColumnRun]) -> f64 {
 pub(crate) fn verify(quick: bool, report: &mut Report) -> Result<()> {
     writeln!(
         report.md,
-        "Mode: {}. Columns of docs/verification.md V1, 2x2(x2) points per cell, ν = 0, rollers on sides and base.",
+        "Mode: {}. Columns of docs/verification.md §V1, 2x2(x2) points per cell, ν = 0, rollers on sides and base.",
         if quick { "quick (CI subset)" } else { "full" }
     )?;
     writeln!(report.md, "e_σ = Σ|σ_yy − σ_yy(Y)|V⁰ / (ΣV⁰ ρ₀gH₀); e_u = relative error of the highest point's displacement; rate = least-squares slope of ln e_σ against ln h over the finest three meshes.\n")?;

@@ -1,4 +1,4 @@
-//! Dynamic verification (docs/verification.md V2, V5 and the column under suddenly applied
+//! Dynamic verification (docs/verification.md §V2, §V5 and the column under suddenly applied
 //! gravity) and the drivers shared with `cargo xtask steps`: run an implicit or explicit
 //! analysis to its end, sampling the histories after every step and timing the steps
 //! alone (sampling costs the same per step for both schemes, so it is left out).

@@ -1,4 +1,4 @@
-//! V3 strip footing (docs/verification.md V3): q_u, read at a settlement of 0.1 B, against
+//! V3 strip footing (docs/verification.md §V3): q_u, read at a settlement of 0.1 B, against
 //! Prandtl's (2 + π) c_u for von Mises and c N_c for associated Mohr–Coulomb, with the mesh
 //! sequence, plain, with B-bar and with the assumed strain (β = 0.1). The 5 % bound is
 //! checked for every law with the assumed strain on the finest mesh (16 cells per b, full
@@ -20,7 +20,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 /// Settlement (in b) and load steps: 0.001 b per step to 0.2 b, the 0.1 B (B = 2b) at which
-/// docs/verification.md V3 reads q_u. The limit load is reached between 0.005 b (undrained) and
+/// docs/verification.md §V3 reads q_u. The limit load is reached between 0.005 b (undrained) and
 /// ~0.03 b (φ = 30°); small steps keep the first plastic steps from overshooting it.
 const SETTLEMENT: f64 = 0.2;
 const LOAD_STEPS: usize = 200;
@@ -233,7 +233,7 @@ impl Sweep {
 /// The V3 section: every law with every treatment on its meshes.
 pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
     let finest_assumed = treatments(quick)[2].1.last().unwrap();
-    writeln!(report.md, "## V3 strip footing\n\nRigid rough footing, half-width b = 1 (B = 2b), pushed {SETTLEMENT} b = 0.1 B in {LOAD_STEPS} load steps (extrapolated start) into weightless soil; half model 10 b × 5 b, linear basis, 2×2 points per cell, small strain, geometrically linear (points held at their places, Prandtl's small-deformation setting), E = {YOUNG:e}, ν = {POISSON} (and 0.49 for the locking case), c = {COHESION}. q = footing reaction / b; q_u = q at the settlement of 0.1 B (docs/verification.md V3), q(0.04 b) is shown beside it; reference (2 + π) c_u (von Mises, c_u = σ_y/√3) and c N_c (Mohr–Coulomb, associated). Plain: every point's own strain (locks); B-bar: cell-averaged dilatation; assumed strain: the cell's average strain plus β = {STABILIZATION} times each point's deviatoric deviation (docs/theory.md §13). The bound |q_u/q_ref − 1| ≤ 5 % is checked for every law with the assumed strain on the finest mesh of the full sweep ({finest_assumed} cells per b); every curve is checked to rise to its plateau without a drop. Curves: footing_curves.csv, footing_curves.svg.\n")?;
+    writeln!(report.md, "## V3 strip footing\n\nRigid rough footing, half-width b = 1 (B = 2b), pushed {SETTLEMENT} b = 0.1 B in {LOAD_STEPS} load steps (extrapolated start) into weightless soil; half model 10 b × 5 b, linear basis, 2×2 points per cell, small strain, geometrically linear (points held at their places, Prandtl's small-deformation setting), E = {YOUNG:e}, ν = {POISSON} (and 0.49 for the locking case), c = {COHESION}. q = footing reaction / b; q_u = q at the settlement of 0.1 B (docs/verification.md §V3), q(0.04 b) is shown beside it; reference (2 + π) c_u (von Mises, c_u = σ_y/√3) and c N_c (Mohr–Coulomb, associated). Plain: every point's own strain (locks); B-bar: cell-averaged dilatation; assumed strain: the cell's average strain plus β = {STABILIZATION} times each point's deviatoric deviation (docs/theory.md §13). The bound |q_u/q_ref − 1| ≤ 5 % is checked for every law with the assumed strain on the finest mesh of the full sweep ({finest_assumed} cells per b); every curve is checked to rise to its plateau without a drop. Curves: footing_curves.csv, footing_curves.svg.\n")?;
     writeln!(report.md, "| law | treatment | cells per b | q(0.04 b)/c | q_u/c | reference | q_u/q_ref − 1 | largest drop / q_ref | max Newton its per sub-step | max corrections to 1e-9 | cut-backs | wall [s] |\n|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")?;
     let mut sweep = Sweep::new(&report.out)?;
     for law in &laws()? {

@@ -1,4 +1,4 @@
-//! V4 slopes (docs/verification.md V4): the undrained 45° slope by gravity increase against
+//! V4 slopes (docs/verification.md §V4): the undrained 45° slope by gravity increase against
 //! Taylor's stability number, and the Griffiths & Lane (1999) frictional slope by strength
 //! reduction against their factor of safety 1.4.
 

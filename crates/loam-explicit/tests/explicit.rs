@@ -111,7 +111,7 @@ fn vibrating_bar_figures(basis: BasisKind, scheme: UpdateScheme, safety: f64) ->
 fn check_vibrating_bar(basis: BasisKind) {
     let f = vibrating_bar_figures(basis, UpdateScheme::Musl, 0.9);
     println!("V2 {basis:?} MUSL safety 0.9, {} steps: {f:#?}", f.steps);
-    // E(0) = ρ v₀² L / 4 per unit thickness (docs/verification.md V2) up to the midpoint
+    // E(0) = ρ v₀² L / 4 per unit thickness (docs/verification.md §V2) up to the midpoint
     // sampling of sin² by 2 points per cell: O((h/L)²) ≈ 1e-4 relative.
     assert!(
         (f.initial_energy - BAR.density * BAR.amplitude * BAR.amplitude * BAR.length / 4.0).abs()

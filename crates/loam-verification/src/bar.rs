@@ -1,4 +1,4 @@
-//! V2: the axially vibrating bar (`docs/verification.md` V2). A bar of length L fixed at
+//! V2: the axially vibrating bar (`docs/verification.md` §V2). A bar of length L fixed at
 //! x = 0 and free at x = L, one cell thick with rollers so that it is one-dimensional,
 //! ν = 0, starting unstressed with the velocity of its first mode, v₀ sin(β₁x). Its exact
 //! motion is that mode: β₁ = π/(2L), ω₁ = β₁c, c = √(E/ρ), period T = 4L/c, centre-of-mass
@@ -18,7 +18,7 @@ use loam_points::{PointStore, Shape};
 use nalgebra::Vector2;
 use std::sync::Arc;
 
-/// The bounds `cargo xtask verify` checks on the bar (`docs/verification.md` V2).
+/// The bounds `cargo xtask verify` checks on the bar (`docs/verification.md` §V2).
 pub mod bounds {
     use super::Bound;
 
@@ -226,7 +226,7 @@ pub struct BarErrors {
 mod tests {
     use super::*;
 
-    /// The reference bar's figures of `docs/verification.md` V2: T = 10, h/c = 0.1, the
+    /// The reference bar's figures of `docs/verification.md` §V2: T = 10, h/c = 0.1, the
     /// energy ρv₀²L/4, and the trapezoidal periods its table gives to five decimals.
     #[test]
     fn the_reference_bar_has_the_documented_figures() {

@@ -1,4 +1,4 @@
-//! V1: the self-weight column (`docs/verification.md` V1). A column of initial height H₀
+//! V1: the self-weight column (`docs/verification.md` §V1). A column of initial height H₀
 //! under its own weight, ν = 0, rollers on the sides and the base, so every cross-section
 //! keeps its area and the problem is one-dimensional. Whatever the law, the vertical
 //! Cauchy stress is the weight above, σ_yy = −ρ₀g(H₀ − Y). For Hencky elasticity the
@@ -17,7 +17,7 @@ use loam_points::{PointStore, Shape};
 use nalgebra::{SVector, Vector2};
 use std::sync::Arc;
 
-/// The bounds `cargo xtask verify` checks on the columns (`docs/verification.md` V1,
+/// The bounds `cargo xtask verify` checks on the columns (`docs/verification.md` §V1,
 /// "Bounds checked", and the column under sudden gravity in the dynamics section).
 pub mod bounds {
     use super::Bound;
@@ -313,7 +313,7 @@ mod tests {
     }
 
     /// The published top displacements of the three columns (the V1 table of the
-    /// verification spec, quoted in `docs/verification.md` V1), computed independently there.
+    /// verification spec, quoted in `docs/verification.md` §V1), computed independently there.
     #[test]
     fn column_reference_displacements_match_the_published_table() {
         let cases = [(Column::V1A, -0.962009), (Column::V1B, -0.115671), (Column::V1C, -3.919632)];

@@ -13,7 +13,7 @@ use loam_points::{PointStore, Shape};
 use nalgebra::Vector2;
 use std::sync::Arc;
 
-/// The bounds `cargo xtask verify` checks on the disks (`docs/verification.md` V5), for
+/// The bounds `cargo xtask verify` checks on the disks (`docs/verification.md` §V5), for
 /// explicit MUSL (leapfrog energy) and implicit trapezoidal (Δt = 0.005) alike.
 pub mod bounds {
     use super::Bound;

@@ -12,7 +12,7 @@ use loam_points::{PointStore, Shape};
 use nalgebra::Vector2;
 use std::sync::Arc;
 
-/// The bounds `cargo xtask verify` checks on the footings (`docs/verification.md` V3).
+/// The bounds `cargo xtask verify` checks on the footings (`docs/verification.md` §V3).
 pub mod bounds {
     use super::Bound;
 
@@ -39,7 +39,7 @@ pub mod bounds {
 /// half-width `b` = 1, domain `width`·b wide and `depth`·b deep, `cells_per_b` cells per
 /// b, 2×2 points per cell, linear basis, small strain and geometrically linear (Prandtl's
 /// small-deformation setting: moving the points under small-strain stresses makes the load
-/// fall after its peak and jump where points cross a cell, docs/verification.md V3);
+/// fall after its peak and jump where points cross a cell, docs/verification.md §V3);
 /// rollers on the symmetry plane x = 0 and the far side, the base fixed; the top nodes
 /// 0 ≤ x ≤ b pushed down by `settlement` at full load and held horizontally (rough). The
 /// footing pressure is −(reaction of constraint 0)_y / b.
@@ -91,7 +91,7 @@ mod tests {
     use super::*;
 
     /// Prandtl's N_c against the values bearing-capacity tables give to three decimals
-    /// (quoted in `docs/verification.md` V3): 8.345, 14.835, 30.140 at φ = 10°, 20°, 30°.
+    /// (quoted in `docs/verification.md` §V3): 8.345, 14.835, 30.140 at φ = 10°, 20°, 30°.
     /// Small φ approaches 2 + π, the φ = 0 value, without a jump.
     #[test]
     fn prandtl_nc_matches_the_tabulated_values() {

@@ -1,4 +1,4 @@
-//! V4: slope stability (`docs/verification.md` V4), the seed paper's geotechnical
+//! V4: slope stability (`docs/verification.md` §V4), the seed paper's geotechnical
 //! application. Two published references: Taylor's (1937) chart, whose stability number
 //! for an undrained 45° slope on a deep foundation is N_s = c_u/(γH) ≈ 0.18 at collapse,
 //! i.e. γH/c_u ≈ 5.5; and Griffiths & Lane (1999), whose first example (a 2:1 slope,
@@ -21,7 +21,7 @@ pub const TAYLOR_STABILITY: f64 = 5.5;
 /// (Bishop's method gives 1.38).
 pub const GRIFFITHS_LANE_FACTOR_OF_SAFETY: f64 = 1.4;
 
-/// The bounds `cargo xtask verify` checks on the slopes (`docs/verification.md` V4).
+/// The bounds `cargo xtask verify` checks on the slopes (`docs/verification.md` §V4).
 pub mod bounds {
     use super::Bound;
 
