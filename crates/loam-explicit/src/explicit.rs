@@ -4,7 +4,7 @@ use crate::{ExplicitError, ExplicitSettings, TimeStep, UpdateScheme};
 use loam_grid::{BasisError, Connectivity, PointBasisError};
 use loam_kernels::{
     advance_deformation, check_constraints, connect, embed, gather_internal_force, gather_nodal, internal_force,
-    interpolate_pair, update_point, ConnectError, RunError,
+    interpolate_pair, update_point, Committed, ConnectError, RunError,
 };
 use loam_model::{Kinematics, Model, StateFields};
 use nalgebra::{Matrix3, SMatrix, SVector};
@@ -584,15 +584,18 @@ fn point_stress<const D: usize>(
     if !det.is_finite() || det <= 0.0 {
         return Err(format!("det ΔF = {det:e}: the point was inverted or torn apart within one step"));
     }
-    let pts = model.points();
-    let f = &pts.deformation_gradient[p];
-    let update =
-        update_point(model.kinematics(), model.law(p), &grad_du, f, &pts.elastic_strain[p], pts.history(p), h_out)
-            .map_err(|e| format!("stress update failed: {e}"))?;
-    if !update.stress.iter().chain(update.elastic_strain.iter()).all(|c| c.is_finite()) {
+    let committed = Committed::of(model.points(), p);
+    let state = update_point(model.kinematics(), model.law(p), &grad_du, committed, h_out, |u| PointState {
+        delta_f: *u.delta_f,
+        det,
+        stress: *u.stress,
+        elastic_strain: *u.elastic_strain,
+    })
+    .map_err(|e| format!("stress update failed: {e}"))?;
+    if !state.stress.iter().chain(state.elastic_strain.iter()).all(|c| c.is_finite()) {
         return Err("stress update failed: non-finite stress".into());
     }
-    Ok(PointState { delta_f: update.delta_f, det, stress: update.stress, elastic_strain: update.elastic_strain })
+    Ok(state)
 }
 
 #[cfg(test)]

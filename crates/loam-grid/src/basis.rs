@@ -128,6 +128,7 @@ impl BasisKind {
     /// The 1D functions along axis `a` at `x`: node indices, values and derivatives (per
     /// unit length) into `idx`, `w`, `dw`; returns how many.
     #[allow(clippy::too_many_arguments)]
+    #[inline]
     fn evaluate_axis<const D: usize>(
         self,
         grid: &Grid<D>,

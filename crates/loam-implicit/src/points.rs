@@ -8,7 +8,7 @@
 use crate::cell_average::CellAverage;
 use loam_constitutive::{ConstitutiveError, Tensor4};
 use loam_grid::Connectivity;
-use loam_kernels::{embed, update_point};
+use loam_kernels::{embed, update_point, Committed};
 use loam_model::{Kinematics, Model};
 use nalgebra::{Matrix3, SMatrix, SVector};
 use rayon::prelude::*;
@@ -161,29 +161,23 @@ fn finite_strain_point<const D: usize>(
     slot: TrialSlot<'_, D>,
 ) -> Result<(), ConstitutiveError> {
     let pts = model.points();
-    let upd = update_point(
-        Kinematics::FiniteStrain,
-        model.law(p),
-        &embed(g),
-        &pts.deformation_gradient[p],
-        &pts.elastic_strain[p],
-        pts.history(p),
-        slot.history,
-    )?;
-    let det_df = upd.delta_f.determinant();
+    let TrialSlot { delta_f, stress, elastic_strain, volume, tangent, grad_x, history, .. } = slot;
+    let det_df =
+        update_point(Kinematics::FiniteStrain, model.law(p), &embed(g), Committed::of(pts, p), history, |u| {
+            let det_df = u.delta_f.determinant();
+            (*delta_f, *stress, *elastic_strain) = (*u.delta_f, *u.stress, *u.elastic_strain);
+            *volume = det_df * pts.volume[p];
+            *tangent = in_plane::<D>(u.tangent, *volume);
+            det_df
+        })?;
     // det ΔF > 0 was checked by the update, so ΔF is invertible unless it is numerically
     // singular: an error, not a case to paper over.
     let inv = (SMatrix::<f64, D, D>::identity() + g)
         .try_inverse()
         .ok_or(ConstitutiveError::SingularIncrement { det: det_df })?;
-    for (x, grad) in slot.grad_x.iter_mut().zip(grads) {
+    for (x, grad) in grad_x.iter_mut().zip(grads) {
         *x = inv.transpose() * grad;
     }
-    *slot.delta_f = upd.delta_f;
-    *slot.stress = upd.stress;
-    *slot.elastic_strain = upd.elastic_strain;
-    *slot.volume = det_df * pts.volume[p];
-    *slot.tangent = in_plane::<D>(&upd.tangent, *slot.volume);
     Ok(())
 }
 
@@ -211,28 +205,20 @@ fn small_strain_point<const D: usize>(
     if let Some(theta_bar) = theta_bar {
         g3 += Matrix3::identity() * ((theta_bar - g.trace()) / 3.0);
     }
-    let upd = update_point(
-        Kinematics::SmallStrain,
-        model.law(p),
-        &g3,
-        &pts.deformation_gradient[p],
-        &pts.elastic_strain[p],
-        pts.history(p),
-        slot.history,
-    )?;
+    let TrialSlot { delta_f, stress, elastic_strain, volume, tangent, grad_x, volumetric, history } = slot;
+    update_point(Kinematics::SmallStrain, model.law(p), &g3, Committed::of(pts, p), history, |u| {
+        (*delta_f, *stress, *elastic_strain) = (*u.delta_f, *u.stress, *u.elastic_strain);
+        *volume = pts.volume[p];
+        *tangent = in_plane::<D>(u.tangent, *volume);
+        if theta_bar.is_some() {
+            let (a, v) = (u.tangent, *volume);
+            let id = Matrix3::from_fn(|k, l| v * (0..3).map(|m| a[(4 * m, 3 * k + l)]).sum::<f64>());
+            let di = Matrix3::from_fn(|i, j| v * (0..3).map(|m| a[(3 * i + j, 4 * m)]).sum::<f64>());
+            *volumetric = (id, di);
+        }
+    })?;
     if theta_bar.is_none() {
-        slot.grad_x[..grads.len()].copy_from_slice(grads);
-    }
-    *slot.delta_f = upd.delta_f;
-    *slot.stress = upd.stress;
-    *slot.elastic_strain = upd.elastic_strain;
-    *slot.volume = pts.volume[p];
-    *slot.tangent = in_plane::<D>(&upd.tangent, *slot.volume);
-    if theta_bar.is_some() {
-        let (a, v) = (&upd.tangent, *slot.volume);
-        let id = Matrix3::from_fn(|k, l| v * (0..3).map(|m| a[(4 * m, 3 * k + l)]).sum::<f64>());
-        let di = Matrix3::from_fn(|i, j| v * (0..3).map(|m| a[(3 * i + j, 4 * m)]).sum::<f64>());
-        *slot.volumetric = (id, di);
+        grad_x[..grads.len()].copy_from_slice(grads);
     }
     Ok(())
 }

@@ -22,5 +22,5 @@ mod transfer;
 pub use connect::{check_constraints, connect};
 pub use error::{ConnectError, InvalidSetting, RunError};
 pub use force::{gather_internal_force, internal_force};
-pub use point::{advance_deformation, embed, update_point, PointUpdate};
+pub use point::{advance_deformation, embed, update_point, Committed, PointUpdate};
 pub use transfer::{gather_nodal, interpolate, interpolate_add, interpolate_pair};

@@ -4,7 +4,7 @@
 
 use loam_constitutive::{finite_strain_update, small_strain_update, ConstitutiveError, ConstitutiveLaw, Tensor4};
 use loam_model::Kinematics;
-use loam_points::stretched_half_length;
+use loam_points::{stretched_half_length, PointStore};
 use nalgebra::{Matrix3, SMatrix, SVector};
 
 /// Embed an in-plane D×D tensor in 3×3, zero out of plane (plane strain: the
@@ -16,46 +16,80 @@ pub fn embed<const D: usize>(g: &SMatrix<f64, D, D>) -> Matrix3<f64> {
     m
 }
 
-/// A point's trial state from its committed one and an increment.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PointUpdate {
-    /// ΔF = I + ∇Δu.
-    pub delta_f: Matrix3<f64>,
-    /// Cauchy stress σ.
-    pub stress: Matrix3<f64>,
+/// A point's committed state, which an update starts from.
+#[derive(Debug, Clone, Copy)]
+pub struct Committed<'a> {
+    /// The deformation gradient F.
+    pub f: &'a Matrix3<f64>,
     /// b^e (finite strain) or ε^e (small strain).
-    pub elastic_strain: Matrix3<f64>,
-    /// The spatial tangent a (finite strain, docs/theory.md §2) or the algorithmic
-    /// modulus D (small strain).
-    pub tangent: Tensor4,
+    pub elastic_strain: &'a Matrix3<f64>,
+    /// The law's history.
+    pub history: &'a [f64],
 }
 
-/// Drive point's law `law` by the displacement-increment gradient `grad_du` (3×3, see
-/// [`embed`]) from its committed deformation gradient `f`, elastic strain state and
-/// history `h_n` (the new history goes to `h_out`): finite strain through b^e and the
-/// logarithmic strain with J = det ΔF det F, small strain through ε^e + sym ∇Δu.
+impl<'a> Committed<'a> {
+    /// The committed state of point `p` of `points`.
+    #[inline]
+    pub fn of<const D: usize>(points: &'a PointStore<D>, p: usize) -> Self {
+        Self {
+            f: &points.deformation_gradient[p],
+            elastic_strain: &points.elastic_strain[p],
+            history: points.history(p),
+        }
+    }
+}
+
+/// A point's trial state from its committed one and an increment, lent where the law wrote
+/// it (the 9×9 tangent is 648 bytes: read, not copied).
+#[derive(Debug, Clone, Copy)]
+pub struct PointUpdate<'a> {
+    /// ΔF = I + ∇Δu.
+    pub delta_f: &'a Matrix3<f64>,
+    /// Cauchy stress σ.
+    pub stress: &'a Matrix3<f64>,
+    /// b^e (finite strain) or ε^e (small strain).
+    pub elastic_strain: &'a Matrix3<f64>,
+    /// The spatial tangent a (finite strain, docs/theory.md §2) or the algorithmic
+    /// modulus D (small strain).
+    pub tangent: &'a Tensor4,
+}
+
+/// Drive the point's law by the displacement-increment gradient `grad_du` (3×3, see
+/// [`embed`]) from its committed state (the new history goes to `h_out`): finite strain
+/// through b^e and the logarithmic strain with J = det ΔF det F, small strain through
+/// ε^e + sym ∇Δu. The update is lent to `finish`, which keeps what its analysis needs.
 #[inline]
-pub fn update_point(
+pub fn update_point<R>(
     kinematics: Kinematics,
     law: &dyn ConstitutiveLaw,
     grad_du: &Matrix3<f64>,
-    f: &Matrix3<f64>,
-    elastic_strain: &Matrix3<f64>,
-    h_n: &[f64],
+    committed: Committed<'_>,
     h_out: &mut [f64],
-) -> Result<PointUpdate, ConstitutiveError> {
+    finish: impl FnOnce(PointUpdate<'_>) -> R,
+) -> Result<R, ConstitutiveError> {
+    let Committed { f, elastic_strain, history } = committed;
     let delta_f = Matrix3::identity() + grad_du;
-    match kinematics {
+    Ok(match kinematics {
         Kinematics::FiniteStrain => {
             let j_total = delta_f.determinant() * f.determinant();
-            let u = finite_strain_update(law, &delta_f, elastic_strain, j_total, h_n, h_out)?;
-            Ok(PointUpdate { delta_f, stress: u.cauchy, elastic_strain: u.be, tangent: u.spatial_tangent })
+            let u = finite_strain_update(law, &delta_f, elastic_strain, j_total, history, h_out)?;
+            finish(PointUpdate {
+                delta_f: &delta_f,
+                stress: &u.cauchy,
+                elastic_strain: &u.be,
+                tangent: &u.spatial_tangent,
+            })
         }
         Kinematics::SmallStrain => {
-            let u = small_strain_update(law, grad_du, elastic_strain, h_n, h_out)?;
-            Ok(PointUpdate { delta_f, stress: u.stress, elastic_strain: u.elastic_strain, tangent: u.tangent })
+            let u = small_strain_update(law, grad_du, elastic_strain, history, h_out)?;
+            finish(PointUpdate {
+                delta_f: &delta_f,
+                stress: &u.stress,
+                elastic_strain: &u.elastic_strain,
+                tangent: &u.tangent,
+            })
         }
-    }
+    })
 }
 
 /// Commit a point's increment of deformation: F ← ΔF F, and the GIMP half-lengths
@@ -87,13 +121,16 @@ mod tests {
         let stretch = 1.01;
         let g = embed(&Matrix2::new(stretch - 1.0, 0.0, 0.0, 0.0));
         let (mut h, f) = ([0.0; 0], Matrix3::identity());
-        let small = update_point(Kinematics::SmallStrain, &law, &g, &f, &Matrix3::zeros(), &[], &mut h).unwrap();
+        let kept = |u: PointUpdate| (*u.stress, u.delta_f.determinant());
+        let unstrained = Committed { f: &f, elastic_strain: &Matrix3::zeros(), history: &[] };
+        let (small, _) = update_point(Kinematics::SmallStrain, &law, &g, unstrained, &mut h, kept).unwrap();
         let eps = stretch - 1.0;
-        assert!((small.stress[(0, 0)] - (lame + 2.0 * mu) * eps).abs() < 1e-10);
-        assert!((small.stress[(2, 2)] - lame * eps).abs() < 1e-10);
-        let finite = update_point(Kinematics::FiniteStrain, &law, &g, &f, &Matrix3::identity(), &[], &mut h).unwrap();
+        assert!((small[(0, 0)] - (lame + 2.0 * mu) * eps).abs() < 1e-10);
+        assert!((small[(2, 2)] - lame * eps).abs() < 1e-10);
+        let unstrained = Committed { f: &f, elastic_strain: &Matrix3::identity(), history: &[] };
+        let (finite, det) = update_point(Kinematics::FiniteStrain, &law, &g, unstrained, &mut h, kept).unwrap();
         let e = f64::ln(stretch);
-        assert!((finite.stress[(0, 0)] - (lame + 2.0 * mu) * e / stretch).abs() < 1e-10);
-        assert!((finite.delta_f.determinant() - stretch).abs() < 1e-15);
+        assert!((finite[(0, 0)] - (lame + 2.0 * mu) * e / stretch).abs() < 1e-10);
+        assert!((det - stretch).abs() < 1e-15);
     }
 }
