@@ -76,6 +76,8 @@ const FONT: &str = "sans-serif";
 /// plotters' font sizes are 1.24 times the SVG `font-size`: this is 12 px.
 const TEXT_SIZE: f64 = 15.0;
 const GREY: RGBColor = RGBColor(0x44, 0x44, 0x44);
+/// The reference slopes alternate between two greys, so that two of them can be told apart.
+const REFERENCE_GREYS: [RGBColor; 2] = [GREY, RGBColor(0xa0, 0xa0, 0xa0)];
 const COLOURS: [RGBColor; 10] = [
     RGBColor(0x1f, 0x77, 0xb4),
     RGBColor(0xd6, 0x27, 0x28),
@@ -170,6 +172,20 @@ where
     Ok(())
 }
 
+/// The line of `slope` through `anchor` (axis units) over the plot ranges `x`, `y`: its
+/// two ends where it enters and leaves that box, none where it misses it.
+fn clipped_line(anchor: (f64, f64), slope: f64, x: (f64, f64), y: (f64, f64)) -> Vec<(f64, f64)> {
+    let (xa, ya) = anchor;
+    let at = |yy: f64| xa + (yy - ya) / slope;
+    let (from, to) = if slope > 0.0 { (at(y.0), at(y.1)) } else { (at(y.1), at(y.0)) };
+    let (lo, hi) = (x.0.max(from), x.1.min(to));
+    // `lo >= hi` where the line misses the box, and false for NaN ends too.
+    if lo.partial_cmp(&hi) != Some(std::cmp::Ordering::Less) {
+        return Vec::new();
+    }
+    vec![(lo, ya + slope * (lo - xa)), (hi, ya + slope * (hi - xa))]
+}
+
 /// A line as drawn: its points in axis units, label, colour, dash, and marker (none for
 /// the reference slopes).
 struct Drawn<'a> {
@@ -227,11 +243,12 @@ impl Plot {
             .collect();
         let anchor = drawn.first().and_then(|d| d.points.last().copied());
         let x = axis_range(drawn.iter().flat_map(|d| d.points.iter().map(|p| p.0)), self.log_x);
-        if let (Some((xa, ya)), true) = (anchor, self.log_x && self.log_y) {
-            for (slope, label) in self.reference_slopes.iter().filter(|(s, _)| s.is_finite()) {
-                let line = [x.0, x.1].map(|xx| (xx, ya + slope * (xx - xa)));
-                let points = line.into_iter().filter(|p| p.1.abs() <= LIMIT.log10()).collect();
-                drawn.push(Drawn { label, points, colour: GREY, dashed: true, marker: None });
+        let y = axis_range(drawn.iter().flat_map(|d| d.points.iter().map(|p| p.1)), self.log_y);
+        if let (Some(anchor), true) = (anchor, self.log_x && self.log_y) {
+            let slopes = self.reference_slopes.iter().filter(|(s, _)| s.is_finite() && *s != 0.0);
+            for (k, (slope, label)) in slopes.enumerate() {
+                let points = clipped_line(anchor, *slope, x, y);
+                drawn.push(Drawn { label, points, colour: REFERENCE_GREYS[k % 2], dashed: true, marker: None });
             }
         }
         drawn
@@ -295,10 +312,8 @@ impl Plot {
             .y_label_area_size(70)
             .build_cartesian_2d(x, y)?;
         self.axes(&mut chart, ranges)?;
-        let ((x0, x1), (y0, y1)) = ranges;
-        let inside = |p: &&(f64, f64)| (x0..=x1).contains(&p.0) && (y0..=y1).contains(&p.1);
         for d in drawn {
-            let line = d.points.iter().filter(inside).map(|p| self.to_data(p));
+            let line = d.points.iter().map(|p| self.to_data(p));
             let style = d.colour.stroke_width(if d.marker.is_some() { 2 } else { 1 });
             if d.dashed {
                 chart.draw_series(DashedLineSeries::new(line, 7, 4, style))?;
@@ -401,6 +416,21 @@ mod tests {
         // "u" solid: one polyline in the chart and one in the legend; "p" dashed: one per dash.
         assert_eq!(svg.matches("stroke=\"#1F77B4\" stroke-width=\"2\" points").count(), 1 + 1);
         assert!(svg.matches("stroke=\"#D62728\" stroke-width=\"2\" points").count() > 3);
+    }
+
+    /// Each reference slope is drawn, in its own grey, through the first series' finest
+    /// point, and a steep one that leaves the plot is clipped to it rather than dropped.
+    #[test]
+    fn reference_slopes_are_drawn_and_clipped() {
+        let mut plot = convergence_plot();
+        let drawn_in =
+            |svg: &str, grey: &str| svg.matches(&format!("stroke=\"{grey}\" stroke-width=\"1\" points")).count();
+        let svg = finite_svg(&plot);
+        // A dashed line is many short polylines (its legend row of 30 px three of them).
+        assert!(drawn_in(&svg, "#444444") > 6 && drawn_in(&svg, "#A0A0A0") > 6, "{svg}");
+        plot.reference_slopes = vec![(6.0, "steep".into())];
+        let svg = finite_svg(&plot);
+        assert!(drawn_in(&svg, "#444444") > 6, "the steep slope was dropped");
     }
 
     #[test]
