@@ -5,7 +5,7 @@
 use loam_explicit::{Explicit, ExplicitError};
 use loam_implicit::{Dynamic, QuasiStatic, StepError, StepReport};
 use loam_kernels::ConnectError;
-use loam_model::Model;
+use loam_model::{LoadLevel, Model};
 use std::time::Duration;
 
 /// One of the three analyses.
@@ -46,6 +46,8 @@ pub struct Progress {
     /// Time reached (quasi-static: the pseudo-time, equal to the load factor).
     pub time: f64,
     pub load_factor: f64,
+    /// Where the loads stand after the step: the load factor (quasi-static) or the time.
+    pub level: LoadLevel,
     /// Time (or load) increment of the step.
     pub increment: f64,
     /// Newton corrections over the step (0 for explicit steps).
@@ -63,11 +65,12 @@ pub struct Progress {
 
 impl Progress {
     /// The progress of an implicit (quasi-static or dynamic) step that started at `before`.
-    fn implicit(r: StepReport, before: f64) -> Self {
+    fn implicit(r: StepReport, before: f64, level: LoadLevel) -> Self {
         Progress {
             step: r.step,
             time: r.time,
             load_factor: r.load_factor,
+            level,
             increment: r.time - before,
             iterations: r.iterations,
             substeps: r.substeps,
@@ -141,6 +144,15 @@ impl<const D: usize> Analysis<D> {
         }
     }
 
+    /// Where the loads stand now: the load factor of a quasi-static analysis, the time of
+    /// the others.
+    pub fn load_level(&self) -> LoadLevel {
+        match self {
+            Analysis::QuasiStatic(a) => LoadLevel::Factor(a.load_factor()),
+            _ => LoadLevel::Time(self.time()),
+        }
+    }
+
     /// Time (or load factor) at the end of the analysis.
     pub fn end_time(&self) -> f64 {
         match self {
@@ -174,14 +186,21 @@ impl<const D: usize> Analysis<D> {
     pub fn step(&mut self) -> Result<Progress, AnalysisError> {
         let before = self.time();
         Ok(match self {
-            Analysis::QuasiStatic(a) => Progress::implicit(a.step()?, before),
-            Analysis::Dynamic(a) => Progress::implicit(a.step()?, before),
+            Analysis::QuasiStatic(a) => {
+                let r = a.step()?;
+                Progress::implicit(r, before, LoadLevel::Factor(a.load_factor()))
+            }
+            Analysis::Dynamic(a) => {
+                let r = a.step()?;
+                Progress::implicit(r, before, LoadLevel::Time(a.time()))
+            }
             Analysis::Explicit(a) => {
                 let r = a.step()?;
                 Progress {
                     step: r.step,
                     time: r.time,
                     load_factor: 1.0,
+                    level: LoadLevel::Time(r.time),
                     increment: r.dt,
                     iterations: 0,
                     substeps: 1,

@@ -4,9 +4,9 @@ use crate::{ExplicitError, ExplicitSettings, TimeStep, UpdateScheme};
 use loam_grid::{BasisError, Connectivity, PointBasisError};
 use loam_kernels::{
     advance_deformation, check_constraints, connect, embed, gather_internal_force, gather_nodal, internal_force,
-    interpolate_pair, update_point, Committed, ConnectError, RunError,
+    interpolate_pair, update_point, Committed, ConnectError, LoadSupports, RunError,
 };
-use loam_model::{Kinematics, Model, StateFields};
+use loam_model::{Kinematics, LoadLevel, Model, StateFields};
 use nalgebra::{Matrix3, SMatrix, SVector};
 use rayon::prelude::*;
 use std::time::{Duration, Instant};
@@ -46,6 +46,8 @@ struct NodalScratch {
     /// Nodal velocity that drives the strain update for USF (p_I / m_I) and MUSL
     /// (re-mapped); USL uses `velocity`.
     strain_velocity: Vec<f64>,
+    /// The loads on surfaces and at points (D per node; empty without them).
+    loads: Vec<f64>,
 }
 
 /// Per-point trial state of one step, committed only when the whole step succeeded.
@@ -90,6 +92,8 @@ pub struct Explicit<const D: usize> {
     p_wave: Vec<f64>,
     conn: Connectivity<D>,
     constrained: Vec<bool>,
+    /// The load vertices on the active nodes.
+    loads: LoadSupports,
     nodes: NodalScratch,
     points: PointScratch<D>,
 }
@@ -122,6 +126,7 @@ impl<const D: usize> Explicit<D> {
             steps: 0,
             p_wave,
             constrained: Vec::new(),
+            loads: LoadSupports::default(),
             nodes: NodalScratch::default(),
             points: PointScratch::default(),
         })
@@ -157,6 +162,7 @@ impl<const D: usize> Explicit<D> {
     /// `QuasiStatic::check`). Scene validation calls this before the first step.
     pub fn check(&mut self) -> Result<(), ExplicitError> {
         connect(&self.model, &mut self.conn, &mut self.constrained, self.steps + 1)?;
+        self.loads.connect(&self.model, &self.conn, self.steps + 1)?;
         Ok(check_constraints(&self.model, &self.conn)?)
     }
 
@@ -200,6 +206,7 @@ impl<const D: usize> Explicit<D> {
         let start = Instant::now();
         let step = self.steps + 1;
         connect(&self.model, &mut self.conn, &mut self.constrained, step)?;
+        self.loads.connect(&self.model, &self.conn, step)?;
         let critical = self.critical_time_step();
         let dt = self.time_step(step, critical)?;
         self.size_buffers();
@@ -253,8 +260,28 @@ impl<const D: usize> Explicit<D> {
     fn map_to_grid(&mut self) -> f64 {
         let usf = self.settings.scheme == UpdateScheme::Usf;
         gather_grid(&self.model, &self.conn, !usf, &mut self.nodes.gathered);
+        self.add_loads();
         let max_mass = self.nodes.gathered.par_chunks(1 + 2 * D).map(|g| g[0]).reduce(|| 0.0, f64::max);
         EMPTY_NODE_MASS * max_mass
+    }
+
+    /// The loads on surfaces and at points at the step's start time, added to the gathered
+    /// nodal forces.
+    fn add_loads(&mut self) {
+        if self.model.loads().is_empty() {
+            return;
+        }
+        let (loads, level) = (self.model.loads(), LoadLevel::Time(self.time));
+        let f = &mut self.nodes.loads;
+        f.clear();
+        f.resize(self.conn.active_nodes().len() * D, 0.0);
+        self.loads.add_dead(loads, level, f);
+        self.loads.add_follower(loads, level, |_, l| l.positions().to_vec(), f);
+        for (g, f) in self.nodes.gathered.chunks_mut(1 + 2 * D).zip(f.chunks(D)) {
+            for i in 0..D {
+                g[1 + D + i] += f[i];
+            }
+        }
     }
 
     /// USF: the stress updated from the start-of-step nodal velocity p_I / m_I before the
@@ -317,7 +344,8 @@ impl<const D: usize> Explicit<D> {
     }
 
     /// Commit the trial state of a successful step (docs/theory.md §1): F ← ΔF F,
-    /// v_p ← det ΔF v_p, half-lengths stretched with F (iGIMP), and the rest copied in.
+    /// v_p ← det ΔF v_p, half-lengths stretched with F (iGIMP), and the rest copied in; the
+    /// load vertices follow their carrier points.
     fn commit(&mut self) {
         let sc = &self.points;
         let pts = self.model.points_mut();
@@ -335,6 +363,7 @@ impl<const D: usize> Explicit<D> {
                 *v = *v_new;
             });
         self.model.swap_state(&mut self.points.fields);
+        self.model.update_load_vertices();
     }
 
     /// Run every remaining step, calling `on_step` after each.

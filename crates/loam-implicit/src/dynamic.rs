@@ -26,7 +26,7 @@ use crate::{StepError, StepReport};
 use loam_kernels::{
     gather_internal_force, gather_nodal, internal_force, interpolate, interpolate_pair, InvalidSetting,
 };
-use loam_model::Model;
+use loam_model::{LoadLevel, Model};
 use loam_solve::{LinearSolverKind, NewtonError, NewtonReport, NewtonSettings};
 use rayon::prelude::*;
 use std::time::Instant;
@@ -219,7 +219,7 @@ impl<const D: usize> Dynamic<D> {
     /// stage. On success the state is committed; on failure nothing changes.
     fn attempt(&mut self, dt: f64) -> Result<NewtonReport, NewtonError<PointUpdateError>> {
         self.map_to_nodes();
-        self.engine.external_forces(1.0);
+        self.engine.external_forces(LoadLevel::Time(self.time + dt));
         self.predict(dt);
         let report = self.engine.newton(Some(&mut self.inertia))?;
         self.update_motion(dt);
@@ -270,7 +270,7 @@ impl<const D: usize> Dynamic<D> {
     /// the nodal mass, velocity and acceleration gathered here.
     fn initial_acceleration(&mut self) {
         self.gather_nodal_motion();
-        self.engine.external_forces(1.0);
+        self.engine.external_forces(LoadLevel::Time(self.time));
         let e = &mut self.engine;
         let (conn, pts) = (&e.conn, e.model.points());
         let average = CellAverage::of(&e.model, e.cell_gradients());

@@ -5,6 +5,7 @@
 //! the Newmark predictor and inertia) and in how they advance the load or time.
 
 use crate::cell_average::{cell_averaged_gradients, CellAverage};
+use crate::follower::{add_follower_tangent, follower_couplings, has_follower, FollowerInputs};
 use crate::ghost::{ghost_couplings, scaled_ghost_faces};
 use crate::inertia::Inertia;
 use crate::points::{update_points, PointInputs, PointUpdateError, TrialState};
@@ -12,8 +13,10 @@ use crate::residual::{residual, ResidualInputs};
 use crate::tangent::{assemble, PointCouplings, TangentInputs};
 use crate::StepError;
 use loam_grid::{Connectivity, GhostFace};
-use loam_kernels::{advance_deformation, check_constraints, connect, gather_nodal, interpolate_add};
-use loam_model::Model;
+use loam_kernels::{
+    advance_deformation, check_constraints, connect, gather_nodal, interpolate_add, trial_vertices, LoadSupports,
+};
+use loam_model::{LoadLevel, Model};
 use loam_solve::{
     norm, BlockPattern, LinearSolveError, LinearSolverKind, NewtonControl, NewtonError, NewtonReport, NewtonSettings,
     SparseDirectSolver,
@@ -33,6 +36,11 @@ pub(crate) struct Engine<const D: usize> {
     pub values: Vec<f64>,
     pub constrained: Vec<bool>,
     pub f_ext: Vec<f64>,
+    /// The loads' vertices on the active nodes, and the level the external forces are at.
+    loads: LoadSupports,
+    level: LoadLevel,
+    /// f_ext with the follower loads at the trial increment (empty without them).
+    f_follower: Vec<f64>,
     /// f_int − f_ext on the constrained dofs at the last residual; zero on free dofs.
     reaction: Vec<f64>,
     /// Per constraint, the support reaction Σ (f_int − f_ext) over its nodes and fixed
@@ -48,7 +56,8 @@ pub(crate) struct Engine<const D: usize> {
     /// Ghost-penalty faces over active nodes, scaled by γ M (empty without the penalty),
     /// and the node couplings they add to the pattern.
     ghost: Vec<GhostFace>,
-    ghost_couplings: Vec<Vec<u32>>,
+    /// The couplings the ghost faces and the follower loads add to the pattern.
+    extra_couplings: Vec<Vec<u32>>,
     trial: TrialState<D>,
     newton: NewtonSettings,
     linear: SparseDirectSolver,
@@ -56,13 +65,14 @@ pub(crate) struct Engine<const D: usize> {
 
 impl<const D: usize> Engine<D> {
     /// The linear solver is the one asked for, or chosen from the tangent: Cholesky when
-    /// every material's tangent is symmetric and none softens, LU otherwise (never a
-    /// silent symmetrisation; a softening tangent is indefinite and Cholesky would stop
-    /// at the first negative pivot).
+    /// every material's tangent is symmetric, none softens and no load follows the surface,
+    /// LU otherwise (never a silent symmetrisation; a softening tangent is indefinite and
+    /// Cholesky would stop at the first negative pivot; a follower load's stiffness is not
+    /// symmetric).
     pub fn new(model: Model<D>, newton: NewtonSettings, linear_solver: Option<LinearSolverKind>) -> Self {
         let (kind, source) = match linear_solver {
             Some(kind) => (kind, "as the settings ask"),
-            None if model.symmetric_tangent() && !model.can_soften() => {
+            None if model.symmetric_tangent() && !model.can_soften() && !has_follower(model.loads()) => {
                 (LinearSolverKind::Cholesky, "chosen from the tangent's symmetry and definiteness")
             }
             None => (LinearSolverKind::Lu, "chosen from the tangent's symmetry and definiteness"),
@@ -76,6 +86,9 @@ impl<const D: usize> Engine<D> {
             values: Vec::new(),
             constrained: Vec::new(),
             f_ext: Vec::new(),
+            loads: LoadSupports::default(),
+            level: LoadLevel::Factor(0.0),
+            f_follower: Vec::new(),
             reaction: Vec::new(),
             reactions: Vec::new(),
             du: Vec::new(),
@@ -83,7 +96,7 @@ impl<const D: usize> Engine<D> {
             correction: Vec::new(),
             cell_gradients: Vec::new(),
             ghost: Vec::new(),
-            ghost_couplings: Vec::new(),
+            extra_couplings: Vec::new(),
             trial: TrialState::default(),
             newton,
             linear: SparseDirectSolver::new(kind),
@@ -102,11 +115,13 @@ impl<const D: usize> Engine<D> {
             return Ok(());
         }
         connect(&self.model, &mut self.conn, &mut self.constrained, step)?;
+        self.loads.connect(&self.model, &self.conn, step)?;
         if let Some(gamma) = self.model.ghost_penalty() {
             self.ghost = scaled_ghost_faces(&self.model, &self.conn, gamma);
-            ghost_couplings(&self.ghost, self.conn.active_nodes().len(), &mut self.ghost_couplings);
         }
-        self.pattern.update_with(&PointCouplings(&self.conn), &self.ghost_couplings);
+        ghost_couplings(&self.ghost, self.conn.active_nodes().len(), &mut self.extra_couplings);
+        follower_couplings(&self.model, &self.conn, &self.loads, &mut self.extra_couplings);
+        self.pattern.update_with(&PointCouplings(&self.conn), &self.extra_couplings);
         if self.model.anti_locking().deviatoric_weight().is_some() {
             cell_averaged_gradients(&self.model, &self.conn, &mut self.cell_gradients);
         }
@@ -129,10 +144,13 @@ impl<const D: usize> Engine<D> {
         self.conn.active_nodes().len() * D
     }
 
-    /// Stage 3, external forces at load factor `lambda`: the model's dead loads on the
-    /// points, gathered to the nodes.
-    pub fn external_forces(&mut self, lambda: f64) {
+    /// Stage 3, external forces at `level` (a load factor, or the time of a dynamic step):
+    /// the model's dead loads on the points gathered to the nodes, then the dead loads on
+    /// its surfaces spread to them. Follower loads are added with the trial increment in
+    /// each residual.
+    pub fn external_forces(&mut self, level: LoadLevel) {
         let (model, conn) = (&self.model, &self.conn);
+        let lambda = level.body_factor();
         self.f_ext.resize(conn.active_nodes().len() * D, 0.0);
         gather_nodal(conn, D, &mut self.f_ext, |p, a, out| {
             let n = conn.support_values(p)[a];
@@ -141,6 +159,22 @@ impl<const D: usize> Engine<D> {
                 out[i] += n * f[i];
             }
         });
+        self.loads.add_dead(model.loads(), level, &mut self.f_ext);
+        self.level = level;
+    }
+
+    /// `f_follower` = f_ext plus the follower loads at the trial increment `du`; false (and
+    /// nothing done) without follower loads.
+    fn follower_forces(&mut self) -> bool {
+        if !self.model.loads().iter().any(|l| l.is_follower()) {
+            return false;
+        }
+        self.f_follower.clone_from(&self.f_ext);
+        let (conn, du, delta_f) = (&self.conn, &self.du, &self.trial.delta_f);
+        let positions = &self.model.points().position;
+        let places = |_, load: &_| trial_vertices(conn, load, positions, du, delta_f);
+        self.loads.add_follower(self.model.loads(), self.level, places, &mut self.f_follower);
+        true
     }
 
     /// Stage 4, Newton's method (docs/theory.md §6) from the increment in `du` (zero, a
@@ -183,12 +217,15 @@ impl<const D: usize> Engine<D> {
         let average = CellAverage::of(&self.model, &self.cell_gradients);
         let inputs = PointInputs { model: &self.model, conn: &self.conn, average, du: &self.du };
         update_points(inputs, &mut self.trial)?;
+        // The follower loads act on the vertices the trial state carries.
+        let follower = self.follower_forces();
+        let average = CellAverage::of(&self.model, &self.cell_gradients);
         let inputs = ResidualInputs {
             conn: &self.conn,
             average,
             ghost: &self.ghost,
             constrained: &self.constrained,
-            f_ext: &self.f_ext,
+            f_ext: if follower { &self.f_follower } else { &self.f_ext },
             mass: &self.model.points().mass,
         };
         Ok(residual(&inputs, &self.trial, inertia, &self.du, &mut self.residual, &mut self.reaction))
@@ -205,6 +242,17 @@ impl<const D: usize> Engine<D> {
             mass: &self.model.points().mass,
         };
         assemble(&inputs, &self.trial, inertia, &mut self.values);
+        if has_follower(self.model.loads()) {
+            let inputs = FollowerInputs {
+                model: &self.model,
+                conn: &self.conn,
+                supports: &self.loads,
+                level: self.level,
+                du: &self.du,
+                delta_f: &self.trial.delta_f,
+            };
+            add_follower_tangent(&inputs, &self.pattern, &self.constrained, &mut self.values);
+        }
     }
 
     /// Solve K δ = −R and add the correction to the increment: Δu ← Δu + δ.
@@ -267,6 +315,7 @@ impl<const D: usize> Engine<D> {
         pts.elastic_strain.copy_from_slice(&trial.elastic_strain);
         let n = pts.history.len();
         pts.history.copy_from_slice(&trial.history[..n]);
+        self.model.update_load_vertices();
         if moves {
             self.model.displace_background(conn.active_nodes(), du);
         }

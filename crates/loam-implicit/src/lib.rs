@@ -16,6 +16,7 @@ mod cell_average;
 mod cutback;
 mod dynamic;
 mod engine;
+mod follower;
 mod ghost;
 mod inertia;
 mod points;

@@ -9,7 +9,7 @@ use crate::engine::Engine;
 use crate::points::PointUpdateError;
 use crate::{IterationProfile, StepError, StepReport};
 use loam_kernels::RunError;
-use loam_model::Model;
+use loam_model::{LoadLevel, Model};
 use loam_solve::{
     BlockPattern, LinearSolverKind, LinearSolverTimings, NewtonError, NewtonReport, NewtonSettings, SparseDirectSolver,
 };
@@ -135,7 +135,7 @@ impl<const D: usize> QuasiStatic<D> {
     /// connectivity of that state: the algorithm of a quasi-static step, stage by stage.
     /// On success the state is committed; on failure nothing changes.
     fn attempt(&mut self, lambda: f64) -> Result<NewtonReport, NewtonError<PointUpdateError>> {
-        self.engine.external_forces(lambda);
+        self.engine.external_forces(LoadLevel::Factor(lambda));
         self.prescribe(lambda);
         let report = self.engine.newton(None)?;
         self.remember_increment(lambda);
@@ -230,7 +230,7 @@ impl<const D: usize> QuasiStatic<D> {
     fn prepare_next_step(&mut self) -> (usize, f64) {
         let step = self.step + 1;
         let lambda = (step as f64 / self.settings.load_steps as f64).min(1.0);
-        self.engine.external_forces(lambda);
+        self.engine.external_forces(LoadLevel::Factor(lambda));
         self.engine.du.clear();
         self.engine.size_buffers();
         (step, lambda)

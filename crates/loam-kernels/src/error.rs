@@ -11,6 +11,8 @@ pub enum ConnectError {
     PointOutsideGrid { step: usize, source: PointBasisError },
     #[error("step {step}: {source} (updated Lagrangian FEM: the mesh is too distorted to go on)")]
     Element { step: usize, source: ElementError },
+    #[error("step {step}: vertex {vertex} of load {load}, at {position:?}, touches no node that a material point reaches: the load is not on the material (or left the grid)")]
+    LoadOffMaterial { step: usize, load: usize, vertex: usize, position: Vec<f64> },
     #[error("constraint {index} (axis {axis}, node plane {plane}) touches no active node: no material point has support on that plane")]
     ConstraintTouchesNoNode { index: usize, axis: usize, plane: usize },
 }

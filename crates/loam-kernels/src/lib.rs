@@ -11,16 +11,20 @@
 //! - [`embed`], [`update_point`], [`advance_deformation`]: point kinematics — the
 //!   increment ΔF = I + ∇Δu, the law driven in small or finite strain, and the committed
 //!   F and GIMP domain.
+//! - [`LoadSupports`]: the load vertices on the active nodes, their forces spread to the
+//!   nodes, and the displacement that moves them.
 //! - [`ConnectError`], [`InvalidSetting`] and [`RunError`]: what the analyses' errors share.
 
 mod connect;
 mod error;
 mod force;
+mod load;
 mod point;
 mod transfer;
 
 pub use connect::{check_constraints, connect};
 pub use error::{ConnectError, InvalidSetting, RunError};
 pub use force::{gather_internal_force, internal_force};
+pub use load::{trial_vertices, LoadSupports};
 pub use point::{advance_deformation, embed, update_point, Committed, PointUpdate};
 pub use transfer::{gather_nodal, interpolate, interpolate_add, interpolate_pair};

@@ -1,7 +1,7 @@
 //! Energies of a model's state: the stored elastic energy of the points and the work of
 //! the dead loads on their motion (the energy histories of dynamic runs).
 
-use crate::{Kinematics, Model};
+use crate::{Kinematics, LoadLevel, Model};
 use loam_constitutive::tensor::sym_log;
 use nalgebra::SVector;
 use rayon::prelude::*;
@@ -30,39 +30,69 @@ impl<const D: usize> Model<D> {
     }
 }
 
-/// Work of the dead loads (gravity, point forces) on the points' motion, accumulated
-/// step by step with the trapezoidal rule in the load factor: exact for loads held
-/// constant, and for loads ramped linearly with displacement increments of one step.
-#[derive(Debug, Clone, Default)]
+/// Work of the loads (gravity, point forces, the loads on surfaces) on the motion of the
+/// points and load vertices, accumulated step by step with the trapezoidal rule: exact for
+/// dead loads held constant, and for loads ramped linearly with displacement increments of
+/// one step.
+#[derive(Debug, Clone)]
 pub struct ExternalWork<const D: usize> {
     previous: Vec<SVector<f64, D>>,
-    previous_factor: f64,
+    previous_loads: Vec<Vec<(SVector<f64, D>, SVector<f64, D>)>>,
+    previous_level: LoadLevel,
     work: f64,
 }
 
 impl<const D: usize> ExternalWork<D> {
-    /// Start at the model's current positions and load factor.
-    pub fn new(model: &Model<D>, load_factor: f64) -> Self {
-        Self { previous: model.points().position.clone(), previous_factor: load_factor, work: 0.0 }
+    /// Start at the model's current positions and load level.
+    pub fn new(model: &Model<D>, level: LoadLevel) -> Self {
+        Self {
+            previous: model.points().position.clone(),
+            previous_loads: vertex_forces(model, level),
+            previous_level: level,
+            work: 0.0,
+        }
     }
 
-    /// Add the work done since the last call; the load factor went linearly from the last
-    /// one to `load_factor`. Returns the accumulated work.
-    pub fn advance(&mut self, model: &Model<D>, load_factor: f64) -> f64 {
+    /// Add the work done since the last call; the loads went linearly from their level then
+    /// to `level`. Returns the accumulated work.
+    pub fn advance(&mut self, model: &Model<D>, level: LoadLevel) -> f64 {
         let pts = model.points();
+        let (before, now) = (self.previous_level.body_factor(), level.body_factor());
         let dw: f64 = (0..pts.len())
             .map(|p| {
-                let mean = (model.point_load_at(p, self.previous_factor) + model.point_load_at(p, load_factor)) * 0.5;
+                let mean = (model.point_load_at(p, before) + model.point_load_at(p, now)) * 0.5;
                 mean.dot(&(pts.position[p] - self.previous[p]))
             })
             .sum();
-        self.work += dw;
+        let loads = vertex_forces(model, level);
+        let dw_loads: f64 = loads
+            .iter()
+            .zip(&self.previous_loads)
+            .flat_map(|(now, before)| now.iter().zip(before))
+            .map(|((x, f), (x0, f0))| ((f + f0) * 0.5).dot(&(x - x0)))
+            .sum();
+        self.work += dw + dw_loads;
         self.previous.copy_from_slice(&pts.position);
-        self.previous_factor = load_factor;
+        self.previous_loads = loads;
+        self.previous_level = level;
         self.work
     }
 
     pub fn work(&self) -> f64 {
         self.work
     }
+}
+
+/// Per load, every vertex's place and force at `level`.
+fn vertex_forces<const D: usize>(model: &Model<D>, level: LoadLevel) -> Vec<Vec<(SVector<f64, D>, SVector<f64, D>)>> {
+    let mut f = Vec::new();
+    model
+        .loads()
+        .iter()
+        .map(|load| {
+            load.forces_on(load.positions(), &mut f);
+            let scale = level.factor(load.time_function());
+            load.positions().iter().zip(&f).map(|(x, f)| (*x, f * scale)).collect()
+        })
+        .collect()
 }

@@ -12,10 +12,12 @@
 mod constraint;
 mod energy;
 mod geostatic;
+mod loads;
 mod points_mut;
 
 pub use constraint::PlaneConstraint;
 pub use energy::ExternalWork;
+pub use loads::{Load, LoadKind, LoadLevel, TimeFunction};
 pub use points_mut::{PointsMut, StateFields};
 
 use loam_constitutive::ConstitutiveLaw;
@@ -108,6 +110,8 @@ pub enum ModelError {
     Gravity { axis: usize, value: f64 },
     #[error("point forces: {0}")]
     PointForces(String),
+    #[error("load {index}: {what}")]
+    Load { index: usize, what: String },
     #[error("materials: {0}")]
     Materials(String),
     #[error("ghost penalty: {0}")]
@@ -128,6 +132,8 @@ pub struct Model<const D: usize> {
     gravity: SVector<f64, D>,
     /// Force on each point at full load (empty: none).
     point_forces: Vec<SVector<f64, D>>,
+    /// Forces at points, tractions and pressures on surfaces.
+    loads: Vec<Load<D>>,
     anti_locking: AntiLocking,
     /// Gravity acts in full from the start (the points carry a geostatic initial stress).
     gravity_preloaded: bool,
@@ -188,6 +194,7 @@ impl<const D: usize> Model<D> {
             constraints,
             gravity,
             point_forces: Vec::new(),
+            loads: Vec::new(),
             anti_locking: AntiLocking::None,
             gravity_preloaded: false,
             ghost_penalty: None,
@@ -261,6 +268,42 @@ impl<const D: usize> Model<D> {
             return Err(ModelError::PointForces(format!("the force on point {p} is not finite")));
         }
         self.point_forces = forces;
+        Ok(self)
+    }
+
+    /// Forces at points and loads on surfaces (docs/theory.md §17). The background-grid MPM
+    /// only (the FEM reference has no surface loads yet); a follower pressure needs finite
+    /// strain; every vertex must lie in the grid.
+    pub fn with_loads(mut self, loads: Vec<Load<D>>) -> Result<Self, ModelError> {
+        let grid = self.background.grid().clone();
+        let grid = &grid;
+        for (index, load) in loads.iter().enumerate() {
+            let error = |what: String| Err(ModelError::Load { index, what });
+            if self.background.moves_with_body() {
+                return error(
+                    "the updated Lagrangian FEM reference takes no loads but gravity yet; use the MPM".into(),
+                );
+            }
+            if load.is_follower() && self.kinematics != Kinematics::FiniteStrain {
+                return error("a follower pressure turns with the deformed surface, a finite-strain notion; use kinematics FiniteStrain or a dead pressure".into());
+            }
+            let (lo, hi, h) = (grid.origin(), grid.extent_max(), grid.cell_size());
+            let inside = |x: &SVector<f64, D>| (0..D).all(|a| x[a] >= lo[a] && x[a] <= hi[a] + 1e-9 * h[a]);
+            if let Some(x) = load.positions().iter().find(|x| !inside(x)) {
+                return error(format!(
+                    "vertex {:?} lies outside the grid {:?} to {:?}",
+                    x.as_slice(),
+                    grid.origin().as_slice(),
+                    grid.extent_max().as_slice()
+                ));
+            }
+        }
+        self.loads = loads;
+        let positions = &self.points.position0;
+        for load in &mut self.loads {
+            load.attach(grid, positions);
+        }
+        self.update_load_vertices();
         Ok(self)
     }
 
@@ -399,6 +442,19 @@ impl<const D: usize> Model<D> {
 
     pub fn constraints(&self) -> &[PlaneConstraint] {
         &self.constraints
+    }
+
+    /// The loads beside gravity and the per-point forces.
+    pub fn loads(&self) -> &[Load<D>] {
+        &self.loads
+    }
+
+    /// Put every load vertex where its carrier point now puts it (the analyses, after a
+    /// committed step).
+    pub fn update_load_vertices(&mut self) {
+        for load in &mut self.loads {
+            load.follow(&self.points.position, &self.points.deformation_gradient);
+        }
     }
 
     /// Body force per unit mass at full load.

@@ -4,7 +4,12 @@
 //!
 //! Points are generated at the centres of an n^D subdivision of every grid cell that the
 //! shape covers (the usual MPM initialisation; Sulsky et al. 1994), each with the volume of
-//! its sub-cell, so that the initial GIMP domains tile the body exactly.
+//! its sub-cell, so that the initial GIMP domains tile the body exactly. A shape's boundary,
+//! where surface loads act, is a [`Surface`] of facets.
+
+mod surface;
+
+pub use surface::{area_vector, Surface};
 
 use loam_grid::{lexicographic_coords, Grid};
 use nalgebra::{Matrix3, SVector, Vector2};
@@ -35,6 +40,8 @@ pub enum PointsError {
     Polygon(usize),
     #[error("a ball's radius is {0}; it must be a positive number")]
     Radius(f64),
+    #[error("the spacing of a surface's facets is {0}; it must be a positive number")]
+    Spacing(f64),
     #[error("a polygon is only defined in 2D")]
     PolygonDimension,
     #[error("box min {min:?} is not below max {max:?} on every axis")]

@@ -1,0 +1,371 @@
+//! Loads beside gravity (docs/theory.md §17): forces at points, and tractions and pressures
+//! on the material's surface. A load lives on the material, not on grid planes: its
+//! vertices start on the boundary of a body, each carried by its nearest material point p
+//! at x_v = x_p + F_p (X_v − X_p), so the surface moves and stretches with the points' own
+//! motion and deformation (on a GIMP point's domain face the vertex stays on that face);
+//! each vertex carries its share of the facets around it, which the analyses spread to
+//! the nodes through the basis at its place.
+//!
+//! A load follows the load factor of a quasi-static analysis and its [`TimeFunction`] in
+//! dynamic and explicit ones. Dead loads keep the force of the initial configuration; a
+//! follower pressure acts on the current facets (it turns and stretches with the surface).
+
+use loam_grid::Grid;
+use loam_points::{area_vector, Surface};
+use nalgebra::{Matrix3, SVector};
+
+/// How a load's magnitude varies in time (dynamic and explicit analyses): the factor that
+/// multiplies its full value.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub enum TimeFunction {
+    /// In full from t = 0.
+    #[default]
+    Constant,
+    /// Linearly from 0 at t = 0 to 1 at t = `duration`, then held.
+    Ramp { duration: f64 },
+    /// Piecewise linear through (time, factor) pairs, times increasing; held before the
+    /// first time and after the last.
+    Table(Vec<(f64, f64)>),
+}
+
+impl TimeFunction {
+    /// Why the function is not valid, if it is not.
+    pub fn check(&self) -> Result<(), String> {
+        match self {
+            TimeFunction::Constant => Ok(()),
+            TimeFunction::Ramp { duration } if duration.is_finite() && *duration > 0.0 => Ok(()),
+            TimeFunction::Ramp { duration } => Err(format!("ramp duration {duration}; it must be a positive number")),
+            TimeFunction::Table(rows) => {
+                if rows.is_empty() {
+                    return Err("a table needs at least one (time, factor) pair".into());
+                }
+                if let Some(k) = rows.iter().position(|(t, f)| !(t.is_finite() && f.is_finite())) {
+                    return Err(format!("pair {k} is not finite"));
+                }
+                match rows.windows(2).position(|w| w[1].0 <= w[0].0) {
+                    Some(k) => Err(format!(
+                        "times must increase: pair {} has time {} after {}",
+                        k + 1,
+                        rows[k + 1].0,
+                        rows[k].0
+                    )),
+                    None => Ok(()),
+                }
+            }
+        }
+    }
+
+    /// The factor at time `t`.
+    pub fn at(&self, t: f64) -> f64 {
+        match self {
+            TimeFunction::Constant => 1.0,
+            TimeFunction::Ramp { duration } => (t / duration).clamp(0.0, 1.0),
+            TimeFunction::Table(rows) => {
+                let k = rows.partition_point(|(time, _)| *time <= t);
+                match k {
+                    0 => rows[0].1,
+                    k if k == rows.len() => rows[k - 1].1,
+                    k => {
+                        let ((t0, f0), (t1, f1)) = (rows[k - 1], rows[k]);
+                        f0 + (f1 - f0) * (t - t0) / (t1 - t0)
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Where an analysis stands when it asks for its loads: a quasi-static load factor, or the
+/// time of a dynamic or explicit analysis (gravity and point forces then act in full).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum LoadLevel {
+    Factor(f64),
+    Time(f64),
+}
+
+impl LoadLevel {
+    /// The factor on gravity and the per-point forces.
+    pub fn body_factor(&self) -> f64 {
+        match *self {
+            LoadLevel::Factor(lambda) => lambda,
+            LoadLevel::Time(_) => 1.0,
+        }
+    }
+
+    /// The factor on a load with time function `time`.
+    pub fn factor(&self, time: &TimeFunction) -> f64 {
+        match *self {
+            LoadLevel::Factor(lambda) => lambda,
+            LoadLevel::Time(t) => time.at(t),
+        }
+    }
+}
+
+/// What a load applies at full value.
+#[derive(Debug, Clone, PartialEq)]
+pub enum LoadKind<const D: usize> {
+    /// A force at a single vertex.
+    Force(SVector<f64, D>),
+    /// A traction per unit initial area on every facet, dead.
+    Traction(SVector<f64, D>),
+    /// A pressure (positive pushes into the body) given at every vertex, on the initial
+    /// facets (dead) or the current ones (`follower`, finite strain).
+    Pressure { values: Vec<f64>, follower: bool },
+}
+
+/// One load: its surface (a single vertex and no facet for a force), the vertices' current
+/// places, what it applies and its time function.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Load<const D: usize> {
+    surface: Surface<D>,
+    position: Vec<SVector<f64, D>>,
+    kind: LoadKind<D>,
+    time: TimeFunction,
+    /// Per vertex, the force at full value on the initial facets.
+    dead: Vec<SVector<f64, D>>,
+    /// Per vertex, the material point that carries it and X_v − X_p (set when the load is
+    /// put on a model).
+    carrier: Vec<u32>,
+    offset: Vec<SVector<f64, D>>,
+}
+
+impl<const D: usize> Load<D> {
+    /// A force at `at`.
+    pub fn force(at: SVector<f64, D>, force: SVector<f64, D>, time: TimeFunction) -> Result<Self, String> {
+        let surface = Surface { vertices: vec![at], facets: Vec::new() };
+        Self::new(surface, LoadKind::Force(force), time)
+    }
+
+    /// A dead traction `traction` per unit area on `surface`.
+    pub fn traction(surface: Surface<D>, traction: SVector<f64, D>, time: TimeFunction) -> Result<Self, String> {
+        Self::new(surface, LoadKind::Traction(traction), time)
+    }
+
+    /// A pressure of `values` (one per vertex of `surface`), dead or follower.
+    pub fn pressure(surface: Surface<D>, values: Vec<f64>, follower: bool, time: TimeFunction) -> Result<Self, String> {
+        if values.len() != surface.vertices.len() {
+            return Err(format!("{} pressures for {} vertices", values.len(), surface.vertices.len()));
+        }
+        Self::new(surface, LoadKind::Pressure { values, follower }, time)
+    }
+
+    fn new(surface: Surface<D>, kind: LoadKind<D>, time: TimeFunction) -> Result<Self, String> {
+        time.check()?;
+        if surface.vertices.is_empty() {
+            return Err("the load has no vertex".into());
+        }
+        if !matches!(kind, LoadKind::Force(_)) && surface.facets.is_empty() {
+            return Err("the load's surface has no facet".into());
+        }
+        let finite = match &kind {
+            LoadKind::Force(f) | LoadKind::Traction(f) => f.iter().all(|v| v.is_finite()),
+            LoadKind::Pressure { values, .. } => values.iter().all(|v| v.is_finite()),
+        };
+        if !finite || !surface.vertices.iter().flatten().all(|x| x.is_finite()) {
+            return Err("its magnitude and vertices must be finite".into());
+        }
+        let mut load = Self {
+            position: surface.vertices.clone(),
+            surface,
+            kind,
+            time,
+            dead: Vec::new(),
+            carrier: Vec::new(),
+            offset: Vec::new(),
+        };
+        let mut dead = Vec::new();
+        load.forces_on(&load.surface.vertices, &mut dead);
+        load.dead = dead;
+        Ok(load)
+    }
+
+    /// The initial vertices and the facets.
+    pub fn surface(&self) -> &Surface<D> {
+        &self.surface
+    }
+
+    /// The vertices' current places.
+    pub fn positions(&self) -> &[SVector<f64, D>] {
+        &self.position
+    }
+
+    pub fn kind(&self) -> &LoadKind<D> {
+        &self.kind
+    }
+
+    pub fn time_function(&self) -> &TimeFunction {
+        &self.time
+    }
+
+    /// Whether the force depends on the vertices' current places.
+    pub fn is_follower(&self) -> bool {
+        matches!(self.kind, LoadKind::Pressure { follower: true, .. })
+    }
+
+    /// Per vertex, the force at full value on the initial configuration.
+    pub fn dead_forces(&self) -> &[SVector<f64, D>] {
+        &self.dead
+    }
+
+    /// Per vertex, the force at full value with the vertices at `x`: each facet's load
+    /// shared equally among its vertices (exact for a uniform load on straight facets).
+    /// Dead loads ignore `x`.
+    pub fn forces_on(&self, x: &[SVector<f64, D>], out: &mut Vec<SVector<f64, D>>) {
+        out.clear();
+        out.resize(self.surface.vertices.len(), SVector::zeros());
+        let x = if self.is_follower() { x } else { &self.surface.vertices };
+        match &self.kind {
+            LoadKind::Force(f) => out[0] = *f,
+            LoadKind::Traction(t) => {
+                for facet in &self.surface.facets {
+                    let area = area_vector(&facet.map(|v| x[v as usize])).norm();
+                    for &v in facet {
+                        out[v as usize] += t * (area / D as f64);
+                    }
+                }
+            }
+            LoadKind::Pressure { values, .. } => {
+                for facet in &self.surface.facets {
+                    let a = area_vector(&facet.map(|v| x[v as usize]));
+                    for &v in facet {
+                        out[v as usize] -= a * (values[v as usize] / D as f64);
+                    }
+                }
+            }
+        }
+    }
+
+    /// The load's resultant at `level`, on the current vertices.
+    pub fn resultant(&self, level: LoadLevel) -> SVector<f64, D> {
+        let mut f = Vec::new();
+        self.forces_on(&self.position, &mut f);
+        f.iter().sum::<SVector<f64, D>>() * level.factor(&self.time)
+    }
+
+    /// The point carrying each vertex.
+    pub fn carriers(&self) -> &[u32] {
+        &self.carrier
+    }
+
+    /// Where vertex `v` is when its carrier is at `x_p` with deformation gradient `f_p`:
+    /// x_p + F_p (X_v − X_p).
+    #[inline]
+    pub fn carried(&self, v: usize, x_p: &SVector<f64, D>, f_p: &Matrix3<f64>) -> SVector<f64, D> {
+        let r = &self.offset[v];
+        x_p + SVector::from_fn(|i, _| (0..D).map(|j| f_p[(i, j)] * r[j]).sum::<f64>())
+    }
+
+    /// Attach every vertex to its nearest point of `positions` (the initial ones).
+    pub(crate) fn attach(&mut self, grid: &Grid<D>, positions: &[SVector<f64, D>]) {
+        self.carrier = nearest_points(grid, positions, &self.surface.vertices);
+        self.offset =
+            (self.surface.vertices.iter().zip(&self.carrier)).map(|(x, &p)| x - positions[p as usize]).collect();
+    }
+
+    /// Put every vertex where its carrier now puts it.
+    pub(crate) fn follow(&mut self, positions: &[SVector<f64, D>], f: &[Matrix3<f64>]) {
+        for v in 0..self.position.len() {
+            let p = self.carrier[v] as usize;
+            self.position[v] = self.carried(v, &positions[p], &f[p]);
+        }
+    }
+}
+
+/// For each of `targets`, the index of the nearest of `points` (the lowest index among
+/// equally near ones), searched cell ring by cell ring over the grid.
+fn nearest_points<const D: usize>(grid: &Grid<D>, points: &[SVector<f64, D>], targets: &[SVector<f64, D>]) -> Vec<u32> {
+    let cell_of = |x: &SVector<f64, D>| grid.cell_index(grid.cell_coords(x));
+    let mut by_cell: Vec<(usize, u32)> = points.iter().enumerate().map(|(p, x)| (cell_of(x), p as u32)).collect();
+    by_cell.sort_unstable();
+    let cells = grid.cells();
+    targets
+        .iter()
+        .map(|x| {
+            let centre = grid.cell_coords(x);
+            let mut best: Option<(f64, u32)> = None;
+            let reach = *cells.iter().max().unwrap_or(&1);
+            for ring in 0..=reach {
+                // A point in ring r is at least (r − 1) cells away: stop one ring after a find.
+                if let Some((d, _)) = best {
+                    let h_min = grid.cell_size().min();
+                    if d.sqrt() < (ring as f64 - 1.0) * h_min {
+                        break;
+                    }
+                }
+                for_ring(centre, ring, cells, |ijk| {
+                    let c = grid.cell_index(ijk);
+                    let start = by_cell.partition_point(|&(cell, _)| cell < c);
+                    for &(_, p) in by_cell[start..].iter().take_while(|&&(cell, _)| cell == c) {
+                        let d = (points[p as usize] - x).norm_squared();
+                        if best.is_none_or(|(bd, bp)| d < bd || (d == bd && p < bp)) {
+                            best = Some((d, p));
+                        }
+                    }
+                });
+            }
+            best.expect("a model has points").1
+        })
+        .collect()
+}
+
+/// Call `visit` for every cell of the grid at Chebyshev distance exactly `ring` from `centre`.
+fn for_ring<const D: usize>(centre: [usize; D], ring: usize, cells: [usize; D], mut visit: impl FnMut([usize; D])) {
+    let lo: [usize; D] = std::array::from_fn(|a| centre[a].saturating_sub(ring));
+    let hi: [usize; D] = std::array::from_fn(|a| (centre[a] + ring).min(cells[a] - 1));
+    let dims: [usize; D] = std::array::from_fn(|a| hi[a] - lo[a] + 1);
+    for k in 0..dims.iter().product() {
+        let off = loam_grid::lexicographic_coords(k, dims);
+        let ijk: [usize; D] = std::array::from_fn(|a| lo[a] + off[a]);
+        if (0..D).any(|a| ijk[a].abs_diff(centre[a]) == ring) {
+            visit(ijk);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use loam_points::Shape;
+    use nalgebra::Vector2;
+
+    #[test]
+    fn time_functions_interpolate_and_refuse_bad_tables() {
+        assert_eq!(TimeFunction::Constant.at(-1.0), 1.0);
+        assert_eq!(TimeFunction::Ramp { duration: 2.0 }.at(0.5), 0.25);
+        assert_eq!(TimeFunction::Ramp { duration: 2.0 }.at(3.0), 1.0);
+        let table = TimeFunction::Table(vec![(0.0, 0.0), (1.0, 2.0), (3.0, 0.0)]);
+        assert!(table.check().is_ok());
+        assert_eq!(table.at(0.5), 1.0);
+        assert_eq!(table.at(2.0), 1.0);
+        assert_eq!(table.at(-1.0), 0.0);
+        assert_eq!(table.at(4.0), 0.0);
+        assert!(TimeFunction::Table(vec![(0.0, 0.0), (0.0, 1.0)]).check().unwrap_err().contains("increase"));
+        assert!(TimeFunction::Table(vec![]).check().is_err());
+        assert!(TimeFunction::Ramp { duration: 0.0 }.check().is_err());
+        assert_eq!(LoadLevel::Factor(0.3).factor(&TimeFunction::Ramp { duration: 1.0 }), 0.3);
+        assert_eq!(LoadLevel::Time(0.5).body_factor(), 1.0);
+    }
+
+    /// A uniform pressure p on the top of a box: resultant −p × width, shared equally
+    /// among interior vertices (p h) and by half at the ends; a follower pressure on a
+    /// surface turned by 90° turns its resultant with it.
+    #[test]
+    fn pressure_shares_and_follows() {
+        let top = Shape::Box { min: Vector2::new(0.0, 0.0), max: Vector2::new(2.0, 1.0) }
+            .boundary(0.5)
+            .unwrap()
+            .select(|c| c[1] > 0.99);
+        let n = top.vertices.len();
+        let load = Load::pressure(top, vec![3.0; n], true, TimeFunction::Constant).unwrap();
+        assert_eq!(load.resultant(LoadLevel::Factor(0.5)), Vector2::new(0.0, -3.0));
+        let shares: Vec<f64> = load.dead_forces().iter().map(|f| f[1]).collect();
+        assert!(shares.iter().all(|&s| s == -1.5 || s == -0.75), "{shares:?}");
+        let turned: Vec<_> = load.positions().iter().map(|x| Vector2::new(-x[1], x[0])).collect();
+        let mut f = Vec::new();
+        load.forces_on(&turned, &mut f);
+        let r: Vector2<f64> = f.iter().sum();
+        assert!((r - Vector2::new(6.0, 0.0)).norm() < 1e-14, "{r}");
+        assert!(Load::pressure(Surface::<2>::default(), vec![], false, TimeFunction::Constant).is_err());
+        assert!(Load::force(Vector2::zeros(), Vector2::new(f64::NAN, 0.0), TimeFunction::Constant).is_err());
+    }
+}
