@@ -9,6 +9,7 @@ mod geostatic;
 mod ghost;
 mod implicit_dynamics;
 mod implicit_mpm;
+mod loads;
 mod prescribed_displacement;
 mod run_scenes;
 mod scene_errors;

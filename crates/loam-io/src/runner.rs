@@ -7,7 +7,7 @@ use crate::output::{write_csv_table, write_vtu, CsvCell, CsvWriter, OutputError,
 use crate::scene::{AnalysisSpec, LoadedScene, OutputSpec, SceneError};
 use loam_analysis::{Analysis, AnalysisError, Progress};
 use loam_implicit::{reduced_strength, FactorOfSafety, QuasiStatic, StrengthReduction, StrengthReductionError};
-use loam_model::{ExternalWork, Model};
+use loam_model::{ExternalWork, LoadLevel, Model};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
@@ -63,15 +63,15 @@ struct History<const D: usize> {
 }
 
 impl<const D: usize> History<D> {
-    fn create(path: &Path, model: &Model<D>, load_factor: f64) -> Result<Self, OutputError> {
+    fn create(path: &Path, model: &Model<D>, level: LoadLevel) -> Result<Self, OutputError> {
         let mut header = vec!["time", "kinetic_energy", "strain_energy", "external_work", "total_energy"];
         header.extend(["momentum_x", "momentum_y", "momentum_z"].iter().take(D));
         let writer = CsvWriter::create(path, &header)?;
-        Ok(Self { writer, work: ExternalWork::new(model, load_factor) })
+        Ok(Self { writer, work: ExternalWork::new(model, level) })
     }
 
-    fn advance(&mut self, model: &Model<D>, load_factor: f64) {
-        self.work.advance(model, load_factor);
+    fn advance(&mut self, model: &Model<D>, level: LoadLevel) {
+        self.work.advance(model, level);
     }
 
     /// Total energy is kinetic + strain − external work: constant for a conservative
@@ -168,7 +168,7 @@ impl<'a, const D: usize> Outputs<'a, D> {
         }
         let mut history = None;
         if spec.history_every > 0 {
-            let mut h = History::create(&out_dir.join("history.csv"), model, analysis.load_factor())?;
+            let mut h = History::create(&out_dir.join("history.csv"), model, analysis.load_level())?;
             h.row(model, analysis.time())?;
             history = Some(h);
         }
@@ -178,9 +178,9 @@ impl<'a, const D: usize> Outputs<'a, D> {
     /// After step `r`: its log row, and a history row and a frame when due (always after the
     /// `last` step).
     fn record(&mut self, r: &Progress, model: &Model<D>, last: bool) -> Result<(), OutputError> {
-        self.log.row(r)?;
+        self.log.row(r, model)?;
         if let Some(h) = self.history.as_mut() {
-            h.advance(model, r.load_factor);
+            h.advance(model, r.level);
             if r.step.is_multiple_of(self.spec.history_every) || last {
                 h.row(model, r.time)?;
             }
@@ -204,12 +204,15 @@ impl<'a, const D: usize> Outputs<'a, D> {
 
 /// `run_log.csv`: one row per step (load factor, Newton iterations, final residual, wall
 /// time, ...). A displaced constraint (a footing) adds its prescribed displacement and
-/// reaction per prescribed component: the load–displacement curve.
+/// reaction per prescribed component: the load–displacement curve. Every load adds its
+/// resultant at the step's load factor or time, per component.
 struct RunLog {
     writer: CsvWriter,
     /// (constraint, component, prescribed displacement at full load).
     displaced: Vec<(usize, usize, f64)>,
 }
+
+const AXES: [&str; 3] = ["x", "y", "z"];
 
 impl RunLog {
     const COLUMNS: [&'static str; 11] = [
@@ -227,7 +230,6 @@ impl RunLog {
     ];
 
     fn create<const D: usize>(path: &Path, model: &Model<D>) -> Result<Self, OutputError> {
-        const AXES: [&str; 3] = ["x", "y", "z"];
         let displaced: Vec<(usize, usize, f64)> = model
             .constraints()
             .iter()
@@ -240,11 +242,14 @@ impl RunLog {
             header.push(format!("constraint{k}_displacement_{}", AXES[i]));
             header.push(format!("constraint{k}_reaction_{}", AXES[i]));
         }
+        for k in 0..model.loads().len() {
+            header.extend(AXES[..D].iter().map(|a| format!("load{k}_{a}")));
+        }
         let writer = CsvWriter::create(path, &header.iter().map(String::as_str).collect::<Vec<_>>())?;
         Ok(Self { writer, displaced })
     }
 
-    fn row(&mut self, r: &Progress) -> Result<(), OutputError> {
+    fn row<const D: usize>(&mut self, r: &Progress, model: &Model<D>) -> Result<(), OutputError> {
         let mut cells = vec![
             CsvCell::Int(r.step as i64),
             CsvCell::Float(r.time),
@@ -261,6 +266,9 @@ impl RunLog {
         for &(k, i, u) in &self.displaced {
             cells.push(CsvCell::Float(r.load_factor * u));
             cells.push(CsvCell::Float(r.reactions.get(k).map_or(f64::NAN, |f| f[i])));
+        }
+        for load in model.loads() {
+            cells.extend(load.resultant(r.level).iter().map(|&f| CsvCell::Float(f)));
         }
         self.writer.row_mixed(&cells)
     }

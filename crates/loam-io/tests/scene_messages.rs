@@ -78,6 +78,8 @@ fn cases() -> Vec<(&'static str, usize, String)> {
     let push = |d: &str| format!("{Y0}\n        Displacement(axis: Y, at: 10.0, displacement: {d}),");
     let within = |w: &str| format!("{Y0}\n        Roller(axis: X, at: 0.0, within: Some({w})),");
     let option = |line: &str| format!("{PLANE}\n    {line}");
+    // The loads key after the constraints (Y0 is the last constraint line).
+    let load = |l: &str| format!("{Y0}\n    ],\n    loads: [\n        {l},");
     let small = "kinematics: SmallStrain,";
     let explicit = "Explicit(duration: 1.0)";
     let dynamic = "ImplicitDynamic(time_step: 0.1, duration: 1.0)";
@@ -338,10 +340,28 @@ fn cases() -> Vec<(&'static str, usize, String)> {
         ("fem explicit damping", 2, f(&[("QuasiStatic(load_steps: 10)", "Explicit(duration: 1.0, damping: 2.0)")])),
         ("fem dynamic", 2, f(&[("QuasiStatic(load_steps: 10)", dynamic)])),
         ("fem constraint on no active node", 2, f(&[(Y0, "Roller(axis: Y, at: 10.3125),")])),
+        ("load surcharge", 2, c(&[(Y0, &load("Pressure(within: Some((min: [0.0, 9.9], max: [0.3125, 10.1])), pressure: Uniform(1e4))"))])),
+        ("load whole boundary", 2, c(&[(Y0, &load("Traction(traction: [0.0, -1.0])"))])),
+        ("load point", 2, c(&[(Y0, &load("PointLoad(at: [0.15, 10.0], force: [0.0, -1e3])"))])),
+        ("load point off the material", 2, c(&[(Y0, &load("PointLoad(at: [0.15, 10.2], force: [0.0, -1e3])"))])),
+        ("load box off the boundary", 2, c(&[(Y0, &load("Pressure(within: Some((min: [0.05, 4.0], max: [0.25, 6.0])), pressure: Uniform(1e4))"))])),
+        ("load box unordered", 2, c(&[(Y0, &load("Pressure(within: Some((min: [0.0, 11.0], max: [0.3125, 9.0])), pressure: Uniform(1e4))"))])),
+        ("load body missing", 2, c(&[(Y0, &load("Traction(body: 2, traction: [0.0, -1.0])"))])),
+        ("load traction length", 2, c(&[(Y0, &load("Traction(traction: [-1.0])"))])),
+        ("load pressure infinite", 2, c(&[(Y0, &load("Pressure(pressure: Uniform(inf))"))])),
+        ("load hydrostatic", 2, c(&[(Y0, &load("Pressure(pressure: Hydrostatic(level: 8.0, unit_weight: 10.0))"))])),
+        ("load linear gradient length", 2, c(&[(Y0, &load("Pressure(pressure: Linear(value: 1.0, at: [0.0, 0.0], gradient: [1.0]))"))])),
+        ("load time in quasi-static", 2, c(&[(Y0, &load("Traction(traction: [0.0, -1.0], time: Ramp(duration: 1.0))"))])),
+        ("load follower in small strain", 2, c(&[("kinematics: FiniteStrain", "kinematics: SmallStrain"), (Y0, &load("Pressure(pressure: Uniform(1.0), follower: true)"))])),
+        ("load follower", 2, c(&[(Y0, &load("Pressure(pressure: Uniform(1.0), follower: true)"))])),
+        ("load on the fem reference", 2, f(&[(Y0, &load("Traction(traction: [0.0, -1.0])"))])),
         ("vibrating bar", 2, edit(BAR, &[])),
         ("bar sine axis", 2, edit(BAR, &[("axis: X, wavelength", "axis: Z, wavelength")])),
         ("bar amplitude length", 2, edit(BAR, &[("amplitude: [0.1, 0.0]", "amplitude: [0.1]")])),
         ("bar gamma", 2, edit(BAR, &[("duration: 30.0", "duration: 30.0, gamma: 0.3")])),
+        ("bar load table", 2, edit(BAR, &[("analysis:", "loads: [PointLoad(at: [1.0, 0.5], force: [1.0, 0.0], time: Table([(0.0, 0.0), (2.0, 1.0)]))],\n    analysis:")])),
+        ("bar load table not increasing", 2, edit(BAR, &[("analysis:", "loads: [PointLoad(at: [1.0, 0.5], force: [1.0, 0.0], time: Table([(0.0, 0.0), (2.0, 1.0), (2.0, 0.0)]))],\n    analysis:")])),
+        ("bar load ramp zero", 2, edit(BAR, &[("analysis:", "loads: [PointLoad(at: [1.0, 0.5], force: [1.0, 0.0], time: Ramp(duration: 0.0))],\n    analysis:")])),
         ("runout", 2, edit(RUNOUT, &[])),
         ("runout fixed step", 2, edit(RUNOUT, &[("Cfl(0.5)", "Fixed(dt: 0.5)")])),
         ("runout polygon of two", 2, edit(RUNOUT, &[("(50.0, 0.0), (50.0, 20.0), (30.0, 20.0), (20.0, 10.0), ", "")])),

@@ -4,7 +4,9 @@
 //! Cauchy stress is the weight above, σ_yy = −ρ₀g(H₀ − Y). For Hencky elasticity the
 //! stretch has the closed form λ = W(s)/s, s = ρ₀g(H₀ − Y)/E (W: Lambert's principal
 //! branch), and the displacement is its integral; for small-strain linear elasticity it is
-//! the parabola −(ρ₀g/E)(H₀Y − Y²/2). The error norm e_σ is AMPLE's (Coombs & Augarde
+//! the parabola −(ρ₀g/E)(H₀Y − Y²/2). A dead surcharge q on the top face (the surcharged
+//! column of §V1) adds q to the weight above at every height: σ_yy = −q − ρ₀g(H₀ − Y), and
+//! the same closed forms hold with s = (q + ρ₀g(H₀ − Y))/E. The error norm e_σ is AMPLE's (Coombs & Augarde
 //! 2020; Wyser et al. 2020). Also here: the layered column of the stiffness-contrast hard
 //! case, whose displacement integrates σ/E layer by layer.
 
@@ -12,7 +14,7 @@ use crate::bound::Bound;
 use loam_constitutive::{ConstitutiveLaw, Elastic};
 use loam_grid::GaussLegendre;
 use loam_grid::{BasisKind, FeMesh, Grid};
-use loam_model::{Kinematics, Model, PlaneConstraint};
+use loam_model::{Kinematics, Load, Model, PlaneConstraint, TimeFunction};
 use loam_points::{PointStore, Shape};
 use nalgebra::{SVector, Vector2};
 use std::sync::Arc;
@@ -74,30 +76,38 @@ pub struct Column {
     pub young: f64,
     pub density: f64,
     pub gravity: f64,
+    /// Dead pressure on the top face at full load (0: the self-weight column).
+    pub surcharge: f64,
 }
 
 impl Column {
     /// V1a: small deformation, E = 1e6, ρ = 80, g = 10, H = 50.
-    pub const V1A: Column = Column { height: 50.0, young: 1e6, density: 80.0, gravity: 10.0 };
+    pub const V1A: Column = Column { height: 50.0, young: 1e6, density: 80.0, gravity: 10.0, surcharge: 0.0 };
     /// V1b: large deformation, 3D, E = 1e3, ρ = 50, g = 9.81, H = 0.8.
-    pub const V1B: Column = Column { height: 0.8, young: 1e3, density: 50.0, gravity: 9.81 };
+    pub const V1B: Column = Column { height: 0.8, young: 1e3, density: 50.0, gravity: 9.81, surcharge: 0.0 };
     /// V1c: large deformation, 2D, E = 1e5, ρ = 2000, g = 10, H = 10.
-    pub const V1C: Column = Column { height: 10.0, young: 1e5, density: 2000.0, gravity: 10.0 };
+    pub const V1C: Column = Column { height: 10.0, young: 1e5, density: 2000.0, gravity: 10.0, surcharge: 0.0 };
 
-    /// ρ₀ g H₀: the stress scale of the error norm.
+    /// The same column under a surcharge of `ratio` times its weight, q = ratio · ρ₀gH₀.
+    pub const fn surcharged(self, ratio: f64) -> Column {
+        Column { surcharge: ratio * self.density * self.gravity * self.height, ..self }
+    }
+
+    /// q + ρ₀ g H₀: the largest stress, the scale of the error norm.
     pub fn stress_scale(&self) -> f64 {
-        self.density * self.gravity * self.height
+        self.surcharge + self.density * self.gravity * self.height
     }
 
     /// Vertical Cauchy stress at the point of initial height `y0`, for any law and any
-    /// deformation: the weight above per unit (unchanged) area.
+    /// deformation: the surcharge and the weight above per unit (unchanged) area.
     pub fn stress_yy(&self, y0: f64) -> f64 {
-        -self.density * self.gravity * (self.height - y0)
+        -self.surcharge - self.density * self.gravity * (self.height - y0)
     }
 
-    /// Stretch of Hencky elasticity at initial height `y0`: λ = W(s)/s, s = ρ₀g(H₀ − Y)/E.
+    /// Stretch of Hencky elasticity at initial height `y0`: λ = W(s)/s with
+    /// s = (q + ρ₀g(H₀ − Y))/E (σ = E ln λ / λ = −sE, ν = 0).
     pub fn hencky_stretch(&self, y0: f64) -> f64 {
-        let s = self.density * self.gravity * (self.height - y0) / self.young;
+        let s = -self.stress_yy(y0) / self.young;
         if s <= 0.0 {
             1.0
         } else {
@@ -114,16 +124,17 @@ impl Column {
     }
 
     /// Vertical displacement of linear small-strain elasticity (M = E for ν = 0):
-    /// u(Y) = −(ρ₀g/E)(H₀Y − Y²/2).
+    /// u(Y) = −(qY + ρ₀g(H₀Y − Y²/2))/E.
     pub fn small_strain_displacement(&self, y0: f64) -> f64 {
-        -(self.density * self.gravity / self.young) * (self.height * y0 - 0.5 * y0 * y0)
+        -(self.surcharge * y0 + self.density * self.gravity * (self.height * y0 - 0.5 * y0 * y0)) / self.young
     }
 }
 
 /// Errors of a column run against the closed form.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ColumnErrors {
-    /// e_σ = Σ |σ_yy,p − σ_yy(Y_p)| V⁰_p / (Σ V⁰_p · ρ₀gH₀) (AMPLE; Wyser et al. 2020).
+    /// e_σ = Σ |σ_yy,p − σ_yy(Y_p)| V⁰_p / (Σ V⁰_p · (q + ρ₀gH₀)) (AMPLE; Wyser et al.
+    /// 2020, with the surcharge in the scale).
     pub stress: f64,
     /// |u_num − u_ref| / |u_ref| at the highest point.
     pub top_displacement: f64,
@@ -205,7 +216,8 @@ fn column_parts<const D: usize>(column: &Column, width: f64, cells_high: usize, 
 /// The V1 column as a model: one cell wide (`width`; the cell is `width` across in every
 /// horizontal axis), `cells_high` cells over the column height plus one empty cell above,
 /// `points_per_cell`^D points per cell, rollers on the sides and the base, ν = 0 elastic,
-/// gravity along −y (axis 1) in 2D and 3D.
+/// gravity along −y (axis 1) in 2D and 3D, and the surcharge as a dead pressure on the top
+/// face.
 pub fn column_model<const D: usize>(
     column: &Column,
     width: f64,
@@ -235,7 +247,18 @@ pub fn column_model_with_spare_cells<const D: usize>(
     points
         .fill(&grid, &Shape::Box { min: SVector::zeros(), max }, points_per_cell, column.density, 0)
         .expect("column fits the grid");
-    Model::new(grid, basis, kinematics, points, vec![law], constraints, gravity).expect("valid column model")
+    let model =
+        Model::new(grid, basis, kinematics, points, vec![law], constraints, gravity).expect("valid column model");
+    if column.surcharge == 0.0 {
+        return model;
+    }
+    let top = Shape::Box { min: SVector::zeros(), max }
+        .boundary(width.min(column.height / cells_high as f64) / points_per_cell as f64)
+        .expect("valid column boundary")
+        .select(|c| c[1] >= column.height * (1.0 - 1e-12));
+    let n = top.vertices.len();
+    let load = Load::pressure(top, vec![column.surcharge; n], false, TimeFunction::Constant).expect("valid surcharge");
+    model.with_loads(vec![load]).expect("the surcharge lies in the grid")
 }
 
 /// The V1 column as an updated Lagrangian FEM model: the same grid planes, constraints,
@@ -248,6 +271,7 @@ pub fn column_fem_model<const D: usize>(
     gauss_order: usize,
     kinematics: Kinematics,
 ) -> Model<D> {
+    assert_eq!(column.surcharge, 0.0, "the FEM reference takes no surface loads yet");
     let ColumnParts { grid, max, constraints, gravity, law } = column_parts::<D>(column, width, cells_high, 1);
     let elements = std::array::from_fn(|a| if a == 1 { cells_high } else { 1 });
     let mesh = FeMesh::block(SVector::zeros(), max, elements, gauss_order).expect("valid column mesh");
@@ -323,6 +347,24 @@ mod tests {
             assert!((got - u).abs() < 5e-7, "{c:?}: {got} vs {u}");
         }
         assert!((Column::V1A.small_strain_displacement(50.0) + 1.0).abs() < 1e-12);
+    }
+
+    /// The surcharged closed forms: the small-strain displacement's slope at the base is the
+    /// strain there, −(q + ρ₀gH₀)/E; the Hencky stretch at the top is W(q/E)/(q/E), and the
+    /// Hencky displacement tends to the small-strain one as E grows (both by quadrature and
+    /// by differentiation, not from a run).
+    #[test]
+    fn surcharged_closed_forms_agree_with_their_definitions() {
+        let c = Column::V1A.surcharged(0.5);
+        assert_eq!(c.surcharge, 0.5 * 80.0 * 10.0 * 50.0);
+        let h = 1e-4;
+        let slope = (c.small_strain_displacement(h) - c.small_strain_displacement(-h)) / (2.0 * h);
+        assert!((slope + c.stress_scale() / c.young).abs() < 1e-10);
+        let s = c.surcharge / c.young;
+        assert!((c.hencky_stretch(c.height) - lambert_w0(s) / s).abs() < 1e-15);
+        let stiff = Column { young: 1e10, ..c };
+        let (a, b) = (stiff.hencky_displacement(50.0), stiff.small_strain_displacement(50.0));
+        assert!((a - b).abs() < 1e-5 * b.abs(), "{a} vs {b}");
     }
 
     /// The layered column without contrast is the uniform one.

@@ -123,6 +123,9 @@ impl LoadedScene {
             Some(&ConnectError::ConstraintTouchesNoNode { index, .. }) => {
                 self.error(&[Seg::Key("constraints"), Seg::Index(index)], format!("constraint {index}: {e}"))
             }
+            Some(&ConnectError::LoadOffMaterial { load, .. }) => {
+                self.error(&[Seg::Key("loads"), Seg::Index(load)], e.to_string())
+            }
             Some(ConnectError::PointOutsideGrid { source, .. }) => self.error(
                 &[Seg::Key("bodies")],
                 format!("material point {} at {:?}: its basis reaches outside the grid ({}); enlarge the grid or move the body", source.point, source.position, source.source),

@@ -112,7 +112,7 @@ impl LoadedScene {
     }
 
     /// Body `i`'s shape, its points with `D` finite components.
-    fn shape<const D: usize>(&self, i: usize, b: &BodySpec) -> Result<Shape<D>, SceneError> {
+    pub(super) fn shape<const D: usize>(&self, i: usize, b: &BodySpec) -> Result<Shape<D>, SceneError> {
         let at = |key| [Seg::Key("bodies"), Seg::Index(i), Seg::Key("shape"), Seg::Key(key)];
         Ok(match &b.shape {
             ShapeSpec::Box { min, max } => Shape::Box {

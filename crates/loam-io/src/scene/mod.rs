@@ -12,6 +12,7 @@
 //! - `materials`: each material's density and constitutive law;
 //! - `bodies`: the material points (or the FEM reference's mesh) and initial velocities;
 //! - `constraints`: gravity, the plane constraints and prescribed displacements;
+//! - `loads`: forces at points, tractions and pressures on the bodies' boundaries;
 //! - `solver`: Newton's tolerances and the linear solver;
 //! - `model`: the model assembled from the parts above, with its options (anti-locking,
 //!   geometric linearity, ghost penalty, initial stress);
@@ -31,6 +32,7 @@ mod bodies;
 mod constraints;
 mod convert;
 mod grid;
+mod loads;
 mod locate;
 mod materials;
 mod model;
@@ -103,8 +105,10 @@ impl LoadedScene {
         let bodies = self.bodies(&grid)?;
         let gravity = self.gravity::<D>()?;
         let constraints = self.constraints(&grid)?;
+        let loads = self.loads(&grid)?;
         let solver = self.solver()?;
         let model = self.model(grid, bodies, laws, constraints, gravity)?;
+        let model = self.with_loads(model, loads)?;
         let mut analysis = self.analysis(model, solver)?;
         self.check_before_the_first_step(&mut analysis)?;
         Ok(analysis)

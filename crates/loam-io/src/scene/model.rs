@@ -7,7 +7,7 @@ use super::locate::Seg;
 use super::{AnalysisSpec, InitialStressSpec, LoadedScene, SceneError};
 use loam_constitutive::ConstitutiveLaw;
 use loam_grid::Grid;
-use loam_model::{Model, ModelError, PlaneConstraint};
+use loam_model::{Load, Model, ModelError, PlaneConstraint};
 use nalgebra::SVector;
 use std::sync::Arc;
 
@@ -46,6 +46,18 @@ impl LoadedScene {
             }
         };
         self.model_options(model)
+    }
+
+    /// The model with the scene's loads, each refused at its place in `loads`.
+    pub(super) fn with_loads<const D: usize>(
+        &self,
+        model: Model<D>,
+        loads: Vec<Load<D>>,
+    ) -> Result<Model<D>, SceneError> {
+        model.with_loads(loads).map_err(|e| match e {
+            ModelError::Load { index, .. } => self.error(&[Seg::Key("loads"), Seg::Index(index)], e.to_string()),
+            e => self.error(&[Seg::Key("loads")], e.to_string()),
+        })
     }
 
     /// Anti-locking, geometric linearity (implicit only), the ghost penalty (implicit only)

@@ -44,6 +44,10 @@ pub struct Scene {
     pub gravity: Vec<f64>,
     #[serde(default)]
     pub constraints: Vec<ConstraintSpec>,
+    /// Loads beside gravity: forces at points, tractions and pressures on the bodies'
+    /// boundaries.
+    #[serde(default)]
+    pub loads: Vec<LoadSpec>,
     pub analysis: AnalysisSpec,
     #[serde(default)]
     pub solver: SolverSpec,
@@ -259,6 +263,75 @@ pub enum ConstraintSpec {
         #[serde(default)]
         within: Option<RegionSpec>,
     },
+}
+
+/// A load. Each follows the load factor of a QuasiStatic analysis, and its `time` function
+/// in ImplicitDynamic and Explicit ones (default: in full from t = 0).
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub enum LoadSpec {
+    /// A force at a point of the material (D components each), spread to the nodes
+    /// through the basis at its place; the point moves with the body.
+    PointLoad {
+        at: Vec<f64>,
+        force: Vec<f64>,
+        #[serde(default)]
+        time: TimeFunctionSpec,
+    },
+    /// A dead traction (force per unit area, D components) on the boundary of body `body`
+    /// (index in `bodies`, default 0) inside the box `within` (default: all of it).
+    Traction {
+        #[serde(default)]
+        body: usize,
+        #[serde(default)]
+        within: Option<RegionSpec>,
+        traction: Vec<f64>,
+        #[serde(default)]
+        time: TimeFunctionSpec,
+    },
+    /// A pressure (positive pushes into the body) on the boundary of body `body` inside
+    /// `within`; `follower: true` (finite strain) turns and stretches it with the surface.
+    Pressure {
+        #[serde(default)]
+        body: usize,
+        #[serde(default)]
+        within: Option<RegionSpec>,
+        pressure: PressureSpec,
+        #[serde(default)]
+        follower: bool,
+        #[serde(default)]
+        time: TimeFunctionSpec,
+    },
+}
+
+/// How a pressure varies over the surface, in the initial configuration.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub enum PressureSpec {
+    Uniform(f64),
+    /// p(x) = value + gradient · (x − at).
+    Linear {
+        value: f64,
+        at: Vec<f64>,
+        gradient: Vec<f64>,
+    },
+    /// p = unit_weight × (level − x_v) below `level`, 0 above; x_v is the last coordinate
+    /// (y in 2D, z in 3D).
+    Hydrostatic {
+        level: f64,
+        unit_weight: f64,
+    },
+}
+
+/// The factor on a load over time (dynamic and explicit analyses).
+#[derive(Debug, Clone, Deserialize, PartialEq, Default)]
+pub enum TimeFunctionSpec {
+    #[default]
+    Constant,
+    /// 0 at t = 0 up to 1 at t = duration, then held.
+    Ramp { duration: f64 },
+    /// Piecewise linear through (time, factor) pairs, times increasing.
+    Table(Vec<(f64, f64)>),
 }
 
 /// A box limiting a constraint to part of its plane.
