@@ -8,6 +8,7 @@ mod columns;
 mod dynamics;
 mod footing;
 mod hard_cases;
+mod loads;
 mod report;
 mod slope;
 mod soil;
@@ -82,6 +83,7 @@ fn verify(quick: bool, out: &Path) -> Result<()> {
     footing::verify(quick, &mut report)?;
     slope::verify(quick, &mut report)?;
     hard_cases::verify(quick, &mut report)?;
+    loads::verify(quick, &mut report)?;
     let failed = report.bounds_table()?;
     writeln!(report.md, "\nThe linear (standard MPM) basis carries no bound: it is known not to converge on this problem (cell-crossing error), and the tables above show its stagnation.")?;
     std::fs::write(out.join("report.md"), &report.md)?;

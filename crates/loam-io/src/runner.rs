@@ -16,7 +16,7 @@ use std::time::{Duration, Instant};
 pub enum RunFailure {
     #[error(transparent)]
     Scene(#[from] SceneError),
-    #[error("{0}")]
+    #[error(transparent)]
     Analysis(#[from] AnalysisError),
     #[error("output: {0}")]
     Output(#[from] OutputError),

@@ -11,6 +11,7 @@
 //! - [`footing`]: V3, the rigid strip footing against Prandtl;
 //! - [`slope`]: V4, slopes against Taylor's chart and Griffiths & Lane;
 //! - [`disks`]: V5, two colliding elastic disks;
+//! - [`cylinder`]: V6, the thick-walled cylinder under internal pressure (Lamé);
 //! - [`hard_cases`]: where implicit MPM usually breaks (softening, small cuts, ...).
 //!
 //! Shared tools: [`dynamics`] (time histories and the periods measured from them),
@@ -23,6 +24,7 @@ pub mod bar;
 pub mod bound;
 pub mod column;
 pub mod conditioning;
+pub mod cylinder;
 pub mod disks;
 pub mod dynamics;
 pub mod footing;
@@ -36,8 +38,9 @@ pub use column::{
     Column, ColumnErrors, LayeredColumn,
 };
 pub use conditioning::condition_number;
+pub use cylinder::{Cylinder, CylinderErrors};
 pub use disks::{disks_model, disks_model_with, inscribed_polygon, polygon_area_ratio, DiskOutline};
 pub use dynamics::{centre_of_mass_velocity, period_from_crossings, zero_crossings, DynamicRecord};
-pub use footing::{footing_model, prandtl_nc};
+pub use footing::{footing_load_model, footing_model, prandtl_nc};
 pub use hard_cases::{softening_specimen, translated_block};
 pub use slope::{slope_model, slope_model_with, SlopeGeometry};

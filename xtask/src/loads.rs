@@ -1,0 +1,139 @@
+//! The checks of the loads on surfaces: the V3 footing under load control (a pressure
+//! ramped on the footing width until Newton fails, against Prandtl), and V6, the
+//! thick-walled cylinder under internal pressure (docs/verification.md §V6) — the radial
+//! displacements at the bore and the outer radius against Lamé on three meshes (small
+//! strain, dead pressure), and Newton under a follower pressure of a tenth of E in finite
+//! strain, with the residual sequence of its hardest load step.
+
+use crate::report::{Report, Row};
+use crate::soil::{self, COHESION, POISSON, YOUNG};
+use anyhow::Result;
+use loam::constitutive::Elastic;
+use loam::implicit::{AntiLocking, Kinematics, QuasiStatic, QuasiStaticSettings};
+use loam::model::Model;
+use loam_verification::cylinder::bounds::{FOLLOWER_NEWTON_ITERATIONS, RADIAL_DISPLACEMENT};
+use loam_verification::footing::bounds::LOAD_CONTROLLED_COLLAPSE;
+use loam_verification::{footing_load_model, prandtl_nc, Cylinder};
+use std::fmt::Write as _;
+use std::time::Instant;
+
+/// Load steps of the follower-pressure run.
+const FOLLOWER_STEPS: usize = 20;
+/// Ghost penalty of the follower-pressure run: the bore sweeps through the grid and leaves
+/// nearly empty cells behind its loaded face (docs/theory.md §15, §17).
+const FOLLOWER_GHOST: f64 = 0.1;
+
+/// Run `model` in `load_steps` quasi-static steps: the finished model, the most Newton
+/// corrections of a step and the residuals of that step.
+fn solve(model: Model<2>, load_steps: usize) -> Result<(Model<2>, usize, Vec<f64>)> {
+    let mut qs = QuasiStatic::new(model, QuasiStaticSettings { load_steps, ..Default::default() });
+    let (mut most, mut hardest) = (0, Vec::new());
+    while !qs.is_finished() {
+        let r = qs.step()?;
+        if r.iterations > most {
+            (most, hardest) = (r.iterations, r.residuals);
+        }
+    }
+    Ok((qs.into_model(), most, hardest))
+}
+
+/// Load steps of the load-controlled footing, and its full pressure over Prandtl's.
+const FOOTING_STEPS: usize = 100;
+const FOOTING_OVERLOAD: f64 = 1.25;
+
+/// The V3 footing under load control: for each mesh the load factor at which Newton
+/// failed after its cut-backs, as a pressure over (2 + π) c_u.
+fn load_control(quick: bool, report: &mut Report) -> Result<()> {
+    let meshes: &[usize] = if quick { &[4, 8] } else { &[4, 8, 16] };
+    let q_ref = prandtl_nc(0.0) * COHESION;
+    let law = soil::undrained(Elastic::new(YOUNG, POISSON)?, COHESION)?;
+    let assumed = AntiLocking::AssumedStrain { stabilization: 0.1 };
+    writeln!(report.md, "## V3 footing under load control
+
+The V3 soil (von Mises, c_u = {COHESION}, E = {YOUNG:e}, ν = {POISSON}, assumed strain β = 0.1, small strain, geometrically linear, half model 10 b × 5 b, 2×2 points per cell) under a uniform pressure on 0 ≤ x ≤ b (a flexible smooth footing, a dead pressure on surface vertices), ramped to {FOOTING_OVERLOAD} (2 + π) c_u in {FOOTING_STEPS} load steps, each halved up to 8 times when Newton fails. Collapse: the last converged pressure. Reference (2 + π) c_u = {q_ref:.3}; the displacement-controlled V3 figures (q at 0.1 B) are in the V3 section above.\n")?;
+    writeln!(
+        report.md,
+        "| cells per b | collapse pressure | / (2 + π) c_u − 1 | steps | wall [s] |\n|---:|---:|---:|---:|---:|"
+    )?;
+    let mut finest = None;
+    for &cells in meshes {
+        eprintln!("verify: V3 under load control, {cells} cells per b");
+        let t = Instant::now();
+        let model = footing_load_model(law.clone(), cells, 10, 5, FOOTING_OVERLOAD * q_ref, assumed);
+        let mut qs = QuasiStatic::new(model, QuasiStaticSettings { load_steps: FOOTING_STEPS, ..Default::default() });
+        while !qs.is_finished() && qs.step().is_ok() {}
+        let collapse = qs.load_factor() * FOOTING_OVERLOAD * q_ref;
+        let error = collapse / q_ref - 1.0;
+        writeln!(
+            report.md,
+            "| {cells} | {collapse:.3} | {error:+.4} | {} | {:.2} |",
+            qs.steps_done(),
+            t.elapsed().as_secs_f64()
+        )?;
+        finest = Some((cells, error, qs.is_finished()));
+    }
+    let (cells, error, finished) = finest.expect("at least one mesh");
+    writeln!(report.md)?;
+    let name = format!("V3 load control {cells} cells per b");
+    report.rows.push(Row::checked(&name, "|collapse/q_ref - 1|", error.abs(), LOAD_CONTROLLED_COLLAPSE));
+    report.rows.push(Row::info(&name, "ran to full load (1 = yes: no collapse found)", f64::from(u8::from(finished))));
+    Ok(())
+}
+
+/// The load sections of the report: the load-controlled footing and V6.
+pub(crate) fn verify(quick: bool, report: &mut Report) -> Result<()> {
+    load_control(quick, report)?;
+    cylinder(quick, report)
+}
+
+/// V6 with a dead pressure in small strain against Lamé, then the follower run.
+fn cylinder(quick: bool, report: &mut Report) -> Result<()> {
+    let meshes: &[usize] = if quick { &[10, 20, 40] } else { &[10, 20, 40, 80] };
+    let c = Cylinder::REFERENCE;
+    writeln!(report.md, "## V6 thick-walled cylinder: Lamé, small strain\n\nQuarter model, a = {}, b = {}, E = {}, ν = {}, p = {} on the bore (a dead pressure on surface vertices), GIMP, 2×2 points per cell, cells across b. u_r(a), u_r(b) from the least-squares fit of A r + B/r to every point's radial displacement; point-wise: the largest |u_r − Lamé| / Lamé(a).\n", c.inner, c.outer, c.young, c.poisson, c.pressure)?;
+    writeln!(
+        report.md,
+        "| cells | points | u_r(a) error | u_r(b) error | point-wise | wall [s] |\n|---:|---:|---:|---:|---:|---:|"
+    )?;
+    let mut finest = None;
+    for &cells in meshes {
+        eprintln!("verify: V6 cylinder, {cells} cells");
+        let t = Instant::now();
+        let (model, _, _) = solve(c.model(cells, Kinematics::SmallStrain, false), 1)?;
+        let e = c.measure(model.points());
+        let n = model.points().len();
+        writeln!(
+            report.md,
+            "| {cells} | {n} | {:.3e} | {:.3e} | {:.3e} | {:.3} |",
+            e.inner,
+            e.outer,
+            e.pointwise,
+            t.elapsed().as_secs_f64()
+        )?;
+        finest = Some((cells, e));
+    }
+    let (cells, e) = finest.expect("at least one mesh");
+    let name = format!("V6 Lamé {cells} cells");
+    report.rows.push(Row::checked(&name, "u_r(a)_error", e.inner, RADIAL_DISPLACEMENT));
+    report.rows.push(Row::checked(&name, "u_r(b)_error", e.outer, RADIAL_DISPLACEMENT));
+    follower(quick, report)
+}
+
+/// The follower-pressure run: p = E/10 in finite strain, the most Newton corrections of a
+/// load step and that step's residuals.
+fn follower(quick: bool, report: &mut Report) -> Result<()> {
+    let cells = if quick { 20 } else { 40 };
+    let c = Cylinder { pressure: 0.1 * Cylinder::REFERENCE.young, ..Cylinder::REFERENCE };
+    eprintln!("verify: V6 follower pressure, {cells} cells");
+    let t = Instant::now();
+    let model = c.model(cells, Kinematics::FiniteStrain, true).with_ghost_penalty(FOLLOWER_GHOST)?;
+    let (model, most, residuals) = solve(model, FOLLOWER_STEPS)?;
+    let bore =
+        model.loads()[0].positions().iter().map(|x| x.norm()).sum::<f64>() / model.loads()[0].positions().len() as f64;
+    let sequence = residuals.iter().map(|r| format!("{r:.2e}")).collect::<Vec<_>>().join(" → ");
+    writeln!(report.md, "\n## V6 follower pressure, finite strain\n\np = E/10 on the bore, following the surface (load stiffness in the tangent, LU), Hencky elasticity, {cells} cells, {FOLLOWER_STEPS} load steps, ghost penalty γ = {FOLLOWER_GHOST}. The bore's mean radius grows from {:.3} to {bore:.4}. Most Newton corrections in a load step: **{most}**; that step's relative residuals: {sequence}. Wall {:.2} s.\n", c.inner, t.elapsed().as_secs_f64())?;
+    let name = format!("V6 follower {cells} cells");
+    report.rows.push(Row::checked(&name, "max_newton_iterations_per_step", most as f64, FOLLOWER_NEWTON_ITERATIONS));
+    report.rows.push(Row::info(&name, "bore_mean_radius", bore));
+    Ok(())
+}
