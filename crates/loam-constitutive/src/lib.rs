@@ -79,6 +79,21 @@ pub trait ConstitutiveLaw: Send + Sync + std::fmt::Debug {
     fn init_history(&self, h: &mut [f64]) {
         h.iter_mut().for_each(|v| *v = 0.0);
     }
+    /// What each history value is, one name per value (the output fields' names).
+    fn history_names(&self) -> &'static [&'static str] {
+        &[]
+    }
+    /// The accumulated equivalent plastic (shear) strain of history `h`, the field a shear
+    /// band is read from; 0 for a law without plasticity.
+    fn plastic_strain(&self, _h: &[f64]) -> f64 {
+        0.0
+    }
+    /// Whether `stress` (the law's own: Kirchhoff stress in finite strain) with history `h`
+    /// lies on the yield surface, to 1e-6 of the strength: the point is yielding. Always
+    /// false for a law without plasticity.
+    fn is_yielding(&self, _stress: &Matrix3<f64>, _h: &[f64]) -> bool {
+        false
+    }
     /// true when the algorithmic tangent is symmetric (elastic, associated flow)
     fn symmetric_tangent(&self) -> bool {
         true

@@ -981,6 +981,21 @@ impl ConstitutiveLaw for MohrCoulomb {
         2
     }
 
+    fn history_names(&self) -> &'static [&'static str] {
+        &["plastic_shear_strain", "plastic_volumetric_strain"]
+    }
+
+    fn plastic_strain(&self, h: &[f64]) -> f64 {
+        h[0]
+    }
+
+    /// f_MC or f_t within 1e-6 of the strength scale max(c, |σ|) of zero.
+    fn is_yielding(&self, stress: &Matrix3<f64>, h: &[f64]) -> bool {
+        let Ok((f, ft)) = self.yield_function(stress, h[0]) else { return false };
+        let tol = 1e-6 * self.strength(h[0]).0.max(stress.norm());
+        f >= -tol || ft.is_some_and(|ft| ft >= -tol)
+    }
+
     /// Symmetric for associated flow (ψ = φ) without softening. Softening couples the yield
     /// normals to κ (and κ to the plastic strain norm), which breaks symmetry in general.
     fn symmetric_tangent(&self) -> bool {

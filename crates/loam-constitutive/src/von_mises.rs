@@ -195,6 +195,21 @@ impl ConstitutiveLaw for VonMises {
         1
     }
 
+    fn history_names(&self) -> &'static [&'static str] {
+        &["equivalent_plastic_strain"]
+    }
+
+    fn plastic_strain(&self, h: &[f64]) -> f64 {
+        h[0]
+    }
+
+    /// q = √(3/2 s:s) at σ_y(ε̄p) within 1e-6 σ_y.
+    fn is_yielding(&self, stress: &Matrix3<f64>, h: &[f64]) -> bool {
+        let s = stress - Matrix3::identity() * (stress.trace() / 3.0);
+        let sy = self.current_yield_stress(h[0]);
+        (1.5f64).sqrt() * s.norm() >= sy - 1e-6 * sy.max(self.yield_stress)
+    }
+
     fn update(
         &self,
         eps_trial: &Matrix3<f64>,

@@ -4,9 +4,11 @@
 //! interface (`loam_analysis`).
 
 pub mod output;
+mod point_fields;
 pub mod runner;
 pub mod scene;
 
 pub use loam_analysis::{Analysis, AnalysisError, Progress};
-pub use runner::{run_scene, write_points_csv, RunFailure, RunSummary};
+pub use point_fields::write_points_csv;
+pub use runner::{run_scene, RunFailure, RunSummary};
 pub use scene::{LoadedScene, Scene, SceneError};

@@ -3,7 +3,9 @@
 //! energies, momentum) and `points_final.csv` after the last step. A run that fails mid-way
 //! keeps every file written so far; the error says which step failed and why.
 
-use crate::output::{write_csv_table, write_vtu, CsvCell, CsvWriter, OutputError, PointCloud, PvdWriter};
+use crate::output::{CsvCell, CsvWriter, OutputError, PvdWriter};
+use crate::point_fields::{default_fields, write_frame, write_points_csv};
+use crate::scene::FieldSpec;
 use crate::scene::{AnalysisSpec, LoadedScene, OutputSpec, SceneError};
 use loam_analysis::{Analysis, AnalysisError, Progress};
 use loam_implicit::{reduced_strength, FactorOfSafety, QuasiStatic, StrengthReduction, StrengthReductionError};
@@ -150,6 +152,7 @@ fn strength_reduction_first<const D: usize>(
 /// energy history, and `points_final.csv` at the end.
 struct Outputs<'a, const D: usize> {
     spec: &'a OutputSpec,
+    fields: Vec<FieldSpec>,
     out_dir: &'a Path,
     log: RunLog,
     pvd: Option<PvdWriter>,
@@ -162,9 +165,10 @@ impl<'a, const D: usize> Outputs<'a, D> {
     fn create(spec: &'a OutputSpec, analysis: &Analysis<D>, out_dir: &'a Path) -> Result<Self, OutputError> {
         let model = analysis.model();
         let log = RunLog::create(&out_dir.join("run_log.csv"), model)?;
+        let fields = spec.fields.clone().unwrap_or_else(|| default_fields(model));
         let mut pvd = if spec.vtu_every > 0 { Some(PvdWriter::create(out_dir.join("points.pvd"))?) } else { None };
         if let Some(pvd) = pvd.as_mut() {
-            write_frame(model, out_dir, pvd, 0, 0.0)?;
+            write_frame(model, &fields, out_dir, pvd, 0, 0.0)?;
         }
         let mut history = None;
         if spec.history_every > 0 {
@@ -172,7 +176,7 @@ impl<'a, const D: usize> Outputs<'a, D> {
             h.row(model, analysis.time())?;
             history = Some(h);
         }
-        Ok(Self { spec, out_dir, log, pvd, history })
+        Ok(Self { spec, fields, out_dir, log, pvd, history })
     }
 
     /// After step `r`: its log row, and a history row and a frame when due (always after the
@@ -187,7 +191,7 @@ impl<'a, const D: usize> Outputs<'a, D> {
         }
         if let Some(pvd) = self.pvd.as_mut() {
             if r.step.is_multiple_of(self.spec.vtu_every) || last {
-                write_frame(model, self.out_dir, pvd, r.step, r.time)?;
+                write_frame(model, &self.fields, self.out_dir, pvd, r.step, r.time)?;
             }
         }
         Ok(())
@@ -196,7 +200,7 @@ impl<'a, const D: usize> Outputs<'a, D> {
     /// After the last step: `points_final.csv`, if asked for.
     fn finish(&self, model: &Model<D>) -> Result<(), OutputError> {
         if self.spec.final_csv {
-            write_points_csv(model, &self.out_dir.join("points_final.csv"))?;
+            write_points_csv(model, &self.fields, &self.out_dir.join("points_final.csv"))?;
         }
         Ok(())
     }
@@ -301,78 +305,4 @@ fn factor_of_safety<const D: usize>(
     });
     written?;
     Ok(fos?)
-}
-
-/// Flattened per-point fields of a VTU frame.
-struct Fields {
-    position: Vec<f64>,
-    displacement: Vec<f64>,
-    velocity: Vec<f64>,
-    stress: Vec<f64>,
-}
-
-fn fields<const D: usize>(model: &Model<D>) -> Fields {
-    let pts = &model.points();
-    let flat = |v: &[nalgebra::SVector<f64, D>]| v.iter().flat_map(|x| x.iter().copied()).collect::<Vec<f64>>();
-    let position = flat(&pts.position);
-    let position0 = flat(&pts.position0);
-    let displacement = position.iter().zip(&position0).map(|(x, x0)| x - x0).collect();
-    let stress =
-        pts.stress.iter().flat_map(|s| [s[(0, 0)], s[(1, 1)], s[(2, 2)], s[(0, 1)], s[(1, 2)], s[(0, 2)]]).collect();
-    Fields { position, displacement, velocity: flat(&pts.velocity), stress }
-}
-
-fn write_frame<const D: usize>(
-    model: &Model<D>,
-    out_dir: &Path,
-    pvd: &mut PvdWriter,
-    step: usize,
-    time: f64,
-) -> Result<(), OutputError> {
-    let f = fields(model);
-    let material: Vec<f64> = model.points().material.iter().map(|&m| m as f64).collect();
-    let cloud = PointCloud::new(D, &f.position)
-        .with_scalar("volume", &model.points().volume)
-        .with_scalar("mass", &model.points().mass)
-        .with_scalar("material", &material)
-        .with_vector("displacement", &f.displacement)
-        .with_vector("velocity", &f.velocity)
-        .with_tensor("stress", &f.stress);
-    let name = format!("points_{step:05}.vtu");
-    write_vtu(&out_dir.join(&name), &cloud)?;
-    pvd.add(time, &name)
-}
-
-/// `points_final.csv`: one row per point with initial and current position, stress
-/// (xx, yy, zz, xy[, yz, xz]), initial and current volume, and mass.
-pub fn write_points_csv<const D: usize>(model: &Model<D>, path: &Path) -> Result<(), OutputError> {
-    let pts = &model.points();
-    let n = pts.len();
-    let axes = ["x", "y", "z"];
-    let mut header: Vec<String> = Vec::new();
-    let mut columns: Vec<Vec<f64>> = Vec::new();
-    for a in 0..D {
-        header.push(format!("{}0", axes[a]));
-        columns.push(pts.position0.iter().map(|x| x[a]).collect());
-    }
-    for a in 0..D {
-        header.push(axes[a].to_string());
-        columns.push(pts.position.iter().map(|x| x[a]).collect());
-    }
-    let mut comps = vec![("sxx", 0, 0), ("syy", 1, 1), ("szz", 2, 2), ("sxy", 0, 1)];
-    if D == 3 {
-        comps.extend([("syz", 1, 2), ("sxz", 0, 2)]);
-    }
-    for (name, i, j) in comps {
-        header.push(name.to_string());
-        columns.push(pts.stress.iter().map(|s| s[(i, j)]).collect());
-    }
-    header.extend(["volume0", "volume", "mass"].map(String::from));
-    columns.push(pts.volume0.clone());
-    columns.push(pts.volume.clone());
-    columns.push(pts.mass.clone());
-    debug_assert!(columns.iter().all(|c| c.len() == n));
-    let header_refs: Vec<&str> = header.iter().map(|s| s.as_str()).collect();
-    let column_refs: Vec<&[f64]> = columns.iter().map(|c| c.as_slice()).collect();
-    write_csv_table(path, &header_refs, &column_refs)
 }

@@ -495,10 +495,35 @@ pub struct OutputSpec {
     /// Write a `history.csv` row (time, energies, momentum) every this many steps (and
     /// after the last); 0 = none.
     pub history_every: usize,
+    /// The per-point fields of the VTU frames (and the extra columns of
+    /// `points_final.csv`); `None`: every field the model has.
+    pub fields: Option<Vec<FieldSpec>>,
 }
 
 impl Default for OutputSpec {
     fn default() -> Self {
-        Self { vtu_every: 1, final_csv: true, history_every: 1 }
+        Self { vtu_every: 1, final_csv: true, history_every: 1, fields: None }
     }
+}
+
+/// A per-point output field.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+pub enum FieldSpec {
+    Displacement,
+    Velocity,
+    /// The Cauchy stress tensor.
+    Stress,
+    /// p = −tr σ / 3 (compression positive).
+    MeanStress,
+    /// q = √(3/2 s:s).
+    DeviatoricStress,
+    Volume,
+    Mass,
+    Material,
+    /// The accumulated equivalent plastic (shear) strain (0 for elastic materials).
+    PlasticStrain,
+    /// 1 where the point is on its yield surface, 0 elsewhere.
+    Yielding,
+    /// Every history value of the laws, by name.
+    History,
 }

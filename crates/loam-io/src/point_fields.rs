@@ -1,0 +1,180 @@
+//! The per-point fields a run writes — in every VTU frame and as the extra columns of
+//! `points_final.csv` — chosen by the scene (`output.fields`): kinematics (displacement,
+//! velocity), stress and its invariants p and q, volume, mass, material, and the state of
+//! the plastic laws (accumulated plastic strain, a yielding flag, every history value by
+//! name). A field that is off costs nothing.
+
+use crate::output::{write_csv_table, write_vtu, OutputError, PointCloud, PvdWriter};
+use crate::scene::FieldSpec;
+use loam_model::{Kinematics, Model};
+use nalgebra::{Matrix3, SVector};
+use std::path::Path;
+
+/// The fields a scene writes when it names none: everything the model has (the plastic
+/// state only where some law is plastic).
+pub(crate) fn default_fields<const D: usize>(model: &Model<D>) -> Vec<FieldSpec> {
+    use FieldSpec::*;
+    let mut fields = vec![Displacement, Velocity, Stress, MeanStress, DeviatoricStress, Volume, Mass, Material];
+    if model.materials().iter().any(|m| m.history_len() > 0) {
+        fields.extend([PlasticStrain, Yielding, History]);
+    }
+    fields
+}
+
+/// Named per-point values: scalars (one per point), vectors (D per point) and symmetric
+/// tensors (xx, yy, zz, xy, yz, xz per point).
+#[derive(Default)]
+struct Fields {
+    scalars: Vec<(String, Vec<f64>)>,
+    vectors: Vec<(String, Vec<f64>)>,
+    tensors: Vec<(String, Vec<f64>)>,
+}
+
+/// Mean stress p = −tr σ / 3 (compression positive, the geotechnical sign) and the von
+/// Mises equivalent q = √(3/2 s:s).
+fn invariants(s: &Matrix3<f64>) -> (f64, f64) {
+    let p = -s.trace() / 3.0;
+    let dev = s + Matrix3::identity() * p;
+    (p, (1.5 * dev.norm_squared()).sqrt())
+}
+
+impl Fields {
+    fn of<const D: usize>(model: &Model<D>, chosen: &[FieldSpec]) -> Self {
+        let pts = model.points();
+        let flat = |v: &[SVector<f64, D>]| v.iter().flat_map(|x| x.iter().copied()).collect::<Vec<f64>>();
+        let scalar = |f: &dyn Fn(usize) -> f64| (0..pts.len()).map(f).collect::<Vec<f64>>();
+        let mut out = Fields::default();
+        for field in chosen {
+            match field {
+                FieldSpec::Displacement => {
+                    let u = pts.position.iter().zip(&pts.position0).map(|(x, x0)| x - x0).collect::<Vec<_>>();
+                    out.vectors.push(("displacement".into(), flat(&u)));
+                }
+                FieldSpec::Velocity => out.vectors.push(("velocity".into(), flat(&pts.velocity))),
+                FieldSpec::Stress => {
+                    let t = pts
+                        .stress
+                        .iter()
+                        .flat_map(|s| [s[(0, 0)], s[(1, 1)], s[(2, 2)], s[(0, 1)], s[(1, 2)], s[(0, 2)]]);
+                    out.tensors.push(("stress".into(), t.collect()));
+                }
+                FieldSpec::MeanStress => out.scalars.push(("p".into(), scalar(&|p| invariants(&pts.stress[p]).0))),
+                FieldSpec::DeviatoricStress => {
+                    out.scalars.push(("q".into(), scalar(&|p| invariants(&pts.stress[p]).1)))
+                }
+                FieldSpec::Volume => out.scalars.push(("volume".into(), pts.volume.clone())),
+                FieldSpec::Mass => out.scalars.push(("mass".into(), pts.mass.clone())),
+                FieldSpec::Material => out.scalars.push(("material".into(), scalar(&|p| pts.material[p] as f64))),
+                FieldSpec::PlasticStrain => out
+                    .scalars
+                    .push(("plastic_strain".into(), scalar(&|p| model.law(p).plastic_strain(pts.history(p))))),
+                FieldSpec::Yielding => {
+                    out.scalars.push(("yielding".into(), scalar(&|p| f64::from(u8::from(yielding(model, p))))))
+                }
+                FieldSpec::History => out.scalars.extend(history_fields(model)),
+            }
+        }
+        out
+    }
+}
+
+/// Whether point `p` is on its law's yield surface, judged on the stress the law works
+/// with (Kirchhoff τ = J σ in finite strain).
+fn yielding<const D: usize>(model: &Model<D>, p: usize) -> bool {
+    let pts = model.points();
+    let stress = match model.kinematics() {
+        Kinematics::FiniteStrain => pts.stress[p] * pts.deformation_gradient[p].determinant(),
+        Kinematics::SmallStrain => pts.stress[p],
+    };
+    model.law(p).is_yielding(&stress, pts.history(p))
+}
+
+/// Every history value the laws name, one field per name (the union over the materials);
+/// a point whose law lacks a name gets NaN there.
+fn history_fields<const D: usize>(model: &Model<D>) -> Vec<(String, Vec<f64>)> {
+    let pts = model.points();
+    let mut names: Vec<&'static str> = Vec::new();
+    for m in model.materials() {
+        for &n in m.history_names() {
+            if !names.contains(&n) {
+                names.push(n);
+            }
+        }
+    }
+    names
+        .into_iter()
+        .map(|name| {
+            let values = (0..pts.len())
+                .map(|p| {
+                    let law = model.law(p);
+                    law.history_names().iter().position(|&n| n == name).map_or(f64::NAN, |k| pts.history(p)[k])
+                })
+                .collect();
+            (name.to_string(), values)
+        })
+        .collect()
+}
+
+/// Write the frame of `step` (`points_<step>.vtu`) with the `chosen` fields and add it to
+/// the PVD collection at `time`.
+pub(crate) fn write_frame<const D: usize>(
+    model: &Model<D>,
+    chosen: &[FieldSpec],
+    out_dir: &Path,
+    pvd: &mut PvdWriter,
+    step: usize,
+    time: f64,
+) -> Result<(), OutputError> {
+    let f = Fields::of(model, chosen);
+    let positions: Vec<f64> = model.points().position.iter().flat_map(|x| x.iter().copied()).collect();
+    let mut cloud = PointCloud::new(D, &positions);
+    cloud.scalars = f.scalars.iter().map(|(n, v)| (n.as_str(), v.as_slice())).collect();
+    cloud.vectors = f.vectors.iter().map(|(n, v)| (n.as_str(), v.as_slice())).collect();
+    cloud.tensors = f.tensors.iter().map(|(n, v)| (n.as_str(), v.as_slice())).collect();
+    let name = format!("points_{step:05}.vtu");
+    write_vtu(&out_dir.join(&name), &cloud)?;
+    pvd.add(time, &name)
+}
+
+/// `points_final.csv`: one row per point with initial and current position, stress
+/// (xx, yy, zz, xy[, yz, xz]), initial and current volume and mass, then the `chosen`
+/// scalar fields beyond those (p, q, the plastic state).
+pub fn write_points_csv<const D: usize>(
+    model: &Model<D>,
+    chosen: &[FieldSpec],
+    path: &Path,
+) -> Result<(), OutputError> {
+    let pts = &model.points();
+    let axes = ["x", "y", "z"];
+    let mut header: Vec<String> = Vec::new();
+    let mut columns: Vec<Vec<f64>> = Vec::new();
+    for a in 0..D {
+        header.push(format!("{}0", axes[a]));
+        columns.push(pts.position0.iter().map(|x| x[a]).collect());
+    }
+    for a in 0..D {
+        header.push(axes[a].to_string());
+        columns.push(pts.position.iter().map(|x| x[a]).collect());
+    }
+    let mut comps = vec![("sxx", 0, 0), ("syy", 1, 1), ("szz", 2, 2), ("sxy", 0, 1)];
+    if D == 3 {
+        comps.extend([("syz", 1, 2), ("sxz", 0, 2)]);
+    }
+    for (name, i, j) in comps {
+        header.push(name.to_string());
+        columns.push(pts.stress.iter().map(|s| s[(i, j)]).collect());
+    }
+    header.extend(["volume0", "volume", "mass"].map(String::from));
+    columns.extend([pts.volume0.clone(), pts.volume.clone(), pts.mass.clone()]);
+    use FieldSpec::*;
+    let extra: Vec<FieldSpec> = (chosen.iter().copied())
+        .filter(|f| matches!(f, MeanStress | DeviatoricStress | Material | PlasticStrain | Yielding | History))
+        .collect();
+    for (name, values) in Fields::of(model, &extra).scalars {
+        header.push(name);
+        columns.push(values);
+    }
+    let header_refs: Vec<&str> = header.iter().map(|s| s.as_str()).collect();
+    let column_refs: Vec<&[f64]> = columns.iter().map(|c| c.as_slice()).collect();
+    write_csv_table(path, &header_refs, &column_refs)
+}
