@@ -1,7 +1,9 @@
-//! Loads on the material's surface and at points (docs/theory.md §17), against closed
-//! forms: a uniform stress under a surcharge alone, the exact equilibrium of a point
-//! load with its support reaction, and the response to a surcharge applied suddenly (an
-//! oscillation about the static settlement) or ramped over the first period (none).
+//! Loads on the material's surface and at points (docs/theory.md §17), and static water
+//! (§18), against closed forms: a uniform stress under a surcharge alone, the exact
+//! equilibrium of a point load with its support reaction, the response to a surcharge
+//! applied suddenly (an oscillation about the static settlement) or ramped over the first
+//! period (none), a submerged slope that is the dry one with the buoyant weight, and a
+//! geostatic stress under water in equilibrium.
 
 use loam::grid::BasisKind;
 use loam::implicit::{Dynamic, DynamicSettings, Kinematics, QuasiStatic, QuasiStaticSettings};
@@ -65,7 +67,7 @@ fn a_point_load_is_balanced_by_the_base_reaction() {
     // The reaction Σ (f_int − f_ext) over the base nodes is the force the support puts on
     // the column: minus the load.
     assert!((base[1] + force[1]).abs() <= 1e-9 * force.norm(), "base reaction {base:?} against the load {force}");
-    let resultant = qs.model().loads()[0].resultant(loam::model::LoadLevel::Factor(1.0));
+    let resultant = qs.model().loads()[0].resultant(1.0);
     assert_eq!(resultant, force);
 }
 
@@ -133,4 +135,68 @@ fn a_sudden_surcharge_oscillates_about_the_static_settlement_and_a_ramped_one_do
     let (lo, hi) = after.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &u| (lo.min(u), hi.max(u)));
     println!("ramped over T: settlement over the period after the ramp in [{lo:.4}, {hi:.4}]");
     assert!(lo >= 0.95 && hi <= 1.05, "after the ramp: [{lo}, {hi}]");
+}
+
+/// Static water changes nothing but the weight: the Griffiths & Lane slope (elastic here)
+/// entirely under water with saturated unit weight 20 has the same displacements and
+/// effective stresses as the dry slope with γ′ = 10, to round-off (the water's force is
+/// the buoyancy γ_w upwards on every point, so the two systems are the same; 1e-9
+/// relative covers the solver's round-off). With a Mohr–Coulomb law the factors of safety
+/// agree as well (`cargo xtask verify`, V7).
+#[test]
+fn a_submerged_slope_is_the_dry_slope_with_the_buoyant_weight() {
+    use loam::constitutive::{ConstitutiveLaw, Elastic};
+    use loam::implicit::AntiLocking;
+    use loam::model::{PhreaticLevel, Water};
+    use loam_verification::{slope_model, SlopeGeometry};
+    use std::sync::Arc;
+    let g = SlopeGeometry::GRIFFITHS_LANE;
+    let law: Arc<dyn ConstitutiveLaw> = Arc::new(Elastic::new(1e5, 0.3).unwrap());
+    let dry = run_quasi_static(slope_model(&g, law.clone(), 1.0, 10.0, 5, AntiLocking::BBar), 1);
+    let wet = slope_model(&g, law, 2.0, 10.0, 5, AntiLocking::BBar);
+    let water = Water::new(10.0, PhreaticLevel::Horizontal(21.0), wet.gravity()).unwrap();
+    let wet = run_quasi_static(wet.with_water(water).unwrap(), 1);
+    let (pd, pw) = (dry.points(), wet.points());
+    let scale = pd.stress.iter().map(|s| s.norm()).fold(0.0, f64::max);
+    for p in 0..pd.len() {
+        assert!((pd.stress[p] - pw.stress[p]).norm() <= 1e-9 * scale, "point {p}");
+        assert!((pd.position[p] - pw.position[p]).norm() <= 1e-9 * 10.0, "point {p}");
+        // The total stress carries the pore pressure on top: σ = σ′ − p_w I.
+        let depth = 21.0 - pw.position[p][1];
+        assert!((wet.pore_pressure(p, 1.0) - 10.0 * depth).abs() <= 1e-9 * 210.0);
+    }
+}
+
+/// A geostatic stress under a water table takes the effective weight: level ground, water
+/// table at half the depth, K0 = 0.5; the first load step finds the state in equilibrium
+/// (σ′_v = −(γ_sat − γ_w [below the table]) × depth, the water's force the buoyancy), so
+/// nothing moves (1e-9 of a cell: Newton's tolerance on a state already balanced).
+#[test]
+fn a_geostatic_stress_under_water_is_in_equilibrium() {
+    use loam::constitutive::Elastic;
+    use loam::grid::Grid;
+    use loam::model::{PhreaticLevel, PlaneConstraint, Water};
+    use loam::points::PointStore;
+    use std::sync::Arc;
+    let grid = Grid::new(Vector2::zeros(), Vector2::new(1.0, 1.0), [4, 11]).unwrap();
+    let mut points = PointStore::new();
+    points.fill(&grid, &Shape::Box { min: Vector2::zeros(), max: Vector2::new(4.0, 10.0) }, 2, 2.0, 0).unwrap();
+    let law = Arc::new(Elastic::new(1e4, 0.3).unwrap());
+    let constraints = vec![
+        PlaneConstraint::new(0, 0, [true, false, false]),
+        PlaneConstraint::new(0, 4, [true, false, false]),
+        PlaneConstraint::new(1, 0, [true, true, false]),
+    ];
+    let gravity = Vector2::new(0.0, -10.0);
+    let model =
+        Model::new(grid, BasisKind::Gimp, Kinematics::SmallStrain, points, vec![law], constraints, gravity).unwrap();
+    let mut model = model.with_water(Water::new(10.0, PhreaticLevel::Horizontal(5.0), &gravity).unwrap()).unwrap();
+    model.geostatic_stress(0.5).unwrap();
+    let before = model.points().position.clone();
+    let bottom = model.points().stress.iter().map(|s| s[(1, 1)]).fold(0.0, f64::min);
+    // Just above the base: 5 m of moist weight 20 and 5 m of buoyant weight 10 above it.
+    assert!((bottom + 150.0).abs() < 20.0 * 0.25 + 1e-9, "σ′_v at the base {bottom}");
+    let after = run_quasi_static(model, 1);
+    let moved = after.points().position.iter().zip(&before).map(|(a, b)| (a - b).norm()).fold(0.0, f64::max);
+    assert!(moved < 1e-9, "moved {moved}");
 }

@@ -159,7 +159,7 @@ fn slope_scene_finds_the_factor_of_safety() {
 /// `cargo xtask verify`, V4).
 #[test]
 fn slope_examples_are_valid_scenes() {
-    for name in ["slope_griffiths_lane", "slope_runout_implicit", "slope_runout_explicit"] {
+    for name in ["slope_griffiths_lane", "slope_runout_implicit", "slope_runout_explicit", "slope_water_table"] {
         let scene =
             LoadedScene::read(Path::new(&format!("examples/{name}.ron"))).unwrap_or_else(|e| panic!("{name}: {e}"));
         scene.build::<2>().unwrap_or_else(|e| panic!("{name}: {e}"));

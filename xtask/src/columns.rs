@@ -201,9 +201,9 @@ fn solve<const D: usize>(case: &Case, model: Model<D>) -> Result<(ColumnErrors, 
     Ok((case.errors(qs.model()), max_its, last))
 }
 
-/// Least-squares slope of ln e against ln h over the given runs (h ∝ 1/cells).
-fn observed_rate(runs: &[&ColumnRun]) -> f64 {
-    let pts: Vec<(f64, f64)> = runs.iter().map(|r| ((1.0 / r.cells as f64).ln(), r.e_sigma.ln())).collect();
+/// Least-squares slope of ln e against ln h over (cells, e) pairs (h ∝ 1/cells).
+pub(crate) fn observed_rate(runs: &[(usize, f64)]) -> f64 {
+    let pts: Vec<(f64, f64)> = runs.iter().map(|&(cells, e)| ((1.0 / cells as f64).ln(), e.ln())).collect();
     let n = pts.len() as f64;
     let mx = pts.iter().map(|p| p.0).sum::<f64>() / n;
     let my = pts.iter().map(|p| p.1).sum::<f64>() / n;
@@ -279,7 +279,7 @@ fn case_section(quick: bool, report: &mut Report, case: &Case, method: Method) -
         writeln!(md, "| {} | {:.3e} | {:.3e} | {} | {:.4} |", r.cells, r.e_sigma, r.e_top, r.max_iterations, r.wall_s)?;
     }
     let last3: Vec<&ColumnRun> = runs.iter().rev().take(3).rev().collect();
-    let rate = observed_rate(&last3);
+    let rate = observed_rate(&last3.iter().map(|r| (r.cells, r.e_sigma)).collect::<Vec<_>>());
     writeln!(
         md,
         "\nObserved rate over {:?} cells: **{rate:.2}**\n",

@@ -14,6 +14,7 @@ mod slope;
 mod soil;
 mod steps;
 mod svg;
+mod water;
 
 use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
@@ -84,6 +85,7 @@ fn verify(quick: bool, out: &Path) -> Result<()> {
     slope::verify(quick, &mut report)?;
     hard_cases::verify(quick, &mut report)?;
     loads::verify(quick, &mut report)?;
+    water::verify(quick, &mut report)?;
     let failed = report.bounds_table()?;
     writeln!(report.md, "\nThe linear (standard MPM) basis carries no bound: it is known not to converge on this problem (cell-crossing error), and the tables above show its stagnation.")?;
     std::fs::write(out.join("report.md"), &report.md)?;

@@ -33,6 +33,8 @@ pub enum ExplicitError {
     GhostPenalty,
     #[error("the model is geometrically linear (points held at their places); explicit analysis moves its points by their velocities")]
     GeometricallyLinear,
+    #[error("the model has groundwater; pore pressures are implemented in the implicit analyses only (QuasiStatic, ImplicitDynamic)")]
+    Water,
     #[error("constraint {index} prescribes a non-zero displacement; only quasi-static implicit analysis applies displacements (with the load factor)")]
     DisplacedConstraint { index: usize },
     #[error("the analysis is already finished ({0} steps)")]

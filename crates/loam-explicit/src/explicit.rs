@@ -112,6 +112,9 @@ impl<const D: usize> Explicit<D> {
         if model.geometrically_linear() {
             return Err(ExplicitError::GeometricallyLinear);
         }
+        if model.water().is_some() {
+            return Err(ExplicitError::Water);
+        }
         if let Some(index) = model.constraints().iter().position(|c| c.is_displaced()) {
             return Err(ExplicitError::DisplacedConstraint { index });
         }
@@ -271,12 +274,12 @@ impl<const D: usize> Explicit<D> {
         if self.model.loads().is_empty() {
             return;
         }
-        let (loads, level) = (self.model.loads(), LoadLevel::Time(self.time));
+        let level = LoadLevel::Time(self.time);
         let f = &mut self.nodes.loads;
         f.clear();
         f.resize(self.conn.active_nodes().len() * D, 0.0);
-        self.loads.add_dead(loads, level, f);
-        self.loads.add_follower(loads, level, |_, l| l.positions().to_vec(), f);
+        self.loads.add_dead(&self.model, level, f);
+        self.loads.add_follower(&self.model, level, |_, l| l.positions().to_vec(), f);
         for (g, f) in self.nodes.gathered.chunks_mut(1 + 2 * D).zip(f.chunks(D)) {
             for i in 0..D {
                 g[1 + D + i] += f[i];

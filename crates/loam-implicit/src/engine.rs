@@ -9,14 +9,14 @@ use crate::follower::{add_follower_tangent, follower_couplings, has_follower, Fo
 use crate::ghost::{ghost_couplings, scaled_ghost_faces};
 use crate::inertia::Inertia;
 use crate::points::{update_points, PointInputs, PointUpdateError, TrialState};
-use crate::residual::{residual, ResidualInputs};
+use crate::residual::{residual, water_body_force, ResidualInputs};
 use crate::tangent::{assemble, PointCouplings, TangentInputs};
 use crate::StepError;
 use loam_grid::{Connectivity, GhostFace};
 use loam_kernels::{
     advance_deformation, check_constraints, connect, gather_nodal, interpolate_add, trial_vertices, LoadSupports,
 };
-use loam_model::{LoadLevel, Model};
+use loam_model::{Kinematics, LoadLevel, Model};
 use loam_solve::{
     norm, BlockPattern, LinearSolveError, LinearSolverKind, NewtonControl, NewtonError, NewtonReport, NewtonSettings,
     SparseDirectSolver,
@@ -41,6 +41,10 @@ pub(crate) struct Engine<const D: usize> {
     level: LoadLevel,
     /// f_ext with the follower loads at the trial increment (empty without them).
     f_follower: Vec<f64>,
+    /// The water's force per unit volume on each point, −∇p_w (empty without water), at
+    /// gravity's factor `body_factor` of the external forces.
+    pub water_force: Vec<SVector<f64, D>>,
+    body_factor: f64,
     /// f_int − f_ext on the constrained dofs at the last residual; zero on free dofs.
     reaction: Vec<f64>,
     /// Per constraint, the support reaction Σ (f_int − f_ext) over its nodes and fixed
@@ -65,14 +69,19 @@ pub(crate) struct Engine<const D: usize> {
 
 impl<const D: usize> Engine<D> {
     /// The linear solver is the one asked for, or chosen from the tangent: Cholesky when
-    /// every material's tangent is symmetric, none softens and no load follows the surface,
-    /// LU otherwise (never a silent symmetrisation; a softening tangent is indefinite and
-    /// Cholesky would stop at the first negative pivot; a follower load's stiffness is not
-    /// symmetric).
+    /// every material's tangent is symmetric, none softens, no load follows the surface
+    /// and no buoyancy follows a changing volume, LU otherwise (never a silent
+    /// symmetrisation; a softening tangent is indefinite and Cholesky would stop at the
+    /// first negative pivot; the stiffness of a follower load, or of the buoyancy on a
+    /// point's current volume in finite strain, is not symmetric).
     pub fn new(model: Model<D>, newton: NewtonSettings, linear_solver: Option<LinearSolverKind>) -> Self {
         let (kind, source) = match linear_solver {
             Some(kind) => (kind, "as the settings ask"),
-            None if model.symmetric_tangent() && !model.can_soften() && !has_follower(model.loads()) => {
+            None if model.symmetric_tangent()
+                && !model.can_soften()
+                && !has_follower(model.loads())
+                && (model.water().is_none() || model.kinematics() == Kinematics::SmallStrain) =>
+            {
                 (LinearSolverKind::Cholesky, "chosen from the tangent's symmetry and definiteness")
             }
             None => (LinearSolverKind::Lu, "chosen from the tangent's symmetry and definiteness"),
@@ -89,6 +98,8 @@ impl<const D: usize> Engine<D> {
             loads: LoadSupports::default(),
             level: LoadLevel::Factor(0.0),
             f_follower: Vec::new(),
+            water_force: Vec::new(),
+            body_factor: 0.0,
             reaction: Vec::new(),
             reactions: Vec::new(),
             du: Vec::new(),
@@ -146,8 +157,8 @@ impl<const D: usize> Engine<D> {
 
     /// Stage 3, external forces at `level` (a load factor, or the time of a dynamic step):
     /// the model's dead loads on the points gathered to the nodes, then the dead loads on
-    /// its surfaces spread to them. Follower loads are added with the trial increment in
-    /// each residual.
+    /// its surfaces spread to them, and the water's force on the points at that level. Follower
+    /// loads are added with the trial increment in each residual.
     pub fn external_forces(&mut self, level: LoadLevel) {
         let (model, conn) = (&self.model, &self.conn);
         let lambda = level.body_factor();
@@ -159,8 +170,40 @@ impl<const D: usize> Engine<D> {
                 out[i] += n * f[i];
             }
         });
-        self.loads.add_dead(model.loads(), level, &mut self.f_ext);
+        self.loads.add_dead(model, level, &mut self.f_ext);
         self.level = level;
+        self.body_factor = lambda;
+        self.add_water_forces();
+    }
+
+    /// The water's force per unit volume on every point, b_w = −∇p_w (the buoyancy below a
+    /// level water table; docs/theory.md §18), at the points' committed places and gravity's
+    /// factor of the external forces. Nothing without water.
+    pub fn update_water_forces(&mut self) {
+        let model = &self.model;
+        if model.water().is_none() {
+            return;
+        }
+        let bf = self.body_factor;
+        self.water_force = (0..model.points().len()).into_par_iter().map(|p| model.water_force(p, bf)).collect();
+    }
+
+    /// The water's force on the committed volumes, Σ_p N v b_w, added to the external force
+    /// (a finite-strain residual adds its change with the volume).
+    fn add_water_forces(&mut self) {
+        self.update_water_forces();
+        if self.water_force.is_empty() {
+            return;
+        }
+        let (conn, water, volume) = (&self.conn, &self.water_force, &self.model.points().volume);
+        let mut buffer = vec![0.0; self.f_ext.len()];
+        gather_nodal(conn, D, &mut buffer, |p, a, out| {
+            let f = water_body_force(water, p, volume[p], conn.support_values(p)[a]);
+            for i in 0..D {
+                out[i] += f[i];
+            }
+        });
+        self.f_ext.iter_mut().zip(&buffer).for_each(|(f, w)| *f += w);
     }
 
     /// `f_follower` = f_ext plus the follower loads at the trial increment `du`; false (and
@@ -173,7 +216,7 @@ impl<const D: usize> Engine<D> {
         let (conn, du, delta_f) = (&self.conn, &self.du, &self.trial.delta_f);
         let positions = &self.model.points().position;
         let places = |_, load: &_| trial_vertices(conn, load, positions, du, delta_f);
-        self.loads.add_follower(self.model.loads(), self.level, places, &mut self.f_follower);
+        self.loads.add_follower(&self.model, self.level, places, &mut self.f_follower);
         true
     }
 
@@ -227,6 +270,8 @@ impl<const D: usize> Engine<D> {
             constrained: &self.constrained,
             f_ext: if follower { &self.f_follower } else { &self.f_ext },
             mass: &self.model.points().mass,
+            water_force: if self.model.kinematics() == Kinematics::FiniteStrain { &self.water_force } else { &[] },
+            committed_volume: &self.model.points().volume,
         };
         Ok(residual(&inputs, &self.trial, inertia, &self.du, &mut self.residual, &mut self.reaction))
     }
@@ -240,6 +285,7 @@ impl<const D: usize> Engine<D> {
             ghost: &self.ghost,
             constrained: &self.constrained,
             mass: &self.model.points().mass,
+            water_force: if self.model.kinematics() == Kinematics::FiniteStrain { &self.water_force } else { &[] },
         };
         assemble(&inputs, &self.trial, inertia, &mut self.values);
         if has_follower(self.model.loads()) {

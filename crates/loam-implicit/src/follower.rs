@@ -63,7 +63,7 @@ pub(crate) fn add_follower_tangent<const D: usize>(
     let positions = &model.points().position;
     for (k, load) in model.loads().iter().enumerate().filter(|(_, l)| l.is_follower()) {
         let LoadKind::Pressure { values: pressure, .. } = load.kind() else { continue };
-        let scale = level.factor(load.time_function());
+        let scale = model.load_scale(k, level);
         let x = trial_vertices(conn, load, positions, du, delta_f);
         for facet in &load.surface().facets {
             let corners = facet.map(|v| x[v as usize]);

@@ -8,6 +8,7 @@ use crate::inertia::Inertia;
 use crate::points::TrialState;
 use loam_grid::{Connectivity, GhostFace};
 use loam_kernels::{gather_internal_force, internal_force};
+use nalgebra::SVector;
 
 /// What the residual reads besides the trial state.
 pub(crate) struct ResidualInputs<'a, const D: usize> {
@@ -17,6 +18,11 @@ pub(crate) struct ResidualInputs<'a, const D: usize> {
     pub constrained: &'a [bool],
     pub f_ext: &'a [f64],
     pub mass: &'a [f64],
+    /// Finite strain with water: the water's force per unit volume on each point, −∇p_w,
+    /// which acts on the current volume; the external force holds it on the committed
+    /// volume, so the residual takes its change (empty otherwise).
+    pub water_force: &'a [SVector<f64, D>],
+    pub committed_volume: &'a [f64],
 }
 
 /// The residual at the increment `du` of the trial state `trial` into `r`, the support
@@ -34,9 +40,12 @@ pub(crate) fn residual<const D: usize>(
 ) -> f64 {
     let stride = inputs.conn.stride();
     let average = inputs.average;
-    gather_internal_force(inputs.conn, r, |p, a| {
+    let (conn, water) = (inputs.conn, inputs.water_force);
+    gather_internal_force(conn, r, |p, a| {
         let k = p * stride + a;
-        internal_force(trial.volume[p], &trial.stress[p], &trial.grad_x[k], average.map(|c| c.average(k)))
+        let f = internal_force(trial.volume[p], &trial.stress[p], &trial.grad_x[k], average.map(|c| c.average(k)));
+        let dv = trial.volume[p] - inputs.committed_volume[p];
+        f - water_body_force(water, p, dv, conn.support_values(p)[a])
     });
     add_ghost_force::<D>(inputs.ghost, du, r);
     // In dynamics the internal and inertial forces join the reference, with the momentum
@@ -60,4 +69,16 @@ pub(crate) fn residual<const D: usize>(
         }
     }
     reference.sqrt()
+}
+
+/// The water's force on point `p` at the node of weight `n`: N v (−∇p_w), zero without
+/// water.
+#[inline]
+pub(crate) fn water_body_force<const D: usize>(
+    water: &[SVector<f64, D>],
+    p: usize,
+    volume: f64,
+    n: f64,
+) -> SVector<f64, D> {
+    water.get(p).map_or(SVector::zeros(), |b| b * (n * volume))
 }

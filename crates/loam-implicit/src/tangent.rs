@@ -34,6 +34,9 @@ pub(crate) struct TangentInputs<'a, const D: usize> {
     pub ghost: &'a [GhostFace],
     pub constrained: &'a [bool],
     pub mass: &'a [f64],
+    /// Finite strain with water: the water's force per unit volume, whose force on the
+    /// current volume changes with it (empty otherwise).
+    pub water_force: &'a [nalgebra::SVector<f64, D>],
 }
 
 /// Assemble the tangent at the trial state into `values` (the pattern's layout).
@@ -70,6 +73,15 @@ pub(crate) fn assemble<const D: usize>(
                     }
                 }
                 out[i * D + k] += s;
+            }
+        }
+        if let Some(b) = inputs.water_force.get(p) {
+            // −N_a b v with δv = v ∇·δu: K_ab,ik = −N_a b_i v ∂N_b/∂x_k.
+            let na = conn.support_values(p)[a];
+            for i in 0..D {
+                for k in 0..D {
+                    out[i * D + k] -= na * b[i] * trial.volume[p] * gb[k];
+                }
             }
         }
     });

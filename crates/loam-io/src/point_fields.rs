@@ -1,8 +1,9 @@
 //! The per-point fields a run writes — in every VTU frame and as the extra columns of
 //! `points_final.csv` — chosen by the scene (`output.fields`): kinematics (displacement,
-//! velocity), stress and its invariants p and q, volume, mass, material, and the state of
+//! velocity), stress and its invariants p and q, volume, mass, material, the state of
 //! the plastic laws (accumulated plastic strain, a yielding flag, every history value by
-//! name). A field that is off costs nothing.
+//! name), and with water the pore pressure and the total stress (the stress the laws see
+//! is the effective one). A field that is off costs nothing.
 
 use crate::output::{write_csv_table, write_vtu, OutputError, PointCloud, PvdWriter};
 use crate::scene::FieldSpec;
@@ -17,6 +18,9 @@ pub(crate) fn default_fields<const D: usize>(model: &Model<D>) -> Vec<FieldSpec>
     let mut fields = vec![Displacement, Velocity, Stress, MeanStress, DeviatoricStress, Volume, Mass, Material];
     if model.materials().iter().any(|m| m.history_len() > 0) {
         fields.extend([PlasticStrain, Yielding, History]);
+    }
+    if model.water().is_some() {
+        fields.extend([PorePressure, TotalStress]);
     }
     fields
 }
@@ -38,8 +42,19 @@ fn invariants(s: &Matrix3<f64>) -> (f64, f64) {
     (p, (1.5 * dev.norm_squared()).sqrt())
 }
 
+/// The six components (xx, yy, zz, xy, yz, xz) of every point's `stress(p)`.
+fn tensor_field(n: usize, stress: impl Fn(usize) -> Matrix3<f64>) -> Vec<f64> {
+    (0..n)
+        .flat_map(|p| {
+            let s = stress(p);
+            [s[(0, 0)], s[(1, 1)], s[(2, 2)], s[(0, 1)], s[(1, 2)], s[(0, 2)]]
+        })
+        .collect()
+}
+
 impl Fields {
-    fn of<const D: usize>(model: &Model<D>, chosen: &[FieldSpec]) -> Self {
+    /// The `chosen` fields of `model`, pore pressures at gravity's factor `body_factor`.
+    fn of<const D: usize>(model: &Model<D>, chosen: &[FieldSpec], body_factor: f64) -> Self {
         let pts = model.points();
         let flat = |v: &[SVector<f64, D>]| v.iter().flat_map(|x| x.iter().copied()).collect::<Vec<f64>>();
         let scalar = |f: &dyn Fn(usize) -> f64| (0..pts.len()).map(f).collect::<Vec<f64>>();
@@ -51,12 +66,13 @@ impl Fields {
                     out.vectors.push(("displacement".into(), flat(&u)));
                 }
                 FieldSpec::Velocity => out.vectors.push(("velocity".into(), flat(&pts.velocity))),
-                FieldSpec::Stress => {
-                    let t = pts
-                        .stress
-                        .iter()
-                        .flat_map(|s| [s[(0, 0)], s[(1, 1)], s[(2, 2)], s[(0, 1)], s[(1, 2)], s[(0, 2)]]);
-                    out.tensors.push(("stress".into(), t.collect()));
+                FieldSpec::Stress => out.tensors.push(("stress".into(), tensor_field(pts.len(), |p| pts.stress[p]))),
+                FieldSpec::PorePressure => {
+                    out.scalars.push(("pore_pressure".into(), scalar(&|p| model.pore_pressure(p, body_factor))))
+                }
+                FieldSpec::TotalStress => {
+                    let total = |p| pts.stress[p] - Matrix3::identity() * model.pore_pressure(p, body_factor);
+                    out.tensors.push(("total_stress".into(), tensor_field(pts.len(), total)));
                 }
                 FieldSpec::MeanStress => out.scalars.push(("p".into(), scalar(&|p| invariants(&pts.stress[p]).0))),
                 FieldSpec::DeviatoricStress => {
@@ -115,17 +131,18 @@ fn history_fields<const D: usize>(model: &Model<D>) -> Vec<(String, Vec<f64>)> {
         .collect()
 }
 
-/// Write the frame of `step` (`points_<step>.vtu`) with the `chosen` fields and add it to
-/// the PVD collection at `time`.
+/// Write the frame of `step` (`points_<step>.vtu`) with the `chosen` fields (pore
+/// pressures at gravity's factor `body_factor`) and add it to the PVD collection at `time`.
 pub(crate) fn write_frame<const D: usize>(
     model: &Model<D>,
     chosen: &[FieldSpec],
+    body_factor: f64,
     out_dir: &Path,
     pvd: &mut PvdWriter,
     step: usize,
     time: f64,
 ) -> Result<(), OutputError> {
-    let f = Fields::of(model, chosen);
+    let f = Fields::of(model, chosen, body_factor);
     let positions: Vec<f64> = model.points().position.iter().flat_map(|x| x.iter().copied()).collect();
     let mut cloud = PointCloud::new(D, &positions);
     cloud.scalars = f.scalars.iter().map(|(n, v)| (n.as_str(), v.as_slice())).collect();
@@ -138,10 +155,12 @@ pub(crate) fn write_frame<const D: usize>(
 
 /// `points_final.csv`: one row per point with initial and current position, stress
 /// (xx, yy, zz, xy[, yz, xz]), initial and current volume and mass, then the `chosen`
-/// scalar fields beyond those (p, q, the plastic state).
+/// scalar fields beyond those (p, q, the plastic state, the pore pressure at gravity's
+/// factor `body_factor`).
 pub fn write_points_csv<const D: usize>(
     model: &Model<D>,
     chosen: &[FieldSpec],
+    body_factor: f64,
     path: &Path,
 ) -> Result<(), OutputError> {
     let pts = &model.points();
@@ -168,9 +187,11 @@ pub fn write_points_csv<const D: usize>(
     columns.extend([pts.volume0.clone(), pts.volume.clone(), pts.mass.clone()]);
     use FieldSpec::*;
     let extra: Vec<FieldSpec> = (chosen.iter().copied())
-        .filter(|f| matches!(f, MeanStress | DeviatoricStress | Material | PlasticStrain | Yielding | History))
+        .filter(|f| {
+            matches!(f, MeanStress | DeviatoricStress | Material | PlasticStrain | Yielding | History | PorePressure)
+        })
         .collect();
-    for (name, values) in Fields::of(model, &extra).scalars {
+    for (name, values) in Fields::of(model, &extra, body_factor).scalars {
         header.push(name);
         columns.push(values);
     }

@@ -114,7 +114,7 @@ fn run_dim<const D: usize>(
         outputs.record(&r, analysis.model(), analysis.is_finished())?;
         progress(&r, end_time);
     }
-    outputs.finish(analysis.model())?;
+    outputs.finish(analysis.model(), analysis.load_level())?;
     Ok(RunSummary {
         analysis: analysis.name(),
         steps: analysis.steps_done(),
@@ -168,7 +168,7 @@ impl<'a, const D: usize> Outputs<'a, D> {
         let fields = spec.fields.clone().unwrap_or_else(|| default_fields(model));
         let mut pvd = if spec.vtu_every > 0 { Some(PvdWriter::create(out_dir.join("points.pvd"))?) } else { None };
         if let Some(pvd) = pvd.as_mut() {
-            write_frame(model, &fields, out_dir, pvd, 0, 0.0)?;
+            write_frame(model, &fields, analysis.load_level().body_factor(), out_dir, pvd, 0, 0.0)?;
         }
         let mut history = None;
         if spec.history_every > 0 {
@@ -191,16 +191,16 @@ impl<'a, const D: usize> Outputs<'a, D> {
         }
         if let Some(pvd) = self.pvd.as_mut() {
             if r.step.is_multiple_of(self.spec.vtu_every) || last {
-                write_frame(model, &self.fields, self.out_dir, pvd, r.step, r.time)?;
+                write_frame(model, &self.fields, r.level.body_factor(), self.out_dir, pvd, r.step, r.time)?;
             }
         }
         Ok(())
     }
 
     /// After the last step: `points_final.csv`, if asked for.
-    fn finish(&self, model: &Model<D>) -> Result<(), OutputError> {
+    fn finish(&self, model: &Model<D>, level: LoadLevel) -> Result<(), OutputError> {
         if self.spec.final_csv {
-            write_points_csv(model, &self.fields, &self.out_dir.join("points_final.csv"))?;
+            write_points_csv(model, &self.fields, level.body_factor(), &self.out_dir.join("points_final.csv"))?;
         }
         Ok(())
     }
@@ -271,8 +271,8 @@ impl RunLog {
             cells.push(CsvCell::Float(r.load_factor * u));
             cells.push(CsvCell::Float(r.reactions.get(k).map_or(f64::NAN, |f| f[i])));
         }
-        for load in model.loads() {
-            cells.extend(load.resultant(r.level).iter().map(|&f| CsvCell::Float(f)));
+        for (k, load) in model.loads().iter().enumerate() {
+            cells.extend(load.resultant(model.load_scale(k, r.level)).iter().map(|&f| CsvCell::Float(f)));
         }
         self.writer.row_mixed(&cells)
     }

@@ -101,10 +101,10 @@ impl LoadSupports {
         (&self.node[range.clone()], &self.weight[range])
     }
 
-    /// Add the nodal forces of the dead loads at `level` to `out` (D per active node).
-    pub fn add_dead<const D: usize>(&self, loads: &[Load<D>], level: LoadLevel, out: &mut [f64]) {
-        for (k, load) in loads.iter().enumerate().filter(|(_, l)| !l.is_follower()) {
-            self.spread(k, load.dead_forces(), level.factor(load.time_function()), out);
+    /// Add the nodal forces of `model`'s dead loads at `level` to `out` (D per active node).
+    pub fn add_dead<const D: usize>(&self, model: &Model<D>, level: LoadLevel, out: &mut [f64]) {
+        for (k, load) in model.loads().iter().enumerate().filter(|(_, l)| !l.is_follower()) {
+            self.spread(k, load.dead_forces(), model.load_scale(k, level), out);
         }
     }
 
@@ -112,15 +112,15 @@ impl LoadSupports {
     /// places `places(k, load)` (its committed ones, or those of a trial state).
     pub fn add_follower<const D: usize>(
         &self,
-        loads: &[Load<D>],
+        model: &Model<D>,
         level: LoadLevel,
         places: impl Fn(usize, &Load<D>) -> Vec<SVector<f64, D>>,
         out: &mut [f64],
     ) {
         let mut forces = Vec::new();
-        for (k, load) in loads.iter().enumerate().filter(|(_, l)| l.is_follower()) {
+        for (k, load) in model.loads().iter().enumerate().filter(|(_, l)| l.is_follower()) {
             load.forces_on(&places(k, load), &mut forces);
-            self.spread(k, &forces, level.factor(load.time_function()), out);
+            self.spread(k, &forces, model.load_scale(k, level), out);
         }
     }
 

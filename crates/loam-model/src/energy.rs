@@ -89,9 +89,10 @@ fn vertex_forces<const D: usize>(model: &Model<D>, level: LoadLevel) -> Vec<Vec<
     model
         .loads()
         .iter()
-        .map(|load| {
+        .enumerate()
+        .map(|(k, load)| {
             load.forces_on(load.positions(), &mut f);
-            let scale = level.factor(load.time_function());
+            let scale = model.load_scale(k, level);
             load.positions().iter().zip(&f).map(|(x, f)| (*x, f * scale)).collect()
         })
         .collect()

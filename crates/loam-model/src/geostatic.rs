@@ -4,9 +4,10 @@ use crate::{Kinematics, Model, ModelError};
 use nalgebra::Matrix3;
 
 impl<const D: usize> Model<D> {
-    /// Put the points in a geostatic initial stress: the vertical stress is the weight of
-    /// the material above each point in its grid column, σ_v = −|g| Σ m / A (A the column's
-    /// horizontal area; points at the same height count half), the horizontal ones K0 σ_v,
+    /// Put the points in a geostatic initial stress: the vertical effective stress is the
+    /// weight of the material above each point in its grid column, σ′_v = −Σ (|g| m − γ_w V)
+    /// / A (A the column's horizontal area; points at the same height count half; the
+    /// buoyancy γ_w V only below the water table), the horizontal ones K0 σ′_v,
     /// with the elastic strain that carries it (small strain ε^e = C⁻¹σ, finite strain
     /// b^e = exp(2 C⁻¹σ)). Gravity then acts in full from the start
     /// (`gravity_preloaded`). K0 applies to level or layered ground; a slope is brought to
@@ -37,9 +38,9 @@ impl<const D: usize> Model<D> {
         Ok(())
     }
 
-    /// σ_v of every point: the weight of the material above it in its grid column over the
-    /// column's area, points at the same height (within 1e-9 of a cell) counting half.
-    /// Gravity `g` acts along axis `vertical`; "above" is against it.
+    /// σ_v of every point: the (effective) weight of the material above it in its grid
+    /// column over the column's area, points at the same height (within 1e-9 of a cell)
+    /// counting half. Gravity `g` acts along axis `vertical`; "above" is against it.
     fn overburden(&self, vertical: usize, g: f64) -> Vec<f64> {
         let up = -g.signum();
         let h = self.grid().cell_size();
@@ -64,14 +65,22 @@ impl<const D: usize> Model<D> {
             for row in
                 col.chunk_by(|&(_, a), &(_, b)| (pts.position[a][vertical] - pts.position[b][vertical]).abs() <= tol)
             {
-                let row_mass: f64 = row.iter().map(|&(_, q)| pts.mass[q]).sum();
+                let row_weight: f64 = row.iter().map(|&(_, q)| self.effective_weight(q, g)).sum();
                 for &(_, q) in row {
-                    sigma_v[q] = -g.abs() * (above + 0.5 * row_mass) / area;
+                    sigma_v[q] = -(above + 0.5 * row_weight) / area;
                 }
-                above += row_mass;
+                above += row_weight;
             }
         }
         sigma_v
+    }
+
+    /// The weight of point `q` that its column's effective stress carries: m |g|, less the
+    /// buoyancy γ_w V below the water table (the pore pressure carries the rest).
+    fn effective_weight(&self, q: usize, g: f64) -> f64 {
+        let pts = &self.points;
+        let buoyancy = self.water.as_ref().filter(|w| w.depth(&pts.position[q]) > 0.0).map_or(0.0, |w| w.unit_weight());
+        g.abs() * pts.mass[q] - buoyancy * pts.volume[q]
     }
 
     /// The elastic strain state that carries `sigma` (K0 and σ_v given for the message) at

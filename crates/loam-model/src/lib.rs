@@ -14,11 +14,13 @@ mod energy;
 mod geostatic;
 mod loads;
 mod points_mut;
+mod water;
 
 pub use constraint::PlaneConstraint;
 pub use energy::ExternalWork;
 pub use loads::{Load, LoadKind, LoadLevel, TimeFunction};
 pub use points_mut::{PointsMut, StateFields};
+pub use water::{PhreaticLevel, Water};
 
 use loam_constitutive::ConstitutiveLaw;
 use loam_grid::{ActiveNodes, Background, BasisKind, FeMesh, Grid};
@@ -112,6 +114,8 @@ pub enum ModelError {
     PointForces(String),
     #[error("load {index}: {what}")]
     Load { index: usize, what: String },
+    #[error("water: {0}")]
+    Water(String),
     #[error("materials: {0}")]
     Materials(String),
     #[error("ghost penalty: {0}")]
@@ -134,6 +138,8 @@ pub struct Model<const D: usize> {
     point_forces: Vec<SVector<f64, D>>,
     /// Forces at points, tractions and pressures on surfaces.
     loads: Vec<Load<D>>,
+    /// Static groundwater: the points' pore pressures.
+    water: Option<Water>,
     anti_locking: AntiLocking,
     /// Gravity acts in full from the start (the points carry a geostatic initial stress).
     gravity_preloaded: bool,
@@ -195,6 +201,7 @@ impl<const D: usize> Model<D> {
             gravity,
             point_forces: Vec::new(),
             loads: Vec::new(),
+            water: None,
             anti_locking: AntiLocking::None,
             gravity_preloaded: false,
             ghost_penalty: None,
@@ -305,6 +312,46 @@ impl<const D: usize> Model<D> {
         }
         self.update_load_vertices();
         Ok(self)
+    }
+
+    /// Static groundwater (docs/theory.md §18): every point below the phreatic level gets
+    /// its pore pressure, the laws see the effective stress, and the balance takes the
+    /// water's force −∇p_w on the points (the buoyancy), which also accounts for the water
+    /// on submerged surfaces. Implicit analyses (`Explicit` refuses it). Before a geostatic
+    /// stress, which then takes the effective (buoyant) weight.
+    pub fn with_water(mut self, water: Water) -> Result<Self, ModelError> {
+        if water.vertical() >= D {
+            return Err(ModelError::Water("the water's vertical axis is not an axis of the model".into()));
+        }
+        self.water = Some(water);
+        Ok(self)
+    }
+
+    /// The groundwater, if any.
+    pub fn water(&self) -> Option<&Water> {
+        self.water.as_ref()
+    }
+
+    /// The pore pressure of point `p` at its place in the configuration the mechanics is
+    /// written on, with gravity's factor `body_factor` (in full when the geostatic stress
+    /// preloaded it); zero without water.
+    #[inline]
+    pub fn pore_pressure(&self, p: usize, body_factor: f64) -> f64 {
+        let factor = if self.gravity_preloaded { 1.0 } else { body_factor };
+        self.water.as_ref().map_or(0.0, |w| factor * w.pore_pressure(&self.configuration()[p]))
+    }
+
+    /// The water's force per unit volume on point `p`, −∇p_w on the submerged part of its
+    /// domain at its place in the configuration the mechanics is written on, with gravity's
+    /// factor `body_factor` (in full once a geostatic stress preloaded it); zero without
+    /// water.
+    #[inline]
+    pub fn water_force(&self, p: usize, body_factor: f64) -> SVector<f64, D> {
+        let factor = if self.gravity_preloaded { 1.0 } else { body_factor };
+        self.water.as_ref().map_or(SVector::zeros(), |w| {
+            let half = self.points.half_length[p][w.vertical()];
+            w.force_density(&self.configuration()[p], half) * factor
+        })
     }
 
     /// Stabilise nearly empty cells by the face ghost penalty with factor γ > 0 (docs/theory.md
@@ -447,6 +494,18 @@ impl<const D: usize> Model<D> {
     /// The loads beside gravity and the per-point forces.
     pub fn loads(&self) -> &[Load<D>] {
         &self.loads
+    }
+
+    /// The factor on load `k` at `level`: the load factor, or its time function at the time;
+    /// for a load that follows gravity, gravity's factor (1 once a geostatic stress has
+    /// preloaded it).
+    pub fn load_scale(&self, k: usize, level: LoadLevel) -> f64 {
+        let load = &self.loads[k];
+        match (load.is_gravity_driven(), self.gravity_preloaded) {
+            (true, true) => 1.0,
+            (true, false) => level.body_factor(),
+            (false, _) => level.factor(load.time_function()),
+        }
     }
 
     /// Put every load vertex where its carrier point now puts it (the analyses, after a

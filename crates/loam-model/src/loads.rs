@@ -123,6 +123,8 @@ pub struct Load<const D: usize> {
     time: TimeFunction,
     /// Per vertex, the force at full value on the initial facets.
     dead: Vec<SVector<f64, D>>,
+    /// The load is the water's: it follows gravity's factor, not the load factor.
+    gravity_driven: bool,
     /// Per vertex, the material point that carries it and X_v − X_p (set when the load is
     /// put on a model).
     carrier: Vec<u32>,
@@ -170,6 +172,7 @@ impl<const D: usize> Load<D> {
             kind,
             time,
             dead: Vec::new(),
+            gravity_driven: false,
             carrier: Vec::new(),
             offset: Vec::new(),
         };
@@ -235,11 +238,24 @@ impl<const D: usize> Load<D> {
         }
     }
 
-    /// The load's resultant at `level`, on the current vertices.
-    pub fn resultant(&self, level: LoadLevel) -> SVector<f64, D> {
+    /// The load's resultant on the current vertices at `scale` times its full value.
+    pub fn resultant(&self, scale: f64) -> SVector<f64, D> {
         let mut f = Vec::new();
         self.forces_on(&self.position, &mut f);
-        f.iter().sum::<SVector<f64, D>>() * level.factor(&self.time)
+        f.iter().sum::<SVector<f64, D>>() * scale
+    }
+
+    /// The same load following gravity's factor instead of the load factor or its time
+    /// function (the water's pressure on submerged surfaces, which grows with the pore
+    /// pressures).
+    pub fn driven_by_gravity(mut self) -> Self {
+        self.gravity_driven = true;
+        self
+    }
+
+    /// Whether the load follows gravity's factor.
+    pub fn is_gravity_driven(&self) -> bool {
+        self.gravity_driven
     }
 
     /// The point carrying each vertex.
@@ -357,7 +373,7 @@ mod tests {
             .select(|c| c[1] > 0.99);
         let n = top.vertices.len();
         let load = Load::pressure(top, vec![3.0; n], true, TimeFunction::Constant).unwrap();
-        assert_eq!(load.resultant(LoadLevel::Factor(0.5)), Vector2::new(0.0, -3.0));
+        assert_eq!(load.resultant(0.5), Vector2::new(0.0, -3.0));
         let shares: Vec<f64> = load.dead_forces().iter().map(|f| f[1]).collect();
         assert!(shares.iter().all(|&s| s == -1.5 || s == -0.75), "{shares:?}");
         let turned: Vec<_> = load.positions().iter().map(|x| Vector2::new(-x[1], x[0])).collect();

@@ -12,6 +12,7 @@
 //! - [`slope`]: V4, slopes against Taylor's chart and Griffiths & Lane;
 //! - [`disks`]: V5, two colliding elastic disks;
 //! - [`cylinder`]: V6, the thick-walled cylinder under internal pressure (Lamé);
+//! - [`water`]: V7, columns under a water table and submerged;
 //! - [`hard_cases`]: where implicit MPM usually breaks (softening, small cuts, ...).
 //!
 //! Shared tools: [`dynamics`] (time histories and the periods measured from them),
@@ -30,6 +31,7 @@ pub mod dynamics;
 pub mod footing;
 pub mod hard_cases;
 pub mod slope;
+pub mod water;
 
 pub use bar::{BarErrors, VibratingBar};
 pub use bound::{Bound, BoundKind};
@@ -44,3 +46,4 @@ pub use dynamics::{centre_of_mass_velocity, period_from_crossings, zero_crossing
 pub use footing::{footing_load_model, footing_model, prandtl_nc};
 pub use hard_cases::{softening_specimen, translated_block};
 pub use slope::{slope_model, slope_model_with, SlopeGeometry};
+pub use water::{WaterColumn, WaterColumnErrors};

@@ -27,6 +27,9 @@ pub mod bounds {
 
     /// V4a: |γH/c_u at collapse / [`super::TAYLOR_STABILITY`] − 1| on the finest mesh.
     pub const TAYLOR: Bound = Bound::upper(0.10, "docs/verification.md §V4: within 10 % of Taylor's 5.5, finest mesh");
+    /// V7: the submerged slope's factor of safety over the dry slope's with γ′, same mesh.
+    pub const SUBMERGED_SLOPE: Bound =
+        Bound::upper(0.01, "docs/verification.md §V7: submerged F within 1 % of the dry slope's with gamma'");
     /// V4b: |F / [`super::GRIFFITHS_LANE_FACTOR_OF_SAFETY`] − 1| on the finest mesh.
     pub const GRIFFITHS_LANE: Bound =
         Bound::upper(0.05, "docs/verification.md §V4: within 5 % of Griffiths & Lane's 1.4, finest mesh");

@@ -200,3 +200,48 @@ fn follower_pressure_tangent_is_the_derivative_of_the_residual() {
     };
     assert!(norm(&load_term) > 1e-3 * norm(&kv), "the load stiffness must matter here");
 }
+
+/// The water's force in finite strain: −∇p_w on each point's current volume (the
+/// buoyancy below the level), which changes with the volume, so the tangent needs its
+/// term. On the stressed block half under water (level at y = 1, γ_w = 5e3, a body force
+/// of half the block's weight), K v equals the central difference of the residual
+/// (tolerance as above), and leaving the water's term out would miss by far more than that.
+#[test]
+fn water_force_tangent_is_the_derivative_of_the_residual() {
+    use loam_model::{PhreaticLevel, Water};
+    let law: Arc<dyn ConstitutiveLaw> = Arc::new(Elastic::new(1e5, 0.3).unwrap());
+    let model = stressed_block_with(Kinematics::FiniteStrain, BasisKind::Gimp, AntiLocking::None, None, law);
+    let water = Water::new(5e3, PhreaticLevel::Horizontal(1.0), &Vector2::new(0.0, -10.0)).unwrap();
+    let model = model.with_water(water).unwrap();
+    let mut engine = Engine::new(model, NewtonSettings::default(), None);
+    engine.connect(1).unwrap();
+    engine.constrained.iter_mut().for_each(|c| *c = false);
+    let n = engine.num_dofs();
+    engine.f_ext = vec![0.0; n];
+    engine.body_factor = 1.0;
+    engine.update_water_forces();
+    let submerged = engine.water_force.iter().filter(|b| b.norm() > 0.0).count();
+    assert!(submerged > 0 && submerged < engine.water_force.len(), "half the block under water");
+    engine.size_buffers();
+    let du: Vec<f64> = noise(n, 17).iter().map(|x| 0.02 * x).collect();
+    let v = noise(n, 19);
+    let eps = 1e-7;
+    let plus: Vec<f64> = du.iter().zip(&v).map(|(a, b)| a + eps * b).collect();
+    let minus: Vec<f64> = du.iter().zip(&v).map(|(a, b)| a - eps * b).collect();
+    let (rp, rm) = (residual_at(&mut engine, &plus), residual_at(&mut engine, &minus));
+    residual_at(&mut engine, &du);
+    engine.assemble(None);
+    let mut kv = vec![0.0; n];
+    engine.pattern.mul_vec(&engine.values, &v, &mut kv);
+    let norm = |x: &[f64]| x.iter().map(|k| k * k).sum::<f64>().sqrt();
+    let diff: Vec<f64> = kv.iter().zip(rp.iter().zip(&rm)).map(|(k, (p, m))| k - (p - m) / (2.0 * eps)).collect();
+    assert!(norm(&diff) <= 1e-6 * norm(&kv), "|Kv − FD| / |Kv| = {:e}", norm(&diff) / norm(&kv));
+    // The same tangent without the water's term misses.
+    let water_force = std::mem::take(&mut engine.water_force);
+    engine.assemble(None);
+    engine.water_force = water_force;
+    let mut kv_dry = vec![0.0; n];
+    engine.pattern.mul_vec(&engine.values, &v, &mut kv_dry);
+    let miss: Vec<f64> = kv_dry.iter().zip(&kv).map(|(a, b)| a - b).collect();
+    assert!(norm(&miss) > 1e-4 * norm(&kv), "the water's term must matter here: {:e}", norm(&miss) / norm(&kv));
+}

@@ -13,6 +13,7 @@
 //! - `bodies`: the material points (or the FEM reference's mesh) and initial velocities;
 //! - `constraints`: gravity, the plane constraints and prescribed displacements;
 //! - `loads`: forces at points, tractions and pressures on the bodies' boundaries;
+//! - `water`: the phreatic level and the water's unit weight;
 //! - `solver`: Newton's tolerances and the linear solver;
 //! - `model`: the model assembled from the parts above, with its options (anti-locking,
 //!   geometric linearity, ghost penalty, initial stress);
@@ -38,6 +39,7 @@ mod materials;
 mod model;
 mod schema;
 mod solver;
+mod water;
 
 pub use locate::SceneError;
 pub use schema::*;

@@ -60,8 +60,8 @@ impl LoadedScene {
         })
     }
 
-    /// Anti-locking, geometric linearity (implicit only), the ghost penalty (implicit only)
-    /// and the initial stress, in that order.
+    /// Anti-locking, geometric linearity (implicit only), the ghost penalty (implicit only),
+    /// the groundwater (implicit only) and the initial stress, in that order.
     fn model_options<const D: usize>(&self, model: Model<D>) -> Result<Model<D>, SceneError> {
         let s = &self.scene;
         let explicit = matches!(s.analysis, AnalysisSpec::Explicit { .. });
@@ -81,6 +81,15 @@ impl LoadedScene {
                 ));
             }
             model = model.with_ghost_penalty(gamma).map_err(refused("ghost_penalty"))?;
+        }
+        if let Some(water) = self.water(&model.gravity().clone())? {
+            if explicit {
+                return Err(self.error(
+                    &[Seg::Key("water")],
+                    "pore pressures are implemented in the implicit analyses; use QuasiStatic or ImplicitDynamic",
+                ));
+            }
+            model = model.with_water(water).map_err(refused("water"))?;
         }
         if let InitialStressSpec::Geostatic { k0 } = s.initial_stress {
             model.geostatic_stress(k0).map_err(refused("initial_stress"))?;

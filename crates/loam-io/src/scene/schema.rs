@@ -48,6 +48,10 @@ pub struct Scene {
     /// boundaries.
     #[serde(default)]
     pub loads: Vec<LoadSpec>,
+    /// Static groundwater: `Some((unit_weight: γ_w, level: Horizontal(h)))` or a 2D
+    /// `Polyline([(x, h), ...])` level (default none). Small strain, implicit analyses.
+    #[serde(default)]
+    pub water: Option<WaterSpec>,
     pub analysis: AnalysisSpec,
     #[serde(default)]
     pub solver: SolverSpec,
@@ -304,6 +308,24 @@ pub enum LoadSpec {
     },
 }
 
+/// Static groundwater: the water's unit weight and its phreatic level.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct WaterSpec {
+    pub unit_weight: f64,
+    pub level: LevelSpec,
+}
+
+/// The phreatic level.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+pub enum LevelSpec {
+    /// A level water table at this height (the coordinate along gravity's axis).
+    Horizontal(f64),
+    /// 2D: (horizontal coordinate, height) pairs, horizontal coordinates increasing; held
+    /// level beyond the ends.
+    Polyline(Vec<(f64, f64)>),
+}
+
 /// How a pressure varies over the surface, in the initial configuration.
 #[derive(Debug, Clone, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -526,4 +548,8 @@ pub enum FieldSpec {
     Yielding,
     /// Every history value of the laws, by name.
     History,
+    /// The pore pressure p_w (with water).
+    PorePressure,
+    /// The total stress σ′ − p_w I (with water; `Stress` is the effective stress σ′).
+    TotalStress,
 }
