@@ -15,6 +15,10 @@ pub enum PhreaticLevel {
     /// 2D: a polyline of (horizontal coordinate, height) pairs, horizontal coordinates
     /// increasing, held level beyond its ends.
     Polyline(Vec<(f64, f64)>),
+    /// A plane (2D: a line): height `height` above the origin of the horizontal axes,
+    /// rising by `slope[a]` per unit along each horizontal axis a (the vertical entry is
+    /// ignored).
+    Plane { height: f64, slope: [f64; 3] },
 }
 
 /// Static water: its unit weight γ_w and phreatic level; `vertical` is the axis of gravity.
@@ -54,6 +58,9 @@ impl Water {
             PhreaticLevel::Polyline(v) if v.windows(2).any(|w| w[1].0 <= w[0].0) => {
                 return Err("the level's horizontal coordinates must increase".into())
             }
+            PhreaticLevel::Plane { height, slope } if !(height.is_finite() && slope.iter().all(|s| s.is_finite())) => {
+                return Err("the plane's height and slopes must be finite".into())
+            }
             _ => {}
         }
         Ok(Self { unit_weight, level, vertical, up: -gravity[vertical].signum() })
@@ -74,21 +81,40 @@ impl Water {
 
     /// The height of the water table above the horizontal place of `x`.
     pub fn head<const D: usize>(&self, x: &SVector<f64, D>) -> f64 {
-        match &self.level {
+        self.head_and_slope(x).0
+    }
+
+    /// The level's height above the horizontal place of `x` and its slope there (zero on
+    /// the vertical axis; a polyline's segment slope, held level beyond its ends).
+    fn head_and_slope<const D: usize>(&self, x: &SVector<f64, D>) -> (f64, SVector<f64, D>) {
+        let mut slope = SVector::zeros();
+        let head = match &self.level {
             PhreaticLevel::Horizontal(h) => *h,
+            PhreaticLevel::Plane { height, slope: s } => {
+                let horizontal = (0..D).filter(|&a| a != self.vertical);
+                horizontal
+                    .map(|a| {
+                        slope[a] = s[a];
+                        s[a] * x[a]
+                    })
+                    .sum::<f64>()
+                    + height
+            }
             PhreaticLevel::Polyline(v) => {
-                let s = x[1 - self.vertical.min(1)];
-                let k = v.partition_point(|(xi, _)| *xi <= s);
+                let h = 1 - self.vertical.min(1);
+                let k = v.partition_point(|(xi, _)| *xi <= x[h]);
                 match k {
                     0 => v[0].1,
                     k if k == v.len() => v[k - 1].1,
                     k => {
                         let ((x0, h0), (x1, h1)) = (v[k - 1], v[k]);
-                        h0 + (h1 - h0) * (s - x0) / (x1 - x0)
+                        slope[h] = (h1 - h0) / (x1 - x0);
+                        h0 + slope[h] * (x[h] - x0)
                     }
                 }
             }
-        }
+        };
+        (head, slope)
     }
 
     /// The depth of `x` below the water table (negative above it).
@@ -116,20 +142,13 @@ impl Water {
         } else {
             0.0
         };
-        let mut b = SVector::zeros();
         if fraction == 0.0 {
-            return b;
+            return SVector::zeros();
         }
-        b[self.vertical] = self.up * self.unit_weight;
-        if let PhreaticLevel::Polyline(v) = &self.level {
-            let h = 1 - self.vertical.min(1);
-            let k = v.partition_point(|(xi, _)| *xi <= x[h]);
-            if k > 0 && k < v.len() {
-                let ((x0, h0), (x1, h1)) = (v[k - 1], v[k]);
-                b[h] = -self.up * self.unit_weight * (h1 - h0) / (x1 - x0);
-            }
-        }
-        b * fraction
+        // −∇p_w = −γ_w ∇depth, depth = up (h(x) − x_v): γ_w up (e_v − ∇h).
+        let mut b = -self.head_and_slope(x).1;
+        b[self.vertical] = 1.0;
+        b * (self.up * self.unit_weight * fraction)
     }
 }
 
@@ -151,6 +170,16 @@ mod tests {
         assert!(Water::new(10.0, PhreaticLevel::Horizontal(1.0), &Vector2::new(1.0, -10.0)).is_err());
         assert!(Water::new(-1.0, PhreaticLevel::Horizontal(1.0), &g).is_err());
         assert!(Water::new(1.0, PhreaticLevel::Polyline(vec![(1.0, 0.0), (1.0, 2.0)]), &g).is_err());
+        // A plane rising 1 in 10 along x: head 4.5 at x = 5; the buoyancy tilts against
+        // the slope (−γ_w ∇h horizontally), and the same as a polyline along it.
+        let plane = Water::new(10.0, PhreaticLevel::Plane { height: 4.0, slope: [0.1, 0.0, 0.0] }, &g).unwrap();
+        let on_line = Water::new(10.0, PhreaticLevel::Polyline(vec![(0.0, 4.0), (10.0, 5.0)]), &g).unwrap();
+        let x = Vector2::new(5.0, 1.0);
+        assert!((plane.pore_pressure(&x) - 35.0).abs() < 1e-12);
+        assert!((plane.force_density(&x, 0.0) - Vector2::new(-1.0, 10.0)).norm() < 1e-12);
+        assert!((plane.force_density(&x, 0.0) - on_line.force_density(&x, 0.0)).norm() < 1e-12);
+        // A point the level cuts at its centre carries half the buoyancy.
+        assert_eq!(w.force_density(&Vector2::new(0.0, 5.0), 0.25), Vector2::new(0.0, 5.0));
         // Gravity along +y: up is −y.
         let down = Water::new(10.0, PhreaticLevel::Horizontal(5.0), &Vector2::new(0.0, 10.0)).unwrap();
         assert_eq!(down.pore_pressure(&Vector2::new(0.0, 7.0)), 20.0);

@@ -324,6 +324,9 @@ pub enum LevelSpec {
     /// 2D: (horizontal coordinate, height) pairs, horizontal coordinates increasing; held
     /// level beyond the ends.
     Polyline(Vec<(f64, f64)>),
+    /// A plane (a line in 2D): `height` above the origin of the horizontal axes, rising by
+    /// `slope[a]` per unit along each axis (D entries; the vertical one must be 0).
+    Plane { height: f64, slope: Vec<f64> },
 }
 
 /// How a pressure varies over the surface, in the initial configuration.
