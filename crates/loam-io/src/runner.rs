@@ -207,13 +207,14 @@ impl<'a, const D: usize> Outputs<'a, D> {
 }
 
 /// `run_log.csv`: one row per step (load factor, Newton iterations, final residual, wall
-/// time, ...). A displaced constraint (a footing) adds its prescribed displacement and
-/// reaction per prescribed component: the load–displacement curve. Every load adds its
-/// resultant at the step's load factor or time, per component.
+/// time, ...). Every constraint adds its reaction per held component (implicit analyses;
+/// NaN in explicit ones), a displaced one (a footing) its prescribed displacement before
+/// it: the load–displacement curve. Every load adds its resultant at the step's load
+/// factor or time, per component.
 struct RunLog {
     writer: CsvWriter,
-    /// (constraint, component, prescribed displacement at full load).
-    displaced: Vec<(usize, usize, f64)>,
+    /// (constraint, component, prescribed displacement at full load if displaced).
+    held: Vec<(usize, usize, Option<f64>)>,
 }
 
 const AXES: [&str; 3] = ["x", "y", "z"];
@@ -234,23 +235,23 @@ impl RunLog {
     ];
 
     fn create<const D: usize>(path: &Path, model: &Model<D>) -> Result<Self, OutputError> {
-        let displaced: Vec<(usize, usize, f64)> = model
-            .constraints()
-            .iter()
-            .enumerate()
-            .filter(|(_, c)| c.is_displaced())
-            .flat_map(|(k, c)| (0..D).filter(|&i| c.fixed[i]).map(move |i| (k, i, c.displacement[i])))
+        let held: Vec<(usize, usize, Option<f64>)> = (model.constraints().iter().enumerate())
+            .flat_map(|(k, c)| {
+                (0..D).filter(|&i| c.fixed[i]).map(move |i| (k, i, c.is_displaced().then_some(c.displacement[i])))
+            })
             .collect();
         let mut header: Vec<String> = Self::COLUMNS.iter().map(|s| s.to_string()).collect();
-        for &(k, i, _) in &displaced {
-            header.push(format!("constraint{k}_displacement_{}", AXES[i]));
+        for &(k, i, u) in &held {
+            if u.is_some() {
+                header.push(format!("constraint{k}_displacement_{}", AXES[i]));
+            }
             header.push(format!("constraint{k}_reaction_{}", AXES[i]));
         }
         for k in 0..model.loads().len() {
             header.extend(AXES[..D].iter().map(|a| format!("load{k}_{a}")));
         }
         let writer = CsvWriter::create(path, &header.iter().map(String::as_str).collect::<Vec<_>>())?;
-        Ok(Self { writer, displaced })
+        Ok(Self { writer, held })
     }
 
     fn row<const D: usize>(&mut self, r: &Progress, model: &Model<D>) -> Result<(), OutputError> {
@@ -267,8 +268,10 @@ impl RunLog {
             CsvCell::Int(r.dofs as i64),
             CsvCell::Float(r.wall_time.as_secs_f64()),
         ];
-        for &(k, i, u) in &self.displaced {
-            cells.push(CsvCell::Float(r.load_factor * u));
+        for &(k, i, u) in &self.held {
+            if let Some(u) = u {
+                cells.push(CsvCell::Float(r.load_factor * u));
+            }
             cells.push(CsvCell::Float(r.reactions.get(k).map_or(f64::NAN, |f| f[i])));
         }
         for (k, load) in model.loads().iter().enumerate() {
