@@ -58,6 +58,27 @@ fn residual_at(engine: &mut Engine<2>, du: &[f64]) -> Vec<f64> {
     engine.residual().to_vec()
 }
 
+/// The Euclidean norm.
+fn norm(x: &[f64]) -> f64 {
+    x.iter().map(|k| k * k).sum::<f64>().sqrt()
+}
+
+/// Assemble K at `du` and check K v against the central difference of the residual along
+/// `v` (step 1e-7, relative tolerance 1e-6 as below); returns K v.
+fn assert_tangent_matches_differences(engine: &mut Engine<2>, du: &[f64], v: &[f64]) -> Vec<f64> {
+    let eps = 1e-7;
+    let plus: Vec<f64> = du.iter().zip(v).map(|(a, b)| a + eps * b).collect();
+    let minus: Vec<f64> = du.iter().zip(v).map(|(a, b)| a - eps * b).collect();
+    let (rp, rm) = (residual_at(engine, &plus), residual_at(engine, &minus));
+    residual_at(engine, du);
+    engine.assemble(None);
+    let mut kv = vec![0.0; du.len()];
+    engine.pattern.mul_vec(&engine.values, v, &mut kv);
+    let diff: Vec<f64> = kv.iter().zip(rp.iter().zip(&rm)).map(|(k, (p, m))| k - (p - m) / (2.0 * eps)).collect();
+    assert!(norm(&diff) <= 1e-6 * norm(&kv), "|Kv − FD| / |Kv| = {:e}", norm(&diff) / norm(&kv));
+    kv
+}
+
 /// K v equals the central difference of the residual along v, on a stressed state and
 /// a finite increment. Relative tolerance 1e-6: central differences with step 1e-7 on a
 /// residual of magnitude ~1e3 carry truncation ~1e-10 and rounding ~1e-9 relative.
@@ -168,18 +189,7 @@ fn follower_pressure_tangent_is_the_derivative_of_the_residual() {
     engine.size_buffers();
     let du: Vec<f64> = noise(n, 5).iter().map(|x| 0.02 * x).collect();
     let v = noise(n, 13);
-    let eps = 1e-7;
-    let plus: Vec<f64> = du.iter().zip(&v).map(|(a, b)| a + eps * b).collect();
-    let minus: Vec<f64> = du.iter().zip(&v).map(|(a, b)| a - eps * b).collect();
-    let (rp, rm) = (residual_at(&mut engine, &plus), residual_at(&mut engine, &minus));
-    residual_at(&mut engine, &du);
-    engine.assemble(None);
-    let mut kv = vec![0.0; n];
-    engine.pattern.mul_vec(&engine.values, &v, &mut kv);
-    let fd: Vec<f64> = rp.iter().zip(&rm).map(|(p, m)| (p - m) / (2.0 * eps)).collect();
-    let norm = |x: &[f64]| x.iter().map(|k| k * k).sum::<f64>().sqrt();
-    let diff: Vec<f64> = kv.iter().zip(&fd).map(|(k, f)| k - f).collect();
-    assert!(norm(&diff) <= 1e-6 * norm(&kv), "|Kv − FD| / |Kv| = {:e}", norm(&diff) / norm(&kv));
+    let kv = assert_tangent_matches_differences(&mut engine, &du, &v);
     assert!(engine.pattern.asymmetry(&engine.values) > 1e-6, "a follower load's stiffness is not symmetric");
     // Without the load stiffness (the load made dead) the same check fails.
     let load_term: Vec<f64> = {
@@ -225,17 +235,7 @@ fn water_force_tangent_is_the_derivative_of_the_residual() {
     engine.size_buffers();
     let du: Vec<f64> = noise(n, 17).iter().map(|x| 0.02 * x).collect();
     let v = noise(n, 19);
-    let eps = 1e-7;
-    let plus: Vec<f64> = du.iter().zip(&v).map(|(a, b)| a + eps * b).collect();
-    let minus: Vec<f64> = du.iter().zip(&v).map(|(a, b)| a - eps * b).collect();
-    let (rp, rm) = (residual_at(&mut engine, &plus), residual_at(&mut engine, &minus));
-    residual_at(&mut engine, &du);
-    engine.assemble(None);
-    let mut kv = vec![0.0; n];
-    engine.pattern.mul_vec(&engine.values, &v, &mut kv);
-    let norm = |x: &[f64]| x.iter().map(|k| k * k).sum::<f64>().sqrt();
-    let diff: Vec<f64> = kv.iter().zip(rp.iter().zip(&rm)).map(|(k, (p, m))| k - (p - m) / (2.0 * eps)).collect();
-    assert!(norm(&diff) <= 1e-6 * norm(&kv), "|Kv − FD| / |Kv| = {:e}", norm(&diff) / norm(&kv));
+    let kv = assert_tangent_matches_differences(&mut engine, &du, &v);
     // The same tangent without the water's term misses.
     let water_force = std::mem::take(&mut engine.water_force);
     engine.assemble(None);
