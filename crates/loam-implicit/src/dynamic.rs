@@ -271,6 +271,7 @@ impl<const D: usize> Dynamic<D> {
     fn initial_acceleration(&mut self) {
         self.gather_nodal_motion();
         self.engine.external_forces(LoadLevel::Time(self.time));
+        let f_ext = self.engine.external_forces_at_rest();
         let e = &mut self.engine;
         let (conn, pts) = (&e.conn, e.model.points());
         let average = CellAverage::of(&e.model, e.cell_gradients());
@@ -284,7 +285,7 @@ impl<const D: usize> Dynamic<D> {
         });
         for (k, a) in self.acceleration.iter_mut().enumerate() {
             let m = self.inertia.nodal_mass[k / D];
-            *a = if e.constrained[k] || m <= 0.0 { 0.0 } else { (e.f_ext[k] - f_int[k]) / m };
+            *a = if e.constrained[k] || m <= 0.0 { 0.0 } else { (f_ext[k] - f_int[k]) / m };
         }
         let (acc, conn) = (&self.acceleration, &e.conn);
         e.model

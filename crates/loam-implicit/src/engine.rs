@@ -206,6 +206,14 @@ impl<const D: usize> Engine<D> {
         self.f_ext.iter_mut().zip(&buffer).for_each(|(f, w)| *f += w);
     }
 
+    /// The external force of the committed state with the follower loads on their
+    /// committed places (the dynamic start's equilibrium).
+    pub fn external_forces_at_rest(&self) -> Vec<f64> {
+        let mut f = self.f_ext.clone();
+        self.loads.add_follower(&self.model, self.level, |_, l| l.positions().to_vec(), &mut f);
+        f
+    }
+
     /// `f_follower` = f_ext plus the follower loads at the trial increment `du`; false (and
     /// nothing done) without follower loads.
     fn follower_forces(&mut self) -> bool {

@@ -75,12 +75,12 @@ pub(crate) fn assemble<const D: usize>(
                 out[i * D + k] += s;
             }
         }
-        if let Some(b) = inputs.water_force.get(p) {
+        if let Some(bw) = inputs.water_force.get(p) {
             // −N_a b v with δv = v ∇·δu: K_ab,ik = −N_a b_i v ∂N_b/∂x_k.
             let na = conn.support_values(p)[a];
             for i in 0..D {
                 for k in 0..D {
-                    out[i * D + k] -= na * b[i] * trial.volume[p] * gb[k];
+                    out[i * D + k] -= na * bw[i] * trial.volume[p] * gb[k];
                 }
             }
         }

@@ -30,8 +30,8 @@ impl<const D: usize> Model<D> {
     }
 }
 
-/// Work of the loads (gravity, point forces, the loads on surfaces) on the motion of the
-/// points and load vertices, accumulated step by step with the trapezoidal rule: exact for
+/// Work of the loads (gravity, point forces, the water's force, the loads on surfaces) on
+/// the motion of the points and load vertices, accumulated step by step with the trapezoidal rule: exact for
 /// dead loads held constant, and for loads ramped linearly with displacement increments of
 /// one step.
 #[derive(Debug, Clone)]
@@ -64,6 +64,14 @@ impl<const D: usize> ExternalWork<D> {
                 mean.dot(&(pts.position[p] - self.previous[p]))
             })
             .sum();
+        // The water's force on the points, on their current volumes.
+        let (wb, wn) = (self.previous_level.body_factor(), level.body_factor());
+        let dw_water: f64 = (0..pts.len())
+            .map(|p| {
+                let mean = (model.water_force(p, wb) + model.water_force(p, wn)) * (0.5 * pts.volume[p]);
+                mean.dot(&(pts.position[p] - self.previous[p]))
+            })
+            .sum();
         let loads = vertex_forces(model, level);
         let dw_loads: f64 = loads
             .iter()
@@ -71,7 +79,7 @@ impl<const D: usize> ExternalWork<D> {
             .flat_map(|(now, before)| now.iter().zip(before))
             .map(|((x, f), (x0, f0))| ((f + f0) * 0.5).dot(&(x - x0)))
             .sum();
-        self.work += dw + dw_loads;
+        self.work += dw + dw_water + dw_loads;
         self.previous.copy_from_slice(&pts.position);
         self.previous_loads = loads;
         self.previous_level = level;

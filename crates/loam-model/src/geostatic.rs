@@ -76,10 +76,14 @@ impl<const D: usize> Model<D> {
     }
 
     /// The weight of point `q` that its column's effective stress carries: m |g|, less the
-    /// buoyancy γ_w V below the water table (the pore pressure carries the rest).
+    /// buoyancy on the submerged part of its domain (the water's force of the balance,
+    /// [`Model::water_force`] in full, so the state starts in equilibrium).
     fn effective_weight(&self, q: usize, g: f64) -> f64 {
         let pts = &self.points;
-        let buoyancy = self.water.as_ref().filter(|w| w.depth(&pts.position[q]) > 0.0).map_or(0.0, |w| w.unit_weight());
+        let buoyancy = self.water.as_ref().map_or(0.0, |w| {
+            let half = pts.half_length[q][w.vertical()];
+            w.force_density(&pts.position[q], half)[w.vertical()].abs()
+        });
         g.abs() * pts.mass[q] - buoyancy * pts.volume[q]
     }
 

@@ -496,16 +496,9 @@ impl<const D: usize> Model<D> {
         &self.loads
     }
 
-    /// The factor on load `k` at `level`: the load factor, or its time function at the time;
-    /// for a load that follows gravity, gravity's factor (1 once a geostatic stress has
-    /// preloaded it).
+    /// The factor on load `k` at `level`: the load factor, or its time function at the time.
     pub fn load_scale(&self, k: usize, level: LoadLevel) -> f64 {
-        let load = &self.loads[k];
-        match (load.is_gravity_driven(), self.gravity_preloaded) {
-            (true, true) => 1.0,
-            (true, false) => level.body_factor(),
-            (false, _) => level.factor(load.time_function()),
-        }
+        level.factor(self.loads[k].time_function())
     }
 
     /// Put every load vertex where its carrier point now puts it (the analyses, after a

@@ -60,17 +60,22 @@ impl TimeFunction {
         match self {
             TimeFunction::Constant => 1.0,
             TimeFunction::Ramp { duration } => (t / duration).clamp(0.0, 1.0),
-            TimeFunction::Table(rows) => {
-                let k = rows.partition_point(|(time, _)| *time <= t);
-                match k {
-                    0 => rows[0].1,
-                    k if k == rows.len() => rows[k - 1].1,
-                    k => {
-                        let ((t0, f0), (t1, f1)) = (rows[k - 1], rows[k]);
-                        f0 + (f1 - f0) * (t - t0) / (t1 - t0)
-                    }
-                }
-            }
+            TimeFunction::Table(rows) => piecewise_linear(rows, t).0,
+        }
+    }
+}
+
+/// The piecewise-linear function through `rows` (abscissae increasing) at `x`, held level
+/// before the first and after the last: its value and slope.
+pub(crate) fn piecewise_linear(rows: &[(f64, f64)], x: f64) -> (f64, f64) {
+    let k = rows.partition_point(|(xi, _)| *xi <= x);
+    match k {
+        0 => (rows[0].1, 0.0),
+        k if k == rows.len() => (rows[k - 1].1, 0.0),
+        k => {
+            let ((x0, y0), (x1, y1)) = (rows[k - 1], rows[k]);
+            let slope = (y1 - y0) / (x1 - x0);
+            (y0 + slope * (x - x0), slope)
         }
     }
 }
@@ -123,8 +128,6 @@ pub struct Load<const D: usize> {
     time: TimeFunction,
     /// Per vertex, the force at full value on the initial facets.
     dead: Vec<SVector<f64, D>>,
-    /// The load is the water's: it follows gravity's factor, not the load factor.
-    gravity_driven: bool,
     /// Per vertex, the material point that carries it and X_v − X_p (set when the load is
     /// put on a model).
     carrier: Vec<u32>,
@@ -172,7 +175,6 @@ impl<const D: usize> Load<D> {
             kind,
             time,
             dead: Vec::new(),
-            gravity_driven: false,
             carrier: Vec::new(),
             offset: Vec::new(),
         };
@@ -210,9 +212,10 @@ impl<const D: usize> Load<D> {
         &self.dead
     }
 
-    /// Per vertex, the force at full value with the vertices at `x`: each facet's load
-    /// shared equally among its vertices (exact for a uniform load on straight facets).
-    /// Dead loads ignore `x`.
+    /// Per vertex, the force at full value with the vertices at `x`: a traction's facet load
+    /// shared equally among the facet's vertices; a pressure's vertex v takes p_v a_e / D of
+    /// each facet e around it (the lumped load of a linearly varying pressure: the
+    /// resultant exact, the moment to the facet size). Dead loads ignore `x`.
     pub fn forces_on(&self, x: &[SVector<f64, D>], out: &mut Vec<SVector<f64, D>>) {
         out.clear();
         out.resize(self.surface.vertices.len(), SVector::zeros());
@@ -243,19 +246,6 @@ impl<const D: usize> Load<D> {
         let mut f = Vec::new();
         self.forces_on(&self.position, &mut f);
         f.iter().sum::<SVector<f64, D>>() * scale
-    }
-
-    /// The same load following gravity's factor instead of the load factor or its time
-    /// function (the water's pressure on submerged surfaces, which grows with the pore
-    /// pressures).
-    pub fn driven_by_gravity(mut self) -> Self {
-        self.gravity_driven = true;
-        self
-    }
-
-    /// Whether the load follows gravity's factor.
-    pub fn is_gravity_driven(&self) -> bool {
-        self.gravity_driven
     }
 
     /// The point carrying each vertex.

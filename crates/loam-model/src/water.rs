@@ -5,6 +5,7 @@
 //! positive). Drained and static: no consolidation and no flow — the pore pressure follows
 //! the points' places and the load factor, nothing else.
 
+use crate::loads::piecewise_linear;
 use nalgebra::SVector;
 
 /// The phreatic level: the height of the water table above each horizontal place.
@@ -102,16 +103,9 @@ impl Water {
             }
             PhreaticLevel::Polyline(v) => {
                 let h = 1 - self.vertical.min(1);
-                let k = v.partition_point(|(xi, _)| *xi <= x[h]);
-                match k {
-                    0 => v[0].1,
-                    k if k == v.len() => v[k - 1].1,
-                    k => {
-                        let ((x0, h0), (x1, h1)) = (v[k - 1], v[k]);
-                        slope[h] = (h1 - h0) / (x1 - x0);
-                        h0 + slope[h] * (x[h] - x0)
-                    }
-                }
+                let (head, s) = piecewise_linear(v, x[h]);
+                slope[h] = s;
+                head
             }
         };
         (head, slope)

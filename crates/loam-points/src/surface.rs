@@ -1,7 +1,8 @@
 //! The boundary of a shape as a surface of facets, on which surface loads act: segments in
 //! 2D, triangles in 3D, each oriented so that its area vector points out of the shape
-//! (docs/theory.md §17). Facets are at most `spacing` long on a side, so a load sampled at
-//! their vertices resolves the grid the way the material points do.
+//! (docs/theory.md §17). The shape's edges are cut into pieces at most `spacing` long (a
+//! triangle's diagonal is up to √2 times that, a cube-sphere's arcs up to about 1.3 times),
+//! so a load sampled at the vertices resolves the grid the way the material points do.
 
 use crate::{PointsError, Shape};
 use nalgebra::{SVector, Vector2, Vector3};

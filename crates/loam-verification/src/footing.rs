@@ -32,7 +32,7 @@ pub mod bounds {
     /// |collapse pressure / q_ref − 1| on the finest mesh of the full sweep.
     pub const LOAD_CONTROLLED_COLLAPSE: Bound = Bound::upper(
         0.05,
-        "docs/verification.md §V3: under load control, collapse within 5 % of (2 + pi) c_u at 16 cells per b",
+        "docs/verification.md §V3: under load control, collapse within 5 % of (2 + pi) c_u on the finest mesh (16 cells per b in the full sweep)",
     );
     /// Newton corrections per step until the relative residual is first ≤ 1e-9, in the
     /// hardest sub-step; reported as a verdict on the finest mesh, not enforced (the

@@ -58,8 +58,8 @@ impl WaterColumn {
 
     /// The column on `cells` cells over its height (one wide, square cells, spare cells up
     /// to the level), 2×2 points per cell, GIMP, rollers on the sides and the base, with its
-    /// water and the water's pressure on the submerged boundary; small strain is
-    /// geometrically linear (the points keep their places).
+    /// water (whose force on the points also carries the water standing on the top); small
+    /// strain is geometrically linear (the points keep their places).
     pub fn model(&self, cells: usize, kinematics: Kinematics) -> Model<2> {
         let c = &self.column;
         let h = c.height / cells as f64;

@@ -48,8 +48,9 @@ pub struct Scene {
     /// boundaries.
     #[serde(default)]
     pub loads: Vec<LoadSpec>,
-    /// Static groundwater: `Some((unit_weight: γ_w, level: Horizontal(h)))` or a 2D
-    /// `Polyline([(x, h), ...])` level (default none). Small strain, implicit analyses.
+    /// Static groundwater: `Some((unit_weight: γ_w, level: Horizontal(h)))`, a 2D
+    /// `Polyline([(x, h), ...])` or an inclined `Plane(height, slope)` level (default
+    /// none). Implicit analyses.
     #[serde(default)]
     pub water: Option<WaterSpec>,
     pub analysis: AnalysisSpec,
