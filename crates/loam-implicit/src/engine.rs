@@ -222,8 +222,8 @@ impl<const D: usize> Engine<D> {
         }
         self.f_follower.clone_from(&self.f_ext);
         let (conn, du, delta_f) = (&self.conn, &self.du, &self.trial.delta_f);
-        let positions = &self.model.points().position;
-        let places = |_, load: &_| trial_vertices(conn, load, positions, du, delta_f);
+        let points = self.model.points();
+        let places = |_, load: &_| trial_vertices(conn, load, points, du, delta_f);
         self.loads.add_follower(&self.model, self.level, places, &mut self.f_follower);
         true
     }

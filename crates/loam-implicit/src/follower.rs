@@ -3,11 +3,11 @@
 //! extra tangent −∂f_p/∂Δu, without which Newton would lose its quadratic rate.
 //!
 //! Vertex v's force is f_v = −s Σ_{e∋v} (p_v / D) a_e (s the load's factor, a_e the facet's
-//! area vector). A vertex carried by point p sits at x_w = x_p + u_p + ΔF_p r_w with
-//! r_w = x_w − x_p committed, so ∂x_w/∂Δu_I = c_wI I with c_wI = N_I(x_p) + ∇N_I(x_p) · r_w.
+//! area vector). A vertex carried by point p sits at x_w = x_p + u_p + diag(ΔF_p F_p) R_w
+//! with R_w = X_w − X_p, so ∂x_w,k/∂Δu_I,k = c_wI,k = N_I(x_p) + (Σ_l ∂N_I/∂x_l F_lk) R_w,k.
 //! In 2D a_e = R (x_1 − x_0), R the rotation by −90°, so ∂a_e/∂x_1 = R = −∂a_e/∂x_0; in 3D
 //! ∂a_e/∂x_k = ½ [x_{k+2} − x_{k+1}]_× (cyclic). The block coupling the force at node J
-//! (weight ω_vJ of v) to the increment at node I is s (p_v / D) ω_vJ c_wI ∂a_e/∂x_w.
+//! (weight ω_vJ of v) to the increment at node I is s (p_v / D) ω_vJ ∂a_e/∂x_w diag(c_wI).
 
 use loam_grid::Connectivity;
 use loam_kernels::{trial_vertices, LoadSupports};
@@ -60,22 +60,22 @@ pub(crate) fn add_follower_tangent<const D: usize>(
     values: &mut [f64],
 ) {
     let FollowerInputs { model, conn, supports, level, du, delta_f } = *inputs;
-    let positions = &model.points().position;
+    let points = model.points();
     for (k, load) in model.loads().iter().enumerate().filter(|(_, l)| l.is_follower()) {
         let LoadKind::Pressure { values: pressure, .. } = load.kind() else { continue };
         let scale = model.load_scale(k, level);
-        let x = trial_vertices(conn, load, positions, du, delta_f);
+        let x = trial_vertices(conn, load, points, du, delta_f);
         for facet in &load.surface().facets {
             let corners = facet.map(|v| x[v as usize]);
             for (slot, &w) in facet.iter().enumerate() {
                 let da = area_derivative(&corners, slot);
                 let p = load.carriers()[w as usize] as usize;
-                let r = load.positions()[w as usize] - positions[p];
+                let carry = Carry { p, offset: *load.offset(w as usize), f: points.deformation_gradient[p] };
                 for &v in facet {
                     let coefficient = scale * pressure[v as usize] / D as f64;
                     let (nodes_j, weights) = supports.support(k, v as usize);
                     for (&j, &omega) in nodes_j.iter().zip(weights) {
-                        add_moving_blocks(conn, p, &r, &(da * (coefficient * omega)), j, pattern, constrained, values);
+                        add_moving_blocks(conn, &carry, &(da * (coefficient * omega)), j, pattern, constrained, values);
                     }
                 }
             }
@@ -83,25 +83,32 @@ pub(crate) fn add_follower_tangent<const D: usize>(
     }
 }
 
-/// Add c_I · `block` to the coupling of node `j` with every node I of point `p`'s support,
-/// c_I = N_I(x_p) + ∇N_I(x_p) · r.
-#[allow(clippy::too_many_arguments)]
+/// A vertex's carrier: point `p`, the offset X_v − X_p and the committed F_p.
+struct Carry<const D: usize> {
+    p: usize,
+    offset: SVector<f64, D>,
+    f: nalgebra::Matrix3<f64>,
+}
+
+/// Add `block` · diag(c_I) to the coupling of node `j` with every node I of the carrier's
+/// support: x_v,k = x_p,k + u_p,k + (ΔF F)_kk R_k, so ∂x_v,k/∂Δu_I,k =
+/// c_I,k = N_I(x_p) + (Σ_l ∂N_I/∂x_l F_lk) R_k, and nothing across components.
 fn add_moving_blocks<const D: usize>(
     conn: &Connectivity<D>,
-    p: usize,
-    r: &SVector<f64, D>,
+    carry: &Carry<D>,
     block: &SMatrix<f64, D, D>,
     j: u32,
     pattern: &BlockPattern,
     constrained: &[bool],
     values: &mut [f64],
 ) {
+    let p = carry.p;
     let mut flat = [0.0; 9];
     let supports = conn.support_nodes(p).iter().zip(conn.support_values(p)).zip(conn.support_gradients(p));
     for ((&i, &n), g) in supports {
-        let c = n + g.dot(r);
-        for a in 0..D {
-            for b in 0..D {
+        for b in 0..D {
+            let c = n + (0..D).map(|l| g[l] * carry.f[(l, b)]).sum::<f64>() * carry.offset[b];
+            for a in 0..D {
                 flat[a * D + b] = c * block[(a, b)];
             }
         }

@@ -14,6 +14,7 @@ use crate::interpolate;
 use crate::ConnectError;
 use loam_grid::{Connectivity, Grid, INACTIVE};
 use loam_model::{Load, LoadLevel, Model};
+use loam_points::PointStore;
 use nalgebra::{Matrix3, SVector};
 
 /// `x`, brought onto the grid where it lies on a grid face or within half a cell beyond it:
@@ -137,22 +138,22 @@ impl LoadSupports {
     }
 }
 
-/// The vertices of `load` in a trial state: each carried by its point, moved by the nodal
-/// increment `du` (u_p = Σ N_I(x_p) Δu_I) and deformed by its increment ΔF_p,
-/// x_v = x_p + u_p + ΔF_p (x_v − x_p) with the committed x_v and x_p.
+/// The vertices of `load` in a trial state: each carried by its point (committed place
+/// and deformation gradient in `points`), moved by the nodal increment `du`
+/// (u_p = Σ N_I(x_p) Δu_I) and stretched by its trial gradient ΔF_p F_p:
+/// x_v = x_p + u_p + diag(ΔF_p F_p) (X_v − X_p) (`Load::carried`).
 pub fn trial_vertices<const D: usize>(
     conn: &Connectivity<D>,
     load: &Load<D>,
-    positions: &[SVector<f64, D>],
+    points: &PointStore<D>,
     du: &[f64],
     delta_f: &[Matrix3<f64>],
 ) -> Vec<SVector<f64, D>> {
-    (load.positions().iter().zip(load.carriers()))
-        .map(|(x, &p)| {
-            let p = p as usize;
-            let r = x - positions[p];
-            let moved = positions[p] + interpolate(conn, p, du);
-            moved + SVector::from_fn(|i, _| (0..D).map(|j| delta_f[p][(i, j)] * r[j]).sum::<f64>())
+    (0..load.positions().len())
+        .map(|v| {
+            let p = load.carriers()[v] as usize;
+            let moved = points.position[p] + interpolate(conn, p, du);
+            load.carried(v, &moved, &(delta_f[p] * points.deformation_gradient[p]))
         })
         .collect()
 }

@@ -1,7 +1,7 @@
 //! Loads beside gravity (docs/theory.md §17): forces at points, and tractions and pressures
 //! on the material's surface. A load lives on the material, not on grid planes: its
 //! vertices start on the boundary of a body, each carried by its nearest material point p
-//! at x_v = x_p + F_p (X_v − X_p), so the surface moves and stretches with the points' own
+//! at x_v = x_p + diag(F_p) (X_v − X_p), so the surface moves and stretches with the points' own
 //! motion and deformation (on a GIMP point's domain face the vertex stays on that face);
 //! each vertex carries its share of the facets around it, which the analyses spread to
 //! the nodes through the basis at its place.
@@ -254,11 +254,18 @@ impl<const D: usize> Load<D> {
     }
 
     /// Where vertex `v` is when its carrier is at `x_p` with deformation gradient `f_p`:
-    /// x_p + F_p (X_v − X_p).
+    /// x_p + diag(F_p) (X_v − X_p), each axis of the offset stretched as the carrier's
+    /// iGIMP domain is, without the shear, which would couple a vertex's height to its
+    /// carrier's shear through a horizontal offset (docs/theory.md §17).
     #[inline]
     pub fn carried(&self, v: usize, x_p: &SVector<f64, D>, f_p: &Matrix3<f64>) -> SVector<f64, D> {
         let r = &self.offset[v];
-        x_p + SVector::from_fn(|i, _| (0..D).map(|j| f_p[(i, j)] * r[j]).sum::<f64>())
+        x_p + SVector::from_fn(|i, _| f_p[(i, i)] * r[i])
+    }
+
+    /// X_v − X_p of vertex `v`.
+    pub fn offset(&self, v: usize) -> &SVector<f64, D> {
+        &self.offset[v]
     }
 
     /// Attach every vertex to its nearest point of `positions` (the initial ones).
