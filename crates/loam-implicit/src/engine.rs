@@ -160,20 +160,23 @@ impl<const D: usize> Engine<D> {
     /// its surfaces spread to them, and the water's force on the points at that level. Follower
     /// loads are added with the trial increment in each residual.
     pub fn external_forces(&mut self, level: LoadLevel) {
-        let (model, conn) = (&self.model, &self.conn);
         let lambda = level.body_factor();
+        self.body_factor = lambda;
+        self.update_water_forces();
+        let (model, conn, water) = (&self.model, &self.conn, &self.water_force);
+        let volume = &model.points().volume;
         self.f_ext.resize(conn.active_nodes().len() * D, 0.0);
+        // The water's force on the committed volumes joins the point loads (a finite-strain
+        // residual adds its change with the volume).
         gather_nodal(conn, D, &mut self.f_ext, |p, a, out| {
             let n = conn.support_values(p)[a];
-            let f = model.point_load_at(p, lambda);
+            let f = model.point_load_at(p, lambda) * n + water_body_force(water, p, volume[p], n);
             for i in 0..D {
-                out[i] += n * f[i];
+                out[i] += f[i];
             }
         });
         self.loads.add_dead(model, level, &mut self.f_ext);
         self.level = level;
-        self.body_factor = lambda;
-        self.add_water_forces();
     }
 
     /// The water's force per unit volume on every point, b_w = −∇p_w (the buoyancy below a
@@ -188,24 +191,6 @@ impl<const D: usize> Engine<D> {
         self.water_force = (0..model.points().len()).into_par_iter().map(|p| model.water_force(p, bf)).collect();
     }
 
-    /// The water's force on the committed volumes, Σ_p N v b_w, added to the external force
-    /// (a finite-strain residual adds its change with the volume).
-    fn add_water_forces(&mut self) {
-        self.update_water_forces();
-        if self.water_force.is_empty() {
-            return;
-        }
-        let (conn, water, volume) = (&self.conn, &self.water_force, &self.model.points().volume);
-        let mut buffer = vec![0.0; self.f_ext.len()];
-        gather_nodal(conn, D, &mut buffer, |p, a, out| {
-            let f = water_body_force(water, p, volume[p], conn.support_values(p)[a]);
-            for i in 0..D {
-                out[i] += f[i];
-            }
-        });
-        self.f_ext.iter_mut().zip(&buffer).for_each(|(f, w)| *f += w);
-    }
-
     /// The external force of the committed state with the follower loads on their
     /// committed places (the dynamic start's equilibrium).
     pub fn external_forces_at_rest(&self) -> Vec<f64> {
@@ -217,7 +202,7 @@ impl<const D: usize> Engine<D> {
     /// `f_follower` = f_ext plus the follower loads at the trial increment `du`; false (and
     /// nothing done) without follower loads.
     fn follower_forces(&mut self) -> bool {
-        if !self.model.loads().iter().any(|l| l.is_follower()) {
+        if !has_follower(self.model.loads()) {
             return false;
         }
         self.f_follower.clone_from(&self.f_ext);
