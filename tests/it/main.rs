@@ -14,4 +14,5 @@ mod prescribed_displacement;
 mod run_scenes;
 mod scene_errors;
 mod slope;
+mod solvers;
 mod ul_fem;

@@ -74,7 +74,7 @@ fn a_bracket_that_does_not_bracket_is_reported() {
 #[test]
 fn the_linear_solver_follows_symmetry_and_softening() {
     use loam::constitutive::MohrCoulomb;
-    use loam::solve::LinearSolverKind;
+    use loam::solve::{LinearSolverChoice, LinearSolverKind};
     let kind = |law: Arc<dyn ConstitutiveLaw>| {
         let model = slope_model(&SlopeGeometry::UNDRAINED, law, 0.4, 10.0, 5, AntiLocking::BBar);
         QuasiStatic::new(model, QuasiStaticSettings::default()).linear_solver_kind()
@@ -88,6 +88,7 @@ fn the_linear_solver_follows_symmetry_and_softening() {
         LinearSolverKind::Cholesky
     );
     let forced = slope_model(&SlopeGeometry::UNDRAINED, clay(), 0.4, 10.0, 5, AntiLocking::BBar);
-    let settings = QuasiStaticSettings { linear_solver: Some(LinearSolverKind::Lu), ..Default::default() };
+    let settings =
+        QuasiStaticSettings { linear_solver: LinearSolverChoice::Forced(LinearSolverKind::Lu), ..Default::default() };
     assert_eq!(QuasiStatic::new(forced, settings).linear_solver_kind(), LinearSolverKind::Lu);
 }

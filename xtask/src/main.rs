@@ -10,6 +10,7 @@ mod footing;
 mod hard_cases;
 mod loads;
 mod report;
+mod scale;
 mod slope;
 mod soil;
 mod steps;
@@ -49,6 +50,18 @@ enum Cmd {
         #[arg(long, default_value = "target/steps")]
         out: PathBuf,
     },
+    /// The cost of one step of an elastic block at several sizes (`scale.rs`).
+    Scale {
+        /// Cells a side, comma separated; each size runs in its own process.
+        #[arg(long, value_delimiter = ',', default_value = "16,24,32")]
+        cells: Vec<usize>,
+        /// auto, direct or iterative.
+        #[arg(long, default_value = "auto")]
+        solver: String,
+        /// 2 or 3.
+        #[arg(long, default_value_t = 3)]
+        dim: usize,
+    },
     /// Run the criterion benchmarks (`cargo bench`), passing any extra arguments on.
     Bench {
         #[arg(trailing_var_arg = true)]
@@ -60,6 +73,7 @@ fn main() -> Result<()> {
     match Cli::parse().command {
         Cmd::Verify { quick, out } => verify(quick, &out),
         Cmd::Steps { quick, out } => steps::run(quick, &out),
+        Cmd::Scale { cells, solver, dim } => scale::run(dim, &cells, &solver),
         Cmd::Bench { args } => {
             let status = std::process::Command::new(env!("CARGO"))
                 .args(["bench", "--package", "loam"])

@@ -52,6 +52,10 @@ pub struct Progress {
     pub increment: f64,
     /// Newton corrections over the step (0 for explicit steps).
     pub iterations: usize,
+    /// Krylov iterations of their linear solves (0 with a direct solver).
+    pub linear_iterations: usize,
+    /// Time the linear solvers took to prepare (factorisations, or multigrid set-up).
+    pub linear_setup: Duration,
     pub substeps: usize,
     pub cutbacks: usize,
     /// Relative residual at convergence (NaN for explicit steps, which have none).
@@ -73,6 +77,8 @@ impl Progress {
             level,
             increment: r.time - before,
             iterations: r.iterations,
+            linear_iterations: r.linear_iterations,
+            linear_setup: r.linear_setup,
             substeps: r.substeps,
             cutbacks: r.cutbacks,
             final_residual: r.final_residual(),
@@ -203,6 +209,8 @@ impl<const D: usize> Analysis<D> {
                     level: LoadLevel::Time(r.time),
                     increment: r.dt,
                     iterations: 0,
+                    linear_iterations: 0,
+                    linear_setup: Duration::ZERO,
                     substeps: 1,
                     cutbacks: 0,
                     final_residual: f64::NAN,

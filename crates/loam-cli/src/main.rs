@@ -189,5 +189,9 @@ fn show_progress(bar: &ProgressBar, r: &Progress, end: f64) {
         format!(" its={} res={:.1e}", r.iterations, r.final_residual)
     };
     let cutbacks = if r.cutbacks > 0 { format!(" cut-backs={}", r.cutbacks) } else { String::new() };
-    bar.set_message(format!("step {} t={:.4e}/{:.4e} Δ={:.2e}{newton}{cutbacks}", r.step, r.time, end, r.increment));
+    let krylov = if r.linear_iterations > 0 { format!(" krylov={}", r.linear_iterations) } else { String::new() };
+    bar.set_message(format!(
+        "step {} t={:.4e}/{:.4e} Δ={:.2e}{newton}{krylov}{cutbacks}",
+        r.step, r.time, end, r.increment
+    ));
 }

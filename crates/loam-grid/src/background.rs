@@ -69,6 +69,16 @@ impl<const D: usize> Background<D> {
         self.mesh.is_some() || self.basis == BasisKind::Linear
     }
 
+    /// The lattice coordinates (grid node indices per axis) of background node `node`, as
+    /// geometric multigrid coarsens them; `None` on a body-fitted mesh.
+    pub fn lattice_coordinates(&self, node: usize) -> Option<[usize; D]> {
+        if self.mesh.is_some() {
+            return None;
+        }
+        let dims = self.grid.cells().map(|c| c + 1);
+        Some(crate::index::lexicographic_coords(node, dims))
+    }
+
     /// Number of nodes: grid nodes, or mesh nodes.
     pub fn num_nodes(&self) -> usize {
         self.mesh.as_ref().map_or(self.grid.num_nodes(), |m| m.num_nodes())

@@ -64,6 +64,19 @@ impl BasisKind {
         }
     }
 
+    /// Most nodes the basis touches along one axis for a domain of half-length at most
+    /// `half_length` cells (GIMP: the integers strictly within 1 + l of the point, at most
+    /// ⌈2 + 2l⌉, so 3 for the l ≤ ½ of two or more points per cell; the others ignore it).
+    pub fn support_bound_1d(self, half_length: f64) -> usize {
+        match self {
+            BasisKind::Gimp if half_length.is_finite() => {
+                let l = half_length.clamp(0.0, MAX_HALF_LENGTH);
+                ((2.0 + 2.0 * (l - SUPPORT_EPS)).ceil() as usize).clamp(2, 4)
+            }
+            _ => self.max_support_1d(),
+        }
+    }
+
     /// Largest number of nodes the basis touches in `dim` dimensions: the stride of
     /// per-point support buffers.
     pub fn max_support(self, dim: usize) -> usize {
@@ -72,7 +85,8 @@ impl BasisKind {
 
     /// Evaluate the basis at `x` for a point of domain half-lengths `half_length` (ignored
     /// by `Linear`). Writes node indices (ascending), values and gradients with respect to
-    /// position into the buffers, which must hold `max_support(D)` entries, and returns
+    /// position into the buffers, which must hold the product over the axes of
+    /// `support_bound_1d` of the half-length in cells (at most `max_support(D)`), and returns
     /// how many were written.
     pub fn evaluate<const D: usize>(
         self,
@@ -420,6 +434,18 @@ mod tests {
             (0.5 * (1.5 - a).powi(2), -(1.5 - a) * d.signum())
         } else {
             (0.0, 0.0)
+        }
+    }
+
+    proptest! {
+        /// The support bound the connectivity sizes its buffers by holds every GIMP
+        /// support: for any position and any half-length up to the one it is asked for.
+        #[test]
+        fn gimp_supports_stay_within_the_bound(x in 0.0f64..7.999, l in 0.0f64..1.2, f in 0.0f64..=1.0) {
+            let g = grid2(8);
+            let bound = BasisKind::Gimp.support_bound_1d(l);
+            let s = eval2(BasisKind::Gimp, &g, Vector2::new(x, 4.0), l * f);
+            prop_assert!(s.len() <= bound * bound, "{} nodes, bound {bound} per axis", s.len());
         }
     }
 

@@ -157,6 +157,15 @@ impl<const D: usize> Connectivity<D> {
         assert_eq!(positions.len(), half_lengths.len());
         let basis = self.basis;
         let h_min = grid.cell_size().min();
+        // Buffers as wide as the largest support the domains allow, not the widest GIMP
+        // support: 27 instead of 64 nodes per point in 3D with two points per cell.
+        self.stride = (0..D)
+            .map(|a| {
+                let h = grid.cell_size()[a];
+                let widest = half_lengths.par_iter().map(|l| l[a] / h).reduce(|| 0.0, f64::max);
+                basis.support_bound_1d(widest)
+            })
+            .product();
         self.fill(positions.len(), grid.num_nodes(), |p, nodes, vals, grads| {
             let c = basis.evaluate(grid, &positions[p], &half_lengths[p], nodes, vals, grads)?;
             // A node where the weight and its gradient (nearly) vanish — a point on or
@@ -186,7 +195,7 @@ impl<const D: usize> Connectivity<D> {
     /// points (element-major), their supports the element nodes, the gradients those of
     /// the current node positions. The stride must hold 2^D nodes (`BasisKind::Linear`).
     pub fn compute_mesh(&mut self, mesh: &FeMesh<D>) -> Result<(), ElementError> {
-        assert!(self.stride >= FeMesh::<D>::NODES_PER_ELEMENT, "stride too small for the element nodes");
+        self.stride = FeMesh::<D>::NODES_PER_ELEMENT;
         self.fill(mesh.num_gauss_points(), mesh.num_nodes(), |p, nodes, vals, grads| {
             mesh.evaluate(p, nodes, vals, grads)
         })

@@ -33,6 +33,8 @@ struct Tally {
     substeps: usize,
     cutbacks: usize,
     iterations: usize,
+    linear_iterations: usize,
+    linear_setup: std::time::Duration,
     /// Relative residuals of the last sub-step.
     residuals: Vec<f64>,
     /// Relative residuals of the converged sub-step with the most corrections.
@@ -57,6 +59,8 @@ impl CutBack {
         let done = &mut self.done;
         done.substeps += 1;
         done.iterations += report.iterations();
+        done.linear_iterations += report.linear_iterations;
+        done.linear_setup += std::time::Duration::from_secs_f64(report.linear_setup_s);
         if report.residuals.len() > done.hardest_residuals.len() {
             done.hardest_residuals.clone_from(&report.residuals);
         }
@@ -112,6 +116,15 @@ impl CutBack {
         start: Instant,
     ) -> StepReport {
         let done = self.done;
+        if done.linear_iterations > 0 {
+            tracing::info!(
+                step,
+                newton_iterations = done.iterations,
+                krylov_iterations = done.linear_iterations,
+                setup_s = done.linear_setup.as_secs_f64(),
+                "iterative linear solves"
+            );
+        }
         StepReport {
             step,
             load_factor,
@@ -119,6 +132,8 @@ impl CutBack {
             substeps: done.substeps,
             cutbacks: done.cutbacks,
             iterations: done.iterations,
+            linear_iterations: done.linear_iterations,
+            linear_setup: done.linear_setup,
             residuals: done.residuals,
             hardest_residuals: done.hardest_residuals,
             active_nodes: done.active_nodes,
@@ -134,7 +149,7 @@ mod tests {
     use super::*;
 
     fn converged(iterations: usize) -> NewtonReport {
-        NewtonReport { residuals: vec![1.0; iterations + 1], increments: vec![1.0; iterations] }
+        NewtonReport { residuals: vec![1.0; iterations + 1], increments: vec![1.0; iterations], ..Default::default() }
     }
 
     /// Drive the control over a step from 0 to 1 whose attempts succeed when `holds(size)`:

@@ -27,7 +27,7 @@ use loam_kernels::{
     gather_internal_force, gather_nodal, internal_force, interpolate, interpolate_pair, InvalidSetting,
 };
 use loam_model::{LoadLevel, Model};
-use loam_solve::{LinearSolverKind, NewtonError, NewtonReport, NewtonSettings};
+use loam_solve::{LinearSolverChoice, LinearSolverKind, NewtonError, NewtonReport, NewtonSettings};
 use rayon::prelude::*;
 use std::time::Instant;
 
@@ -59,7 +59,7 @@ pub struct DynamicSettings {
     /// How many halvings a sub-step may reach before a failure stops the run.
     pub max_cutbacks: usize,
     /// Force a linear solver; `None` chooses Cholesky for symmetric tangents, LU otherwise.
-    pub linear_solver: Option<LinearSolverKind>,
+    pub linear_solver: LinearSolverChoice,
 }
 
 impl DynamicSettings {
@@ -74,7 +74,7 @@ impl DynamicSettings {
             mass: MassMatrix::Lumped,
             newton: NewtonSettings::default(),
             max_cutbacks: 8,
-            linear_solver: None,
+            linear_solver: LinearSolverChoice::Auto,
         }
     }
 

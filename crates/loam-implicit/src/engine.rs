@@ -18,8 +18,8 @@ use loam_kernels::{
 };
 use loam_model::{Kinematics, LoadLevel, Model};
 use loam_solve::{
-    norm, BlockPattern, LinearSolveError, LinearSolverKind, NewtonControl, NewtonError, NewtonReport, NewtonSettings,
-    SparseDirectSolver,
+    norm, BlockPattern, LinearSolveError, LinearSolver, LinearSolverChoice, LinearSolverKind, LinearSystem,
+    NewtonControl, NewtonError, NewtonReport, NewtonSettings, NodeLattice,
 };
 use nalgebra::SVector;
 use rayon::prelude::*;
@@ -53,6 +53,8 @@ pub(crate) struct Engine<const D: usize> {
     /// The step's increment Δu, per active dof.
     pub du: Vec<f64>,
     residual: Vec<f64>,
+    /// −R, the right-hand side of a correction's solve.
+    rhs: Vec<f64>,
     correction: Vec<f64>,
     /// B-bar or assumed strain: the cell-averaged support gradients, `stride` per point
     /// (empty without them).
@@ -64,8 +66,20 @@ pub(crate) struct Engine<const D: usize> {
     extra_couplings: Vec<Vec<u32>>,
     trial: TrialState<D>,
     newton: NewtonSettings,
-    linear: SparseDirectSolver,
+    linear: Box<dyn LinearSolver>,
+    /// What the settings asked, resolved against the size of the first connectivity.
+    linear_choice: LinearSolverChoice,
+    linear_resolved: bool,
+    /// The active nodes' grid coordinates, for multigrid (empty otherwise), and the
+    /// pattern generation they belong to.
+    lattice: Option<NodeLattice>,
 }
+
+/// With the automatic choice, multigrid CG from this many dofs, by dimension, for symmetric
+/// positive definite tangents (docs/theory.md §19 gives the measurements): in 3D just above
+/// the measured crossover (3 000 to 4 000 dofs); in 2D well above it (8 000), so that the
+/// plastic 2D problems, where the iterative solver is not yet verified, keep the direct one.
+const ITERATIVE_FROM_DOFS: [usize; 3] = [usize::MAX, 100_000, 5_000];
 
 impl<const D: usize> Engine<D> {
     /// The linear solver is the one asked for, or chosen from the tangent: Cholesky when
@@ -74,19 +88,16 @@ impl<const D: usize> Engine<D> {
     /// symmetrisation; a softening tangent is indefinite and Cholesky would stop at the
     /// first negative pivot; the stiffness of a follower load, or of the buoyancy on a
     /// point's current volume in finite strain, is not symmetric).
-    pub fn new(model: Model<D>, newton: NewtonSettings, linear_solver: Option<LinearSolverKind>) -> Self {
-        let (kind, source) = match linear_solver {
-            Some(kind) => (kind, "as the settings ask"),
-            None if model.symmetric_tangent()
-                && !model.can_soften()
-                && !has_follower(model.loads())
-                && (model.water().is_none() || model.kinematics() == Kinematics::SmallStrain) =>
-            {
-                (LinearSolverKind::Cholesky, "chosen from the tangent's symmetry and definiteness")
-            }
-            None => (LinearSolverKind::Lu, "chosen from the tangent's symmetry and definiteness"),
+    pub fn new(model: Model<D>, newton: NewtonSettings, linear_choice: LinearSolverChoice) -> Self {
+        let definite = model.symmetric_tangent()
+            && !model.can_soften()
+            && !has_follower(model.loads())
+            && (model.water().is_none() || model.kinematics() == Kinematics::SmallStrain);
+        let kind = match linear_choice {
+            LinearSolverChoice::Forced(kind) => kind,
+            LinearSolverChoice::Iterative => LinearSolverKind::for_tangent(true, definite),
+            LinearSolverChoice::Direct | LinearSolverChoice::Auto => LinearSolverKind::for_tangent(false, definite),
         };
-        tracing::info!(solver = %kind, "linear solver {source}");
         Self {
             conn: Connectivity::new(model.basis()),
             model,
@@ -104,18 +115,55 @@ impl<const D: usize> Engine<D> {
             reactions: Vec::new(),
             du: Vec::new(),
             residual: Vec::new(),
+            rhs: Vec::new(),
             correction: Vec::new(),
             cell_gradients: Vec::new(),
             ghost: Vec::new(),
             extra_couplings: Vec::new(),
             trial: TrialState::default(),
             newton,
-            linear: SparseDirectSolver::new(kind),
+            linear: kind.solver(),
+            linear_choice,
+            linear_resolved: false,
+            lattice: None,
         }
     }
 
-    pub fn linear_solver(&self) -> &SparseDirectSolver {
-        &self.linear
+    pub fn linear_solver(&self) -> &dyn LinearSolver {
+        self.linear.as_ref()
+    }
+
+    /// At the first connectivity: the automatic choice turns to multigrid CG on a grid from
+    /// `ITERATIVE_FROM_DOFS` where the tangent is symmetric positive definite (BiCGStab is
+    /// only taken when asked for); an iterative solver asked for on a body-fitted mesh (which
+    /// has no lattice for multigrid) is an error. Logs the solver and why.
+    fn resolve_linear_solver(&mut self) -> Result<(), StepError> {
+        if self.linear_resolved {
+            return Ok(());
+        }
+        self.linear_resolved = true;
+        let on_grid = self.model.background().mesh().is_none();
+        let dofs = self.num_dofs();
+        let source = match self.linear_choice {
+            LinearSolverChoice::Auto
+                if on_grid
+                    && dofs >= ITERATIVE_FROM_DOFS[D - 1]
+                    && self.linear.kind() == LinearSolverKind::Cholesky =>
+            {
+                self.linear = LinearSolverKind::Cg.solver();
+                "from the number of dofs (iterative from this size) and the tangent (symmetric positive definite)"
+            }
+            LinearSolverChoice::Auto => {
+                "from the tangent's symmetry and definiteness (direct below the size for iteration)"
+            }
+            LinearSolverChoice::Forced(_) => "as the settings ask",
+            _ => "from the tangent's symmetry and definiteness, in the family the settings ask",
+        };
+        if self.linear.wants_lattice() && !on_grid {
+            return Err(StepError::LinearSolver(LinearSolveError::NoLattice));
+        }
+        tracing::info!(solver = %self.linear.kind(), dofs, "linear solver chosen {source}");
+        Ok(())
     }
 
     /// Stage 1, connect: the connectivity of the committed configuration, its constrained
@@ -132,12 +180,32 @@ impl<const D: usize> Engine<D> {
         }
         ghost_couplings(&self.ghost, self.conn.active_nodes().len(), &mut self.extra_couplings);
         follower_couplings(&self.model, &self.conn, &self.loads, &mut self.extra_couplings);
-        self.pattern.update_with(&PointCouplings(&self.conn), &self.extra_couplings);
+        let changed = self.pattern.update_with(&PointCouplings(&self.conn), &self.extra_couplings);
+        self.resolve_linear_solver()?;
+        if self.linear.wants_lattice() && (changed || self.lattice.is_none()) {
+            self.lattice = Some(self.node_lattice());
+        }
         if self.model.anti_locking().deviatoric_weight().is_some() {
             cell_averaged_gradients(&self.model, &self.conn, &mut self.cell_gradients);
         }
         self.conn_current = true;
         Ok(())
+    }
+
+    /// The grid coordinates of the active nodes.
+    fn node_lattice(&self) -> NodeLattice {
+        let background = self.model.background();
+        let coords = self
+            .conn
+            .active_nodes()
+            .active_to_grid
+            .iter()
+            .map(|&g| {
+                let c = background.lattice_coordinates(g as usize).expect("checked: the background is a grid");
+                std::array::from_fn(|a| if a < D { c[a] as u32 } else { 0 })
+            })
+            .collect();
+        NodeLattice::new(coords)
     }
 
     /// Force the next `connect` to recompute (e.g. before profiling a cold iteration).
@@ -227,7 +295,8 @@ impl<const D: usize> Engine<D> {
         loop {
             newton.next_iteration()?;
             self.assemble(inertia.as_deref());
-            self.solve().map_err(|e| newton.linear_failure(e))?;
+            let (iterations, setup) = self.solve(newton.linear_tolerance()).map_err(|e| newton.linear_failure(e))?;
+            newton.linear_solved(iterations, setup);
             newton.corrected(norm(&self.correction), norm(&self.du));
             let reference =
                 self.update_points_and_residual(inertia.as_deref_mut()).map_err(|e| newton.problem_failure(e))?;
@@ -243,6 +312,7 @@ impl<const D: usize> Engine<D> {
         let n = self.num_dofs();
         self.du.resize(n, 0.0);
         self.residual.resize(n, 0.0);
+        self.rhs.resize(n, 0.0);
         self.correction.resize(n, 0.0);
         let pts = self.model.points();
         self.trial.resize(pts.len(), self.conn.stride(), pts.history_stride());
@@ -294,17 +364,37 @@ impl<const D: usize> Engine<D> {
         }
     }
 
-    /// Solve K δ = −R and add the correction to the increment: Δu ← Δu + δ.
-    fn solve(&mut self) -> Result<(), LinearSolveError> {
-        self.linear.factorize(&self.pattern, &self.values)?;
-        for (c, r) in self.correction.iter_mut().zip(&self.residual) {
-            *c = -r;
+    /// Solve K δ = −R to the relative residual `tolerance` (an iterative solver; a direct
+    /// one does better) and add the correction to the increment: Δu ← Δu + δ. Returns the
+    /// Krylov iterations and the time the solver's set-up took.
+    fn solve(&mut self, tolerance: f64) -> Result<(usize, std::time::Duration), LinearSolveError> {
+        let start = std::time::Instant::now();
+        let system = LinearSystem {
+            pattern: &self.pattern,
+            values: &self.values,
+            constrained: &self.constrained,
+            lattice: self.lattice.as_ref(),
+        };
+        self.linear.prepare(&system)?;
+        let setup = start.elapsed();
+        for (b, r) in self.rhs.iter_mut().zip(&self.residual) {
+            *b = -r;
         }
-        self.linear.solve_in_place(&mut self.correction)?;
+        let stats = self.linear.solve(&self.rhs, &mut self.correction, tolerance)?;
         for (u, c) in self.du.iter_mut().zip(&self.correction) {
             *u += c;
         }
-        Ok(())
+        Ok((stats.iterations, setup))
+    }
+
+    /// The assembled tangent as the linear solvers see it.
+    pub fn linear_system(&self) -> LinearSystem<'_> {
+        LinearSystem {
+            pattern: &self.pattern,
+            values: &self.values,
+            constrained: &self.constrained,
+            lattice: self.lattice.as_ref(),
+        }
     }
 
     /// The cell-averaged support gradients of the connectivity (empty without cell

@@ -11,7 +11,7 @@ use crate::{IterationProfile, StepError, StepReport};
 use loam_kernels::RunError;
 use loam_model::{LoadLevel, Model};
 use loam_solve::{
-    BlockPattern, LinearSolverKind, LinearSolverTimings, NewtonError, NewtonReport, NewtonSettings, SparseDirectSolver,
+    BlockPattern, LinearSolverChoice, LinearSolverKind, LinearSolverTimings, NewtonError, NewtonReport, NewtonSettings,
 };
 use std::time::Instant;
 
@@ -24,8 +24,9 @@ pub struct QuasiStaticSettings {
     /// How many halvings a sub-step may reach before a failure stops the run (the smallest
     /// sub-step is the load step over 2^max_cutbacks).
     pub max_cutbacks: usize,
-    /// Force a linear solver; `None` chooses Cholesky for symmetric tangents, LU otherwise.
-    pub linear_solver: Option<LinearSolverKind>,
+    /// The linear solver: by default direct (Cholesky for symmetric positive definite
+    /// tangents, LU otherwise) below a size and multigrid-preconditioned Krylov above it.
+    pub linear_solver: LinearSolverChoice,
     /// Start each step's Newton iterate on the free dofs from the last converged
     /// increment, scaled to the new load increment (node by node, through the grid or mesh
     /// numbering), instead of from zero. Off by default: docs/theory.md §6 gives where it
@@ -40,7 +41,7 @@ impl Default for QuasiStaticSettings {
             load_steps: 10,
             newton: NewtonSettings::default(),
             max_cutbacks: 8,
-            linear_solver: None,
+            linear_solver: LinearSolverChoice::Auto,
             extrapolate: false,
         }
     }
@@ -195,14 +196,21 @@ impl<const D: usize> QuasiStatic<D> {
         self.engine.assemble(None);
         let assembly = t.elapsed();
         let e = &self.engine;
-        let mut solver = SparseDirectSolver::new(e.linear_solver().kind());
-        solver.factorize(&e.pattern, &e.values).map_err(|e| not_converged(e.to_string()))?;
-        let mut r: Vec<f64> = e.residual().iter().map(|v| -v).collect();
-        solver.solve_in_place(&mut r).map_err(|e| not_converged(e.to_string()))?;
+        let mut solver = e.linear_solver().kind().solver();
+        solver.prepare(&e.linear_system()).map_err(|e| not_converged(e.to_string()))?;
+        let rhs: Vec<f64> = e.residual().iter().map(|v| -v).collect();
+        let mut x = vec![0.0; rhs.len()];
+        // The first Newton iteration's forcing term (an iterative solver's tolerance).
+        let tolerance = loam_solve::NewtonControl::start::<PointUpdateError>(self.settings.newton, 1.0, 1.0)
+            .map(|c| c.linear_tolerance())
+            .unwrap_or(1e-3);
+        let stats = solver.solve(&rhs, &mut x, tolerance).map_err(|e| not_converged(e.to_string()))?;
         let lt = solver.timings();
         Ok(IterationProfile {
-            dofs: r.len(),
+            dofs: rhs.len(),
             nonzeros: e.pattern.nnz(),
+            krylov_iterations: stats.iterations,
+            solver_bytes: solver.bytes(),
             connectivity,
             points_and_residual,
             assembly,

@@ -18,6 +18,10 @@ pub struct StepReport {
     pub cutbacks: usize,
     /// Newton corrections over all converged sub-steps.
     pub iterations: usize,
+    /// Krylov iterations of their linear solves (0 with a direct solver).
+    pub linear_iterations: usize,
+    /// Time their linear solvers took to prepare (factorisations, or multigrid set-up).
+    pub linear_setup: Duration,
     /// Relative residuals of the last sub-step, before the first and after each correction.
     pub residuals: Vec<f64>,
     /// Relative residuals of the converged sub-step with the most corrections (the first
@@ -54,6 +58,8 @@ pub enum StepError {
     NotConverged { step: usize, load_factor: f64, cutbacks: usize, reason: String, residuals: Vec<f64> },
     #[error("analysis: {0}")]
     InvalidSettings(InvalidSetting),
+    #[error("linear solver: {0}")]
+    LinearSolver(loam_solve::LinearSolveError),
     #[error("constraint {index} prescribes a non-zero displacement; displacements follow the load factor of a quasi-static analysis and are not applied in dynamics")]
     DisplacementInDynamics { index: usize },
     #[error("the analysis is already finished ({0} steps)")]
@@ -65,13 +71,19 @@ pub enum StepError {
 pub struct IterationProfile {
     pub dofs: usize,
     pub nonzeros: usize,
+    /// Krylov iterations of the solve (0 for a direct solver).
+    pub krylov_iterations: usize,
+    /// Bytes the linear solver holds beyond the assembled tangent (0 where not known).
+    pub solver_bytes: usize,
     /// Basis evaluation, active nodes, adjacency, sparsity pattern.
     pub connectivity: Duration,
     /// Point kinematics, stress update and tangent, internal force gather.
     pub points_and_residual: Duration,
     /// Global tangent assembly.
     pub assembly: Duration,
+    /// Symbolic factorisation, or the multigrid structure.
     pub symbolic: Duration,
+    /// Numeric factorisation, or the multigrid values (Galerkin products, smoothers).
     pub numeric: Duration,
     pub solve: Duration,
 }

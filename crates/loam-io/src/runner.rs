@@ -220,7 +220,7 @@ struct RunLog {
 const AXES: [&str; 3] = ["x", "y", "z"];
 
 impl RunLog {
-    const COLUMNS: [&'static str; 11] = [
+    const COLUMNS: [&'static str; 13] = [
         "step",
         "time",
         "load_factor",
@@ -228,6 +228,8 @@ impl RunLog {
         "substeps",
         "cutbacks",
         "iterations",
+        "krylov_iterations",
+        "solver_setup_s",
         "final_residual",
         "active_nodes",
         "dofs",
@@ -263,6 +265,8 @@ impl RunLog {
             CsvCell::Int(r.substeps as i64),
             CsvCell::Int(r.cutbacks as i64),
             CsvCell::Int(r.iterations as i64),
+            CsvCell::Int(r.linear_iterations as i64),
+            CsvCell::Float(r.linear_setup.as_secs_f64()),
             CsvCell::Float(r.final_residual),
             CsvCell::Int(r.active_nodes as i64),
             CsvCell::Int(r.dofs as i64),

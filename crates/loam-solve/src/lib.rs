@@ -1,12 +1,23 @@
 //! Linear and nonlinear solvers for the implicit MPM: the block sparsity pattern of a
 //! nodal system with deterministic parallel assembly, sparse direct solvers (faer
-//! Cholesky and LU) that reuse their symbolic factorisation, and Newton's method with
-//! relative-residual and increment criteria. Nothing here knows about grids or points.
+//! Cholesky and LU) that reuse their symbolic factorisation, Krylov solvers (CG,
+//! BiCGStab) preconditioned by geometric multigrid on a node lattice, and Newton's method
+//! with relative-residual and increment criteria and an inexact-Newton forcing term.
+//! Nothing here knows about grids or points: multigrid sees integer node coordinates.
 
+mod block_matrix;
+mod krylov;
 mod linear;
+mod multigrid;
 mod newton;
 mod pattern;
 
-pub use linear::{LinearSolveError, LinearSolverKind, LinearSolverTimings, SparseDirectSolver};
+pub use block_matrix::BlockMatrix;
+pub use krylov::IterativeSolver;
+pub use linear::{
+    KrylovFailure, LinearSolveError, LinearSolveStats, LinearSolver, LinearSolverChoice, LinearSolverKind,
+    LinearSolverTimings, LinearSystem, SparseDirectSolver,
+};
+pub use multigrid::{Multigrid, NodeLattice};
 pub use newton::{norm, NewtonControl, NewtonError, NewtonReport, NewtonSettings};
 pub use pattern::{BlockPattern, Couplings};

@@ -5,21 +5,59 @@
 //!
 //! A non-symmetric matrix is never handed to Cholesky: the choice is the caller's (from the
 //! material's tangent symmetry) and is reported by `kind()`.
+//!
+//! Every solver sits behind [`LinearSolver`]: prepare for a matrix (factorise, or build a
+//! preconditioner), then solve to a relative tolerance (which a direct solver exceeds).
+//! The interface passes the system as its node graph, values, constrained dofs and node
+//! lattice, and vectors as plain slices over the dofs this process holds: a distributed
+//! backend (PETSc's KSP over MPI) would hold a contiguous range of node rows and implement
+//! the same two calls (docs/theory.md §19).
 
-use crate::BlockPattern;
+use crate::{BlockPattern, NodeLattice};
 use faer::linalg::solvers::Solve;
 use faer::sparse::linalg::solvers::{Llt, Lu, SymbolicLlt, SymbolicLu};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{MatMut, Side};
 use std::time::{Duration, Instant};
 
-/// Which factorisation a solver uses.
+/// Which method a solver uses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum LinearSolverKind {
     /// Sparse Cholesky, for symmetric positive definite tangents.
     Cholesky,
     /// Sparse LU with partial pivoting, for non-symmetric tangents.
     Lu,
+    /// Conjugate gradients preconditioned by geometric multigrid, for symmetric positive
+    /// definite tangents.
+    Cg,
+    /// BiCGStab preconditioned by geometric multigrid, for the others.
+    BiCgStab,
+}
+
+impl LinearSolverKind {
+    pub fn is_iterative(self) -> bool {
+        matches!(self, LinearSolverKind::Cg | LinearSolverKind::BiCgStab)
+    }
+
+    /// The method of this family (direct or iterative) for a tangent that is (or is not)
+    /// symmetric positive definite.
+    pub fn for_tangent(iterative: bool, symmetric_definite: bool) -> Self {
+        match (iterative, symmetric_definite) {
+            (false, true) => LinearSolverKind::Cholesky,
+            (false, false) => LinearSolverKind::Lu,
+            (true, true) => LinearSolverKind::Cg,
+            (true, false) => LinearSolverKind::BiCgStab,
+        }
+    }
+
+    /// A solver of this kind.
+    pub fn solver(self) -> Box<dyn LinearSolver> {
+        if self.is_iterative() {
+            Box::new(crate::IterativeSolver::new(self))
+        } else {
+            Box::new(SparseDirectSolver::new(self))
+        }
+    }
 }
 
 impl std::fmt::Display for LinearSolverKind {
@@ -27,11 +65,68 @@ impl std::fmt::Display for LinearSolverKind {
         f.write_str(match self {
             LinearSolverKind::Cholesky => "sparse Cholesky",
             LinearSolverKind::Lu => "sparse LU",
+            LinearSolverKind::Cg => "multigrid-preconditioned CG",
+            LinearSolverKind::BiCgStab => "multigrid-preconditioned BiCGStab",
         })
     }
 }
 
-#[derive(Debug, Clone, thiserror::Error)]
+/// What the settings ask of the linear solver.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum LinearSolverChoice {
+    /// Direct below a size, iterative above it (and where the background is a grid), the
+    /// method from the tangent's symmetry.
+    #[default]
+    Auto,
+    /// A direct solver, Cholesky or LU from the tangent's symmetry.
+    Direct,
+    /// An iterative solver, CG or BiCGStab from the tangent's symmetry.
+    Iterative,
+    /// This method, whatever the tangent.
+    Forced(LinearSolverKind),
+}
+
+/// A linear system as the solvers see it: the node graph, the values assembled on it, the
+/// constrained dofs (rows and columns eliminated but for the diagonal) and, where the nodes
+/// lie on a grid, their lattice coordinates (for multigrid).
+#[derive(Debug, Clone, Copy)]
+pub struct LinearSystem<'a> {
+    pub pattern: &'a BlockPattern,
+    pub values: &'a [f64],
+    pub constrained: &'a [bool],
+    pub lattice: Option<&'a NodeLattice>,
+}
+
+/// What one solve did.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct LinearSolveStats {
+    /// Krylov iterations (0 for a direct solve).
+    pub iterations: usize,
+    /// ‖b − A x‖ / ‖b‖ reached (0 for a direct solve, which does not compute it).
+    pub residual: f64,
+}
+
+/// A linear solver. See the module docs.
+pub trait LinearSolver: Send {
+    fn kind(&self) -> LinearSolverKind;
+    /// Whether `prepare` needs the node lattice.
+    fn wants_lattice(&self) -> bool {
+        false
+    }
+    /// Prepare for the matrix of `system`: factorise it, or build the preconditioner.
+    fn prepare(&mut self, system: &LinearSystem<'_>) -> Result<(), LinearSolveError>;
+    /// Solve A x = rhs into `x` to the relative residual `rel_tol` (a direct solver does
+    /// better).
+    fn solve(&mut self, rhs: &[f64], x: &mut [f64], rel_tol: f64) -> Result<LinearSolveStats, LinearSolveError>;
+    fn timings(&self) -> LinearSolverTimings;
+    /// Bytes the solver holds beyond the assembled system (a factor, a hierarchy); 0 where
+    /// it is not known.
+    fn bytes(&self) -> usize {
+        0
+    }
+}
+
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum LinearSolveError {
     #[error("symbolic factorisation failed: {0}")]
     Symbolic(String),
@@ -43,9 +138,38 @@ pub enum LinearSolveError {
     NotFactorised,
     #[error("the solution contains NaN or infinity")]
     NonFinite,
+    #[error("multigrid needs the nodes' grid coordinates, and a body-fitted mesh (the FEM reference) has none: use a direct solver")]
+    NoLattice,
+    #[error(transparent)]
+    NotConverged(Box<KrylovFailure>),
 }
 
-/// Time spent in each phase, summed since creation.
+/// A Krylov solve that did not reach its tolerance, with the true relative residual of
+/// each iterate.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{method} did not reach the relative residual {tolerance:.1e} in {iterations} iterations (reached {residual:.2e}; residuals {})", history_summary(.history))]
+pub struct KrylovFailure {
+    pub method: LinearSolverKind,
+    pub iterations: usize,
+    pub residual: f64,
+    pub tolerance: f64,
+    pub history: Vec<f64>,
+}
+
+/// A residual history in a line: the first few, then every tenth, then the last.
+fn history_summary(history: &[f64]) -> String {
+    let picked: Vec<String> = history
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| *i < 3 || i % 10 == 9 || *i + 1 == history.len())
+        .map(|(i, r)| format!("{}: {r:.2e}", i + 1))
+        .collect();
+    picked.join(", ")
+}
+
+/// Time spent in each phase, summed since creation: for a direct solver the symbolic and
+/// numeric factorisations; for an iterative one the multigrid structure and its values
+/// (Galerkin products, smoothers, coarsest factorisation).
 #[derive(Debug, Clone, Copy, Default)]
 pub struct LinearSolverTimings {
     pub symbolic: Duration,
@@ -53,6 +177,8 @@ pub struct LinearSolverTimings {
     pub solve: Duration,
     pub symbolic_count: usize,
     pub numeric_count: usize,
+    /// Krylov iterations over all solves.
+    pub iterations: usize,
 }
 
 /// A sparse direct solver with symbolic reuse. See the module docs.
@@ -68,6 +194,7 @@ pub struct SparseDirectSolver {
 
 impl SparseDirectSolver {
     pub fn new(kind: LinearSolverKind) -> Self {
+        assert!(!kind.is_iterative(), "{kind} is not a factorisation");
         Self {
             kind,
             generation: None,
@@ -102,7 +229,7 @@ impl SparseDirectSolver {
                             .map_err(|e| LinearSolveError::Symbolic(format!("{e:?}")))?,
                     )
                 }
-                LinearSolverKind::Lu => {
+                _ => {
                     self.symbolic_lu =
                         Some(SymbolicLu::try_new(symbolic).map_err(|e| LinearSolveError::Symbolic(format!("{e:?}")))?)
                 }
@@ -122,7 +249,7 @@ impl SparseDirectSolver {
                         .map_err(|e| LinearSolveError::NotPositiveDefinite(format!("{e:?}")))?,
                 );
             }
-            LinearSolverKind::Lu => {
+            _ => {
                 let sym = self.symbolic_lu.clone().expect("symbolic factorisation present");
                 self.lu = Some(
                     Lu::try_new_with_symbolic(sym, mat).map_err(|e| LinearSolveError::Singular(format!("{e:?}")))?,
@@ -150,6 +277,26 @@ impl SparseDirectSolver {
         } else {
             Err(LinearSolveError::NonFinite)
         }
+    }
+}
+
+impl LinearSolver for SparseDirectSolver {
+    fn kind(&self) -> LinearSolverKind {
+        self.kind
+    }
+
+    fn prepare(&mut self, system: &LinearSystem<'_>) -> Result<(), LinearSolveError> {
+        self.factorize(system.pattern, system.values)
+    }
+
+    fn solve(&mut self, rhs: &[f64], x: &mut [f64], _rel_tol: f64) -> Result<LinearSolveStats, LinearSolveError> {
+        x.copy_from_slice(rhs);
+        self.solve_in_place(x)?;
+        Ok(LinearSolveStats::default())
+    }
+
+    fn timings(&self) -> LinearSolverTimings {
+        self.timings
     }
 }
 

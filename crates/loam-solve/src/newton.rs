@@ -9,6 +9,12 @@
 //! fails — and the caller must cut the step back — on a non-finite residual, a residual
 //! that grows past `divergence_factor` times the initial one, a failed factorisation or the
 //! iteration limit. An unconverged step is never reported as converged.
+//!
+//! An iterative linear solver is asked for the relative residual of
+//! [`NewtonControl::linear_tolerance`], an inexact-Newton forcing term (Eisenstat & Walker,
+//! SIAM J. Sci. Comput. 17, 1996, choice 2): loose while Newton is far from the solution,
+//! tightening as it converges quadratically, and never tighter than what takes the next
+//! residual below Newton's own tolerance.
 
 use crate::LinearSolveError;
 
@@ -38,6 +44,10 @@ pub struct NewtonReport {
     pub residuals: Vec<f64>,
     /// Relative correction ‖δ‖ / ‖Δu‖ of each correction.
     pub increments: Vec<f64>,
+    /// Krylov iterations of the corrections' linear solves (0 with a direct solver).
+    pub linear_iterations: usize,
+    /// Seconds spent preparing the linear solves: factorisations, or multigrid set-up.
+    pub linear_setup_s: f64,
 }
 
 impl NewtonReport {
@@ -75,6 +85,15 @@ impl<E: std::error::Error + 'static> NewtonError<E> {
     }
 }
 
+/// Forcing term of the first Newton iteration: tight enough that an inexact first solve
+/// adds no iteration in the common case where the first correction gains two or more
+/// digits (a linear elastic step gains all of them).
+const FORCING_FIRST: f64 = 1e-3;
+/// The loosest forcing term: each solve gains at least a digit.
+const FORCING_MAX: f64 = 0.1;
+/// The tightest: near the round-off of a Krylov solve in double precision.
+const FORCING_MIN: f64 = 1e-12;
+
 /// The Euclidean norm of a vector, summed in index order.
 pub fn norm(v: &[f64]) -> f64 {
     v.iter().map(|x| x * x).sum::<f64>().sqrt()
@@ -99,7 +118,7 @@ impl NewtonControl {
         reference: f64,
     ) -> Result<Self, NewtonError<E>> {
         let initial = relative(residual, reference);
-        let report = NewtonReport { residuals: vec![initial], increments: Vec::new() };
+        let report = NewtonReport { residuals: vec![initial], ..Default::default() };
         if !initial.is_finite() {
             return Err(NewtonError::NonFinite(report));
         }
@@ -118,6 +137,12 @@ impl NewtonControl {
     /// Record a correction of norm `correction` that left an increment of norm `increment`.
     pub fn corrected(&mut self, correction: f64, increment: f64) {
         self.report.increments.push(relative(correction, increment));
+    }
+
+    /// Record the Krylov iterations and the set-up time of the last linear solve.
+    pub fn linear_solved(&mut self, iterations: usize, setup: std::time::Duration) {
+        self.report.linear_iterations += iterations;
+        self.report.linear_setup_s += setup.as_secs_f64();
     }
 
     /// Check the residual after the last correction: `Ok(true)` when converged, `Ok(false)`
@@ -140,6 +165,23 @@ impl NewtonControl {
         // correction kept the residual within tolerance.
         let inc = self.report.increments.last().copied().unwrap_or(f64::INFINITY);
         Ok(rk <= s.residual_tolerance && (inc <= s.increment_tolerance || self.initial <= s.residual_tolerance))
+    }
+
+    /// The relative residual the next linear solve must reach (see the module docs):
+    /// η = 0.9 (r_k / r_{k−1})² (Eisenstat–Walker choice 2, γ = 0.9, α = 2), `FORCING_FIRST`
+    /// for the first solve, at least half the ratio of Newton's tolerance to the current
+    /// residual (no solve more exact than the step needs), within
+    /// [`FORCING_MIN`, `FORCING_MAX`].
+    pub fn linear_tolerance(&self) -> f64 {
+        let r = &self.report.residuals;
+        let current = *r.last().expect("a solve has a starting residual");
+        let eta = match r.len() {
+            0 | 1 => FORCING_FIRST,
+            k => 0.9 * (current / r[k - 2]).powi(2),
+        };
+        let sufficient = 0.5 * self.settings.residual_tolerance / current;
+        let eta = if eta.is_finite() { eta.max(sufficient) } else { FORCING_FIRST };
+        eta.clamp(FORCING_MIN, FORCING_MAX)
     }
 
     /// The failure of a linear solve, with the history so far.

@@ -8,7 +8,7 @@ use loam_explicit::{TimeStep, UpdateScheme};
 use loam_grid::BasisKind;
 use loam_implicit::MassMatrix;
 use loam_model::{AntiLocking, Kinematics};
-use loam_solve::LinearSolverKind;
+use loam_solve::{LinearSolverChoice, LinearSolverKind};
 
 impl From<BasisSpec> for BasisKind {
     fn from(spec: BasisSpec) -> Self {
@@ -39,11 +39,16 @@ impl From<AntiLockingSpec> for AntiLocking {
     }
 }
 
-impl From<LinearSpec> for LinearSolverKind {
+impl From<LinearSpec> for LinearSolverChoice {
     fn from(spec: LinearSpec) -> Self {
         match spec {
-            LinearSpec::Cholesky => LinearSolverKind::Cholesky,
-            LinearSpec::Lu => LinearSolverKind::Lu,
+            LinearSpec::Auto => LinearSolverChoice::Auto,
+            LinearSpec::Direct => LinearSolverChoice::Direct,
+            LinearSpec::Iterative => LinearSolverChoice::Iterative,
+            LinearSpec::Cholesky => LinearSolverChoice::Forced(LinearSolverKind::Cholesky),
+            LinearSpec::Lu => LinearSolverChoice::Forced(LinearSolverKind::Lu),
+            LinearSpec::Cg => LinearSolverChoice::Forced(LinearSolverKind::Cg),
+            LinearSpec::BiCgStab => LinearSolverChoice::Forced(LinearSolverKind::BiCgStab),
         }
     }
 }

@@ -486,7 +486,7 @@ pub struct SolverSpec {
     pub residual_tolerance: f64,
     pub increment_tolerance: f64,
     pub max_iterations: usize,
-    /// `None`: chosen from the tangent's symmetry.
+    /// `None`: `Auto`.
     pub linear: Option<LinearSpec>,
     /// Quasi-static: start each load step from the last increment, scaled (default false).
     pub extrapolate: bool,
@@ -507,8 +507,16 @@ impl Default for SolverSpec {
 
 #[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
 pub enum LinearSpec {
+    /// Direct below a size, iterative above it (the default).
+    Auto,
+    /// Sparse Cholesky or LU, from the tangent.
+    Direct,
+    /// Multigrid-preconditioned CG or BiCGStab, from the tangent.
+    Iterative,
     Cholesky,
     Lu,
+    Cg,
+    BiCgStab,
 }
 
 #[derive(Debug, Clone, Deserialize, PartialEq)]

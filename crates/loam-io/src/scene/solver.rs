@@ -3,13 +3,12 @@
 
 use super::locate::Seg;
 use super::{LoadedScene, SceneError};
-use loam_solve::{LinearSolverKind, NewtonSettings};
+use loam_solve::{LinearSolverChoice, NewtonSettings};
 
 /// The checked solver settings.
 pub(super) struct Solver {
     pub newton: NewtonSettings,
-    /// `None`: chosen from the tangent's symmetry.
-    pub linear_solver: Option<LinearSolverKind>,
+    pub linear_solver: LinearSolverChoice,
     pub extrapolate: bool,
 }
 
@@ -39,6 +38,10 @@ impl LoadedScene {
             max_iterations: sv.max_iterations,
             ..NewtonSettings::default()
         };
-        Ok(Solver { newton, linear_solver: sv.linear.map(Into::into), extrapolate: sv.extrapolate })
+        Ok(Solver {
+            newton,
+            linear_solver: sv.linear.map_or(LinearSolverChoice::Auto, Into::into),
+            extrapolate: sv.extrapolate,
+        })
     }
 }

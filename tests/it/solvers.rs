@@ -1,0 +1,97 @@
+//! The linear solvers inside an analysis: multigrid-preconditioned CG against the sparse
+//! direct solve on a 3D oedometric block (docs/theory.md §19).
+
+use loam::constitutive::Elastic;
+use loam::grid::{BasisKind, Grid};
+use loam::implicit::{Kinematics, Model, PlaneConstraint, QuasiStatic, QuasiStaticSettings};
+use loam::points::{PointStore, Shape};
+use loam::solve::{LinearSolverChoice, LinearSolverKind};
+use nalgebra::Vector3;
+use std::sync::Arc;
+
+const DENSITY: f64 = 2000.0;
+const GRAVITY: f64 = 10.0;
+const POISSON: f64 = 0.3;
+
+/// An `n`-cell cube of elastic soil under gravity on [1, n+1]² × [0, n], in a grid with an
+/// empty cell around it, rollers on its four sides and base: a laterally confined
+/// (oedometric) block.
+fn oedometric_block(n: usize) -> Model<3> {
+    let grid = Grid::new(Vector3::zeros(), Vector3::new(1.0, 1.0, 1.0), [n + 2, n + 2, n + 2]).unwrap();
+    let mut points = PointStore::new();
+    let top = n as f64 + 1.0;
+    let shape = Shape::Box { min: Vector3::new(1.0, 1.0, 0.0), max: Vector3::new(top, top, n as f64) };
+    points.fill(&grid, &shape, 2, DENSITY, 0).unwrap();
+    let constraints = vec![
+        PlaneConstraint::new(2, 0, [false, false, true]),
+        PlaneConstraint::new(0, 1, [true, false, false]),
+        PlaneConstraint::new(0, n + 1, [true, false, false]),
+        PlaneConstraint::new(1, 1, [false, true, false]),
+        PlaneConstraint::new(1, n + 1, [false, true, false]),
+    ];
+    let law = Elastic::new(1e7, POISSON).unwrap();
+    let gravity = Vector3::new(0.0, 0.0, -GRAVITY);
+    Model::new(grid, BasisKind::Gimp, Kinematics::SmallStrain, points, vec![Arc::new(law)], constraints, gravity)
+        .unwrap()
+}
+
+/// One load step with `solver`: the kind taken, the Krylov iterations, and the points'
+/// stresses.
+fn run(n: usize, solver: LinearSolverChoice) -> (LinearSolverKind, usize, Vec<nalgebra::Matrix3<f64>>) {
+    let settings = QuasiStaticSettings { load_steps: 1, linear_solver: solver, ..Default::default() };
+    let mut qs = QuasiStatic::new(oedometric_block(n), settings);
+    let report = qs.step().unwrap();
+    (qs.linear_solver_kind(), report.linear_iterations, qs.model().points().stress.clone())
+}
+
+/// e_σ = ‖σ_h − σ‖ / ‖σ‖ over the points, σ_zz = −ρ g (H − z), σ_xx = σ_yy = ν/(1−ν) σ_zz.
+fn stress_error(n: usize, stress: &[nalgebra::Matrix3<f64>]) -> f64 {
+    let model = oedometric_block(n);
+    let (mut num, mut den) = (0.0, 0.0);
+    for (s, x) in stress.iter().zip(&model.points().position) {
+        let szz = -DENSITY * GRAVITY * (n as f64 - x[2]);
+        let sxx = POISSON / (1.0 - POISSON) * szz;
+        let exact = nalgebra::Matrix3::from_diagonal(&Vector3::new(sxx, sxx, szz));
+        num += (s - exact).norm_squared();
+        den += exact.norm_squared();
+    }
+    (num / den).sqrt()
+}
+
+#[test]
+fn multigrid_cg_gives_the_direct_solvers_oedometric_stresses() {
+    let n = 8;
+    let (direct_kind, direct_its, direct) = run(n, LinearSolverChoice::Direct);
+    let (cg_kind, cg_its, cg) = run(n, LinearSolverChoice::Iterative);
+    assert_eq!((direct_kind, cg_kind), (LinearSolverKind::Cholesky, LinearSolverKind::Cg));
+    assert_eq!(direct_its, 0);
+    assert!(cg_its > 0);
+    let (e_direct, e_cg) = (stress_error(n, &direct), stress_error(n, &cg));
+    // Both converge Newton to the relative residual 1e-9 of the same discrete problem:
+    // their stresses may differ by the unsolved residual only, far below the spatial error.
+    let scale = direct.iter().map(|s| s.norm()).fold(0.0, f64::max);
+    let diff = direct.iter().zip(&cg).map(|(a, b)| (a - b).norm()).fold(0.0, f64::max);
+    assert!(diff < 1e-6 * scale, "stresses differ by {diff:e} (scale {scale:e})");
+    assert!((e_direct - e_cg).abs() < 1e-6 * e_direct, "e_sigma {e_direct:e} (direct) and {e_cg:e} (CG)");
+    // And they approach the closed form under refinement (its rate is the V1 column's
+    // business, docs/verification.md §V1): the error at 8 cells is below that at 4.
+    let e_coarse = stress_error(4, &run(4, LinearSolverChoice::Iterative).2);
+    assert!(e_cg < e_coarse, "e_sigma {e_cg:e} at 8 cells, {e_coarse:e} at 4");
+}
+
+#[test]
+fn the_automatic_choice_turns_to_multigrid_in_3d_above_its_size() {
+    // 8 cells: 2 187 dofs, below the 5 000 of the automatic choice; 12 cells: 6 591.
+    assert_eq!(run(8, LinearSolverChoice::Auto).0, LinearSolverKind::Cholesky);
+    assert_eq!(run(12, LinearSolverChoice::Auto).0, LinearSolverKind::Cg);
+}
+
+#[test]
+fn multigrid_cg_gives_the_same_numbers_on_one_and_two_threads() {
+    // Every reduction has a fixed order, the coarsest LU runs on one thread: bitwise equal.
+    let on = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| run(6, LinearSolverChoice::Iterative).2)
+    };
+    assert!(on(1) == on(2));
+}

@@ -1,0 +1,138 @@
+//! `cargo xtask scale`: the cost of one quasi-static step of an elastic block under gravity
+//! (GIMP, finite strain, 2 points per cell and axis, rollers on the sides, fixed base; 2D or
+//! 3D) at several sizes, with each linear solver: time per Newton iteration, its phases, and the
+//! peak memory of the process. Each size runs in a child process so that its peak memory
+//! is its own.
+
+use anyhow::{bail, Context, Result};
+use loam::constitutive::Elastic;
+use loam::grid::{BasisKind, Grid};
+use loam::implicit::{Kinematics, Model, PlaneConstraint, QuasiStatic, QuasiStaticSettings};
+use loam::points::{PointStore, Shape};
+use loam::solve::LinearSolverChoice;
+use nalgebra::{Vector2, Vector3};
+use std::sync::Arc;
+use std::time::Instant;
+
+/// The elastic block of `n` cells a side in 3D: grid of n+2 cells in x and y (an empty
+/// column each side) and n+2 in z (room above), the body on [1, n+1]² × [0, n].
+pub fn block3d(n: usize) -> Result<Model<3>> {
+    let grid = Grid::new(Vector3::zeros(), Vector3::new(1.0, 1.0, 1.0), [n + 2, n + 2, n + 2])?;
+    let mut points = PointStore::new();
+    let max = n as f64 + 1.0;
+    let shape = Shape::Box { min: Vector3::new(1.0, 1.0, 0.0), max: Vector3::new(max, max, n as f64) };
+    points.fill(&grid, &shape, 2, 2000.0, 0)?;
+    let law = Elastic::new(1e7, 0.3)?;
+    let constraints = vec![
+        PlaneConstraint::new(2, 0, [true, true, true]),
+        PlaneConstraint::new(0, 1, [true, false, false]),
+        PlaneConstraint::new(0, n + 1, [true, false, false]),
+        PlaneConstraint::new(1, 1, [false, true, false]),
+        PlaneConstraint::new(1, n + 1, [false, true, false]),
+    ];
+    Ok(Model::new(
+        grid,
+        BasisKind::Gimp,
+        Kinematics::FiniteStrain,
+        points,
+        vec![Arc::new(law)],
+        constraints,
+        Vector3::new(0.0, 0.0, -10.0),
+    )?)
+}
+
+/// The 2D block of `n` cells a side: grid of n+2 cells each way, the body on
+/// [1, n+1] × [0, n], rollers on its sides, fixed base.
+pub fn block2d(n: usize) -> Result<Model<2>> {
+    let grid = Grid::new(Vector2::zeros(), Vector2::new(1.0, 1.0), [n + 2, n + 2])?;
+    let mut points = PointStore::new();
+    let shape = Shape::Box { min: Vector2::new(1.0, 0.0), max: Vector2::new(n as f64 + 1.0, n as f64) };
+    points.fill(&grid, &shape, 2, 2000.0, 0)?;
+    let law = Elastic::new(1e7, 0.3)?;
+    let constraints = vec![
+        PlaneConstraint::new(1, 0, [true, true, false]),
+        PlaneConstraint::new(0, 1, [true, false, false]),
+        PlaneConstraint::new(0, n + 1, [true, false, false]),
+    ];
+    Ok(Model::new(
+        grid,
+        BasisKind::Gimp,
+        Kinematics::FiniteStrain,
+        points,
+        vec![Arc::new(law)],
+        constraints,
+        Vector2::new(0.0, -10.0),
+    )?)
+}
+
+/// Peak resident memory of this process so far (VmHWM), in bytes.
+fn peak_memory() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}
+
+/// One size in this process: build, profile one iteration, run one load step; print one
+/// line of figures.
+pub fn run_one(dim: usize, n: usize, solver: LinearSolverChoice) -> Result<()> {
+    match dim {
+        2 => run_model(n, block2d(n)?, solver),
+        3 => run_model(n, block3d(n)?, solver),
+        _ => bail!("--dim {dim}: expected 2 or 3"),
+    }
+}
+
+fn run_model<const D: usize>(n: usize, model: Model<D>, solver: LinearSolverChoice) -> Result<()> {
+    let t = Instant::now();
+    let points = model.points().len();
+    let build = t.elapsed().as_secs_f64();
+    let mut qs =
+        QuasiStatic::new(model, QuasiStaticSettings { load_steps: 1, linear_solver: solver, ..Default::default() });
+    let p = qs.profile_iteration()?;
+    let t = Instant::now();
+    let report = qs.step()?;
+    let step = t.elapsed().as_secs_f64();
+    let mem = peak_memory().map_or(f64::NAN, |b| b as f64 / 1e9);
+    println!(
+        "{n}^{D} {} | {points} points | {} dofs | {} nnz | build {build:.2} s | connect {:.2} | points+residual {:.2} | assembly {:.2} | symbolic {:.2} | numeric {:.2} | solve {:.2} ({} Krylov) | step {step:.2} s, {} Newton iterations ({} Krylov), {:.2} s per iteration, residuals {:?} | peak {mem:.2} GB",
+        qs.linear_solver_kind(),
+        p.dofs,
+        p.nonzeros,
+        p.connectivity.as_secs_f64(),
+        p.points_and_residual.as_secs_f64(),
+        p.assembly.as_secs_f64(),
+        p.symbolic.as_secs_f64(),
+        p.numeric.as_secs_f64(),
+        p.solve.as_secs_f64(),
+        p.krylov_iterations,
+        report.iterations,
+        report.linear_iterations,
+        step / report.iterations.max(1) as f64,
+        report.residuals.iter().map(|r| format!("{r:.1e}")).collect::<Vec<_>>(),
+    );
+    Ok(())
+}
+
+/// Every size in a child process of its own.
+pub fn run(dim: usize, cells: &[usize], solver: &str) -> Result<()> {
+    let choice = match solver {
+        "auto" => LinearSolverChoice::Auto,
+        "direct" => LinearSolverChoice::Direct,
+        "iterative" => LinearSolverChoice::Iterative,
+        other => bail!("--solver {other}: expected auto, direct or iterative"),
+    };
+    if let [n] = cells {
+        return run_one(dim, *n, choice);
+    }
+    let exe = std::env::current_exe().context("locating xtask")?;
+    for n in cells {
+        let status = std::process::Command::new(&exe)
+            .args(["scale", "--dim", &dim.to_string(), "--solver", solver, "--cells", &n.to_string()])
+            .status()?;
+        if !status.success() {
+            bail!("scale: {n}^{dim} failed");
+        }
+    }
+    Ok(())
+}
