@@ -8,14 +8,10 @@
 //!   numeric factorisation + solve), target ≤ 2 s. The phase split is printed first.
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use loam::constitutive::Elastic;
-use loam::grid::{BasisKind, Grid};
-use loam::implicit::{Kinematics, Model, PlaneConstraint, QuasiStatic, QuasiStaticSettings};
-use loam::points::{PointStore, Shape};
-use loam_verification::{column_model, Column};
-use nalgebra::Vector2;
+use loam::grid::BasisKind;
+use loam::implicit::{Kinematics, QuasiStatic, QuasiStaticSettings};
+use loam_verification::{column_model, elastic_block, Column};
 use std::hint::black_box;
-use std::sync::Arc;
 
 fn column(c: &mut Criterion) {
     let col = Column::V1C;
@@ -32,26 +28,7 @@ fn column(c: &mut Criterion) {
 }
 
 fn block(n: usize) -> QuasiStatic<2> {
-    let grid = Grid::new(Vector2::zeros(), Vector2::new(1.0, 1.0), [n + 2, n + 2]).unwrap();
-    let mut points = PointStore::new();
-    let shape = Shape::Box { min: Vector2::new(1.0, 0.0), max: Vector2::new(n as f64 + 1.0, n as f64) };
-    points.fill(&grid, &shape, 2, 2000.0, 0).unwrap();
-    let law = Elastic::new(1e7, 0.3).unwrap();
-    let constraints = vec![
-        PlaneConstraint::new(1, 0, [true, true, false]),
-        PlaneConstraint::new(0, 1, [true, false, false]),
-        PlaneConstraint::new(0, n + 1, [true, false, false]),
-    ];
-    let m = Model::new(
-        grid,
-        BasisKind::Gimp,
-        Kinematics::FiniteStrain,
-        points,
-        vec![Arc::new(law)],
-        constraints,
-        Vector2::new(0.0, -10.0),
-    )
-    .unwrap();
+    let m = elastic_block::<2>(n, Kinematics::FiniteStrain, true);
     QuasiStatic::new(m, QuasiStaticSettings { load_steps: 1, ..Default::default() })
 }
 

@@ -1,38 +1,15 @@
 //! The linear solvers inside an analysis: multigrid-preconditioned CG against the sparse
 //! direct solve on a 3D oedometric block (docs/theory.md §19).
 
-use loam::constitutive::Elastic;
-use loam::grid::{BasisKind, Grid};
-use loam::implicit::{Kinematics, Model, PlaneConstraint, QuasiStatic, QuasiStaticSettings};
-use loam::points::{PointStore, Shape};
+use loam::implicit::{Kinematics, Model, QuasiStatic, QuasiStaticSettings};
 use loam::solve::{LinearSolverChoice, LinearSolverKind};
+use loam_verification::block::{BLOCK_DENSITY, BLOCK_GRAVITY, BLOCK_POISSON};
+use loam_verification::elastic_block;
 use nalgebra::Vector3;
-use std::sync::Arc;
 
-const DENSITY: f64 = 2000.0;
-const GRAVITY: f64 = 10.0;
-const POISSON: f64 = 0.3;
-
-/// An `n`-cell cube of elastic soil under gravity on [1, n+1]² × [0, n], in a grid with an
-/// empty cell around it, rollers on its four sides and base: a laterally confined
-/// (oedometric) block.
+/// The laterally confined block of `n` cells (roller base), in small strain.
 fn oedometric_block(n: usize) -> Model<3> {
-    let grid = Grid::new(Vector3::zeros(), Vector3::new(1.0, 1.0, 1.0), [n + 2, n + 2, n + 2]).unwrap();
-    let mut points = PointStore::new();
-    let top = n as f64 + 1.0;
-    let shape = Shape::Box { min: Vector3::new(1.0, 1.0, 0.0), max: Vector3::new(top, top, n as f64) };
-    points.fill(&grid, &shape, 2, DENSITY, 0).unwrap();
-    let constraints = vec![
-        PlaneConstraint::new(2, 0, [false, false, true]),
-        PlaneConstraint::new(0, 1, [true, false, false]),
-        PlaneConstraint::new(0, n + 1, [true, false, false]),
-        PlaneConstraint::new(1, 1, [false, true, false]),
-        PlaneConstraint::new(1, n + 1, [false, true, false]),
-    ];
-    let law = Elastic::new(1e7, POISSON).unwrap();
-    let gravity = Vector3::new(0.0, 0.0, -GRAVITY);
-    Model::new(grid, BasisKind::Gimp, Kinematics::SmallStrain, points, vec![Arc::new(law)], constraints, gravity)
-        .unwrap()
+    elastic_block::<3>(n, Kinematics::SmallStrain, false)
 }
 
 /// One load step with `solver`: the kind taken, the Krylov iterations, and the points'
@@ -49,8 +26,8 @@ fn stress_error(n: usize, stress: &[nalgebra::Matrix3<f64>]) -> f64 {
     let model = oedometric_block(n);
     let (mut num, mut den) = (0.0, 0.0);
     for (s, x) in stress.iter().zip(&model.points().position) {
-        let szz = -DENSITY * GRAVITY * (n as f64 - x[2]);
-        let sxx = POISSON / (1.0 - POISSON) * szz;
+        let szz = -BLOCK_DENSITY * BLOCK_GRAVITY * (n as f64 - x[2]);
+        let sxx = BLOCK_POISSON / (1.0 - BLOCK_POISSON) * szz;
         let exact = nalgebra::Matrix3::from_diagonal(&Vector3::new(sxx, sxx, szz));
         num += (s - exact).norm_squared();
         den += exact.norm_squared();

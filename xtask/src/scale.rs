@@ -5,65 +5,10 @@
 //! is its own.
 
 use anyhow::{bail, Context, Result};
-use loam::constitutive::Elastic;
-use loam::grid::{BasisKind, Grid};
-use loam::implicit::{Kinematics, Model, PlaneConstraint, QuasiStatic, QuasiStaticSettings};
-use loam::points::{PointStore, Shape};
+use loam::implicit::{Kinematics, Model, QuasiStatic, QuasiStaticSettings};
 use loam::solve::LinearSolverChoice;
-use nalgebra::{Vector2, Vector3};
-use std::sync::Arc;
+use loam_verification::elastic_block;
 use std::time::Instant;
-
-/// The elastic block of `n` cells a side in 3D: grid of n+2 cells in x and y (an empty
-/// column each side) and n+2 in z (room above), the body on [1, n+1]² × [0, n].
-pub fn block3d(n: usize) -> Result<Model<3>> {
-    let grid = Grid::new(Vector3::zeros(), Vector3::new(1.0, 1.0, 1.0), [n + 2, n + 2, n + 2])?;
-    let mut points = PointStore::new();
-    let max = n as f64 + 1.0;
-    let shape = Shape::Box { min: Vector3::new(1.0, 1.0, 0.0), max: Vector3::new(max, max, n as f64) };
-    points.fill(&grid, &shape, 2, 2000.0, 0)?;
-    let law = Elastic::new(1e7, 0.3)?;
-    let constraints = vec![
-        PlaneConstraint::new(2, 0, [true, true, true]),
-        PlaneConstraint::new(0, 1, [true, false, false]),
-        PlaneConstraint::new(0, n + 1, [true, false, false]),
-        PlaneConstraint::new(1, 1, [false, true, false]),
-        PlaneConstraint::new(1, n + 1, [false, true, false]),
-    ];
-    Ok(Model::new(
-        grid,
-        BasisKind::Gimp,
-        Kinematics::FiniteStrain,
-        points,
-        vec![Arc::new(law)],
-        constraints,
-        Vector3::new(0.0, 0.0, -10.0),
-    )?)
-}
-
-/// The 2D block of `n` cells a side: grid of n+2 cells each way, the body on
-/// [1, n+1] × [0, n], rollers on its sides, fixed base.
-pub fn block2d(n: usize) -> Result<Model<2>> {
-    let grid = Grid::new(Vector2::zeros(), Vector2::new(1.0, 1.0), [n + 2, n + 2])?;
-    let mut points = PointStore::new();
-    let shape = Shape::Box { min: Vector2::new(1.0, 0.0), max: Vector2::new(n as f64 + 1.0, n as f64) };
-    points.fill(&grid, &shape, 2, 2000.0, 0)?;
-    let law = Elastic::new(1e7, 0.3)?;
-    let constraints = vec![
-        PlaneConstraint::new(1, 0, [true, true, false]),
-        PlaneConstraint::new(0, 1, [true, false, false]),
-        PlaneConstraint::new(0, n + 1, [true, false, false]),
-    ];
-    Ok(Model::new(
-        grid,
-        BasisKind::Gimp,
-        Kinematics::FiniteStrain,
-        points,
-        vec![Arc::new(law)],
-        constraints,
-        Vector2::new(0.0, -10.0),
-    )?)
-}
 
 /// Peak resident memory of this process so far (VmHWM), in bytes.
 fn peak_memory() -> Option<u64> {
@@ -77,8 +22,8 @@ fn peak_memory() -> Option<u64> {
 /// line of figures.
 pub fn run_one(dim: usize, n: usize, solver: LinearSolverChoice) -> Result<()> {
     match dim {
-        2 => run_model(n, block2d(n)?, solver),
-        3 => run_model(n, block3d(n)?, solver),
+        2 => run_model(n, elastic_block::<2>(n, Kinematics::FiniteStrain, true), solver),
+        3 => run_model(n, elastic_block::<3>(n, Kinematics::FiniteStrain, true), solver),
         _ => bail!("--dim {dim}: expected 2 or 3"),
     }
 }

@@ -15,13 +15,14 @@
 //! - [`water`]: V7, columns under a water table and submerged;
 //! - [`hard_cases`]: where implicit MPM usually breaks (softening, small cuts, ...).
 //!
-//! Shared tools: [`dynamics`] (time histories and the periods measured from them),
+//! Shared tools: [`block`] (the elastic block that sizes the solvers), [`dynamics`] (time histories and the periods measured from them),
 //! [`conditioning`] (condition numbers of small tangents), [`bound`] (what a bound is).
 //!
 //! Not published: it exists for loam's own verification, and its builders `expect` valid
 //! input rather than returning errors.
 
 pub mod bar;
+pub mod block;
 pub mod bound;
 pub mod column;
 pub mod conditioning;
@@ -34,6 +35,7 @@ pub mod slope;
 pub mod water;
 
 pub use bar::{BarErrors, VibratingBar};
+pub use block::elastic_block;
 pub use bound::{Bound, BoundKind};
 pub use column::{
     column_errors, column_fem_model, column_model, column_model_with_spare_cells, column_stress_error, lambert_w0,

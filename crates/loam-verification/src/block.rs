@@ -1,0 +1,43 @@
+//! The elastic block under gravity that sizes the solvers (docs/theory.md §19): `n` cells
+//! a side in 2D or 3D, two points per cell and axis, GIMP, on [1, n+1]^(D−1) × [0, n] in a
+//! grid with an empty cell beside and above it, rollers on its vertical sides and a base
+//! that is either fixed or a roller. With the roller base it is laterally confined:
+//! σ_v = −ρ g (H − z), σ_h = ν/(1−ν) σ_v in small strain.
+
+use loam_constitutive::Elastic;
+use loam_grid::{BasisKind, Grid};
+use loam_model::{Kinematics, Model, PlaneConstraint};
+use loam_points::{PointStore, Shape};
+use nalgebra::SVector;
+use std::sync::Arc;
+
+/// The block's density, gravity (along the last axis, downwards), Young's modulus and
+/// Poisson's ratio (SI: kg/m³, m/s², Pa; cells of 1 m).
+pub const BLOCK_DENSITY: f64 = 2000.0;
+pub const BLOCK_GRAVITY: f64 = 10.0;
+pub const BLOCK_YOUNG: f64 = 1e7;
+pub const BLOCK_POISSON: f64 = 0.3;
+
+/// The block of `n` cells a side; `fixed_base` holds the base in every direction, else
+/// only vertically.
+pub fn elastic_block<const D: usize>(n: usize, kinematics: Kinematics, fixed_base: bool) -> Model<D> {
+    let grid = Grid::new(SVector::zeros(), SVector::repeat(1.0), [n + 2; D]).expect("valid block grid");
+    let mut points = PointStore::new();
+    let v = D - 1;
+    let min = SVector::<f64, D>::from_fn(|a, _| if a == v { 0.0 } else { 1.0 });
+    let max = SVector::<f64, D>::from_fn(|a, _| if a == v { n as f64 } else { n as f64 + 1.0 });
+    points.fill(&grid, &Shape::Box { min, max }, 2, BLOCK_DENSITY, 0).expect("the block lies in its grid");
+    let mut base = [fixed_base; 3];
+    base[v] = true;
+    let mut constraints = vec![PlaneConstraint::new(v, 0, base)];
+    for a in 0..v {
+        let mut roller = [false; 3];
+        roller[a] = true;
+        constraints.push(PlaneConstraint::new(a, 1, roller));
+        constraints.push(PlaneConstraint::new(a, n + 1, roller));
+    }
+    let law = Elastic::new(BLOCK_YOUNG, BLOCK_POISSON).expect("valid elastic constants");
+    let gravity = SVector::<f64, D>::from_fn(|a, _| if a == v { -BLOCK_GRAVITY } else { 0.0 });
+    Model::new(grid, BasisKind::Gimp, kinematics, points, vec![Arc::new(law)], constraints, gravity)
+        .expect("valid block model")
+}
