@@ -72,3 +72,31 @@ fn multigrid_cg_gives_the_same_numbers_on_one_and_two_threads() {
     };
     assert!(on(1) == on(2));
 }
+
+/// Near a plastic mechanism multigrid CG does not converge (docs/theory.md §19): on the von
+/// Mises footing's second load step its residual grows. The correction is then solved by
+/// sparse LU, and the run follows the direct solver's: the same Newton residuals, to the
+/// forcing term's four digits, and the same reactions.
+#[test]
+fn a_failed_krylov_solve_falls_back_on_the_direct_solver() {
+    let path = std::path::Path::new("examples/footing_von_mises.ron");
+    let source = std::fs::read_to_string(path).unwrap();
+    let run = |linear: &str| {
+        let text = source.replace("solver: (", &format!("solver: (linear: Some({linear}), "));
+        let scene = loam::io::LoadedScene::parse(path, text).unwrap();
+        let mut analysis = scene.build::<2>().unwrap();
+        (0..4).map(|_| analysis.step().unwrap()).collect::<Vec<_>>()
+    };
+    let (direct, iterative) = (run("Direct"), run("Iterative"));
+    for (d, i) in direct.iter().zip(&iterative) {
+        assert_eq!(d.iterations, i.iterations, "Newton iterations of step {}", d.step);
+        for (a, b) in d.reactions.iter().zip(&i.reactions) {
+            for k in 0..2 {
+                // Newton's tolerance 1e-9 bounds both residuals; the reactions are sums of them.
+                assert!((a[k] - b[k]).abs() <= 1e-6 * a[k].abs().max(1.0), "step {}: {a:?} against {b:?}", d.step);
+            }
+        }
+    }
+    assert!(iterative.iter().any(|p| p.linear_iterations > 0));
+    assert!(iterative.iter().any(|p| p.direct_fallbacks > 0), "the second step's solve falls back");
+}

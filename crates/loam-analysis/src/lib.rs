@@ -56,6 +56,9 @@ pub struct Progress {
     pub linear_iterations: usize,
     /// Time the linear solvers took to prepare (factorisations, or multigrid set-up).
     pub linear_setup: Duration,
+    /// Corrections whose Krylov solve failed and were solved by sparse LU instead, over
+    /// all the step's attempts (converged or cut back).
+    pub direct_fallbacks: usize,
     pub substeps: usize,
     pub cutbacks: usize,
     /// Relative residual at convergence (NaN for explicit steps, which have none).
@@ -79,6 +82,7 @@ impl Progress {
             iterations: r.iterations,
             linear_iterations: r.linear_iterations,
             linear_setup: r.linear_setup,
+            direct_fallbacks: r.direct_fallbacks,
             substeps: r.substeps,
             cutbacks: r.cutbacks,
             final_residual: r.final_residual(),
@@ -211,6 +215,7 @@ impl<const D: usize> Analysis<D> {
                     iterations: 0,
                     linear_iterations: 0,
                     linear_setup: Duration::ZERO,
+                    direct_fallbacks: 0,
                     substeps: 1,
                     cutbacks: 0,
                     final_residual: f64::NAN,

@@ -35,6 +35,7 @@ struct Tally {
     iterations: usize,
     linear_iterations: usize,
     linear_setup: std::time::Duration,
+    direct_fallbacks: usize,
     /// Relative residuals of the last sub-step.
     residuals: Vec<f64>,
     /// Relative residuals of the converged sub-step with the most corrections.
@@ -61,6 +62,7 @@ impl CutBack {
         done.iterations += report.iterations();
         done.linear_iterations += report.linear_iterations;
         done.linear_setup += std::time::Duration::from_secs_f64(report.linear_setup_s);
+        done.direct_fallbacks += report.direct_fallbacks;
         if report.residuals.len() > done.hardest_residuals.len() {
             done.hardest_residuals.clone_from(&report.residuals);
         }
@@ -74,17 +76,20 @@ impl CutBack {
     }
 
     /// An attempt of step `step` from `position` to `load_factor` failed for `reason`
-    /// with the residual history `residuals`: cut the step back, or stop with
-    /// `NotConverged` once it was already at its smallest size.
+    /// with the report `report` (its residual history, and the direct fallbacks it took):
+    /// cut the step back, or stop with `NotConverged` once it was already at its smallest
+    /// size.
     pub fn failed(
         &mut self,
         step: usize,
         position: f64,
         load_factor: f64,
         reason: String,
-        residuals: &[f64],
+        report: &NewtonReport,
     ) -> Result<(), StepError> {
+        let residuals = &report.residuals;
         self.done.cutbacks += 1;
+        self.done.direct_fallbacks += report.direct_fallbacks;
         self.streak = 0;
         // A cut-back is the step control doing its job (the run log and the progress
         // count them; strength reduction fails trials on purpose), so it is information,
@@ -122,6 +127,7 @@ impl CutBack {
                 newton_iterations = done.iterations,
                 krylov_iterations = done.linear_iterations,
                 setup_s = done.linear_setup.as_secs_f64(),
+                direct_fallbacks = done.direct_fallbacks,
                 "iterative linear solves"
             );
         }
@@ -134,6 +140,7 @@ impl CutBack {
             iterations: done.iterations,
             linear_iterations: done.linear_iterations,
             linear_setup: done.linear_setup,
+            direct_fallbacks: done.direct_fallbacks,
             residuals: done.residuals,
             hardest_residuals: done.hardest_residuals,
             active_nodes: done.active_nodes,
@@ -163,7 +170,13 @@ mod tests {
             if holds(size) {
                 position = to;
                 control.converged(converged(3), 10);
-            } else if let Err(e) = control.failed(1, position, to, "too big".into(), &[1.0, 2.0]) {
+            } else if let Err(e) = control.failed(
+                1,
+                position,
+                to,
+                "too big".into(),
+                &NewtonReport { residuals: vec![1.0, 2.0], ..Default::default() },
+            ) {
                 return (tried, Err(e));
             }
         }

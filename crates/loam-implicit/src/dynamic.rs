@@ -204,7 +204,7 @@ impl<const D: usize> Dynamic<D> {
                 Ok(report) => control.converged(report, self.engine.conn.active_nodes().len()),
                 Err(e) => {
                     let reason = format!("at time {:.6e} with time step {h:.3e}: {e}", self.time);
-                    control.failed(step, self.time, 1.0, reason, &e.report().residuals)?
+                    control.failed(step, self.time, 1.0, reason, e.report())?
                 }
             }
         }

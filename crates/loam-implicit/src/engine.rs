@@ -19,7 +19,7 @@ use loam_kernels::{
 use loam_model::{Kinematics, LoadLevel, Model};
 use loam_solve::{
     norm, BlockPattern, LinearSolveError, LinearSolver, LinearSolverChoice, LinearSolverKind, LinearSystem,
-    NewtonControl, NewtonError, NewtonReport, NewtonSettings, NodeLattice,
+    NewtonControl, NewtonError, NewtonReport, NewtonSettings, NodeLattice, SparseDirectSolver,
 };
 use nalgebra::SVector;
 use rayon::prelude::*;
@@ -67,6 +67,10 @@ pub(crate) struct Engine<const D: usize> {
     trial: TrialState<D>,
     newton: NewtonSettings,
     linear: Box<dyn LinearSolver>,
+    /// The direct solver an iterative one falls back on when a Krylov solve fails (made on
+    /// the first failure, below `DIRECT_FALLBACK_MAX_DOFS`), and how often it did.
+    fallback: Option<SparseDirectSolver>,
+    fallbacks: usize,
     /// What the settings asked, resolved against the size of the first connectivity.
     linear_choice: LinearSolverChoice,
     linear_resolved: bool,
@@ -80,6 +84,11 @@ pub(crate) struct Engine<const D: usize> {
 /// the measured crossover (3 000 to 4 000 dofs); in 2D well above it (8 000), so that the
 /// plastic 2D problems, where the iterative solver is not yet verified, keep the direct one.
 const ITERATIVE_FROM_DOFS: [usize; 3] = [usize::MAX, 100_000, 5_000];
+
+/// A failed Krylov solve is repeated by sparse LU up to this many dofs, by dimension: about
+/// 4 GB of factor in 3D (32³ cells took 3 GB with Cholesky), far less in 2D. Above it the
+/// step is cut back.
+const DIRECT_FALLBACK_MAX_DOFS: [usize; 3] = [usize::MAX, 2_000_000, 120_000];
 
 impl<const D: usize> Engine<D> {
     /// The linear solver is the one asked for, or chosen from the tangent: Cholesky when
@@ -123,6 +132,8 @@ impl<const D: usize> Engine<D> {
             trial: TrialState::default(),
             newton,
             linear: kind.solver(),
+            fallback: None,
+            fallbacks: 0,
             linear_choice,
             linear_resolved: false,
             lattice: None,
@@ -295,8 +306,9 @@ impl<const D: usize> Engine<D> {
         loop {
             newton.next_iteration()?;
             self.assemble(inertia.as_deref());
+            let fallbacks = self.fallbacks;
             let (iterations, setup) = self.solve(newton.linear_tolerance()).map_err(|e| newton.linear_failure(e))?;
-            newton.linear_solved(iterations, setup);
+            newton.linear_solved(iterations, setup, self.fallbacks > fallbacks);
             newton.corrected(norm(&self.correction), norm(&self.du));
             let reference =
                 self.update_points_and_residual(inertia.as_deref_mut()).map_err(|e| newton.problem_failure(e))?;
@@ -380,7 +392,18 @@ impl<const D: usize> Engine<D> {
         for (b, r) in self.rhs.iter_mut().zip(&self.residual) {
             *b = -r;
         }
-        let stats = self.linear.solve(&self.rhs, &mut self.correction, tolerance)?;
+        let stats = match self.linear.solve(&self.rhs, &mut self.correction, tolerance) {
+            Err(e @ (LinearSolveError::NotConverged(_) | LinearSolveError::NotPositiveDefinite(_)))
+                if self.linear.kind().is_iterative() && self.num_dofs() <= DIRECT_FALLBACK_MAX_DOFS[D - 1] =>
+            {
+                tracing::warn!(error = %e, "the Krylov solve failed; solving this correction by sparse LU");
+                self.fallbacks += 1;
+                let direct = self.fallback.get_or_insert_with(|| SparseDirectSolver::new(LinearSolverKind::Lu));
+                direct.prepare(&system)?;
+                direct.solve(&self.rhs, &mut self.correction, tolerance)?
+            }
+            result => result?,
+        };
         for (u, c) in self.du.iter_mut().zip(&self.correction) {
             *u += c;
         }

@@ -124,7 +124,7 @@ impl<const D: usize> QuasiStatic<D> {
             let lambda = (self.load_factor + size).min(target);
             match self.attempt(lambda) {
                 Ok(report) => control.converged(report, self.engine.conn.active_nodes().len()),
-                Err(e) => control.failed(step, self.load_factor, lambda, e.to_string(), &e.report().residuals)?,
+                Err(e) => control.failed(step, self.load_factor, lambda, e.to_string(), e.report())?,
             }
         }
         self.step = step;

@@ -22,6 +22,9 @@ pub struct StepReport {
     pub linear_iterations: usize,
     /// Time their linear solvers took to prepare (factorisations, or multigrid set-up).
     pub linear_setup: Duration,
+    /// Corrections whose Krylov solve failed and were solved by sparse LU instead, over
+    /// all the step's attempts (converged or cut back).
+    pub direct_fallbacks: usize,
     /// Relative residuals of the last sub-step, before the first and after each correction.
     pub residuals: Vec<f64>,
     /// Relative residuals of the converged sub-step with the most corrections (the first

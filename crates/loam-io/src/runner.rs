@@ -220,7 +220,7 @@ struct RunLog {
 const AXES: [&str; 3] = ["x", "y", "z"];
 
 impl RunLog {
-    const COLUMNS: [&'static str; 13] = [
+    const COLUMNS: [&'static str; 14] = [
         "step",
         "time",
         "load_factor",
@@ -230,6 +230,7 @@ impl RunLog {
         "iterations",
         "krylov_iterations",
         "solver_setup_s",
+        "direct_fallbacks",
         "final_residual",
         "active_nodes",
         "dofs",
@@ -267,6 +268,7 @@ impl RunLog {
             CsvCell::Int(r.iterations as i64),
             CsvCell::Int(r.linear_iterations as i64),
             CsvCell::Float(r.linear_setup.as_secs_f64()),
+            CsvCell::Int(r.direct_fallbacks as i64),
             CsvCell::Float(r.final_residual),
             CsvCell::Int(r.active_nodes as i64),
             CsvCell::Int(r.dofs as i64),

@@ -38,6 +38,9 @@ const SMOOTHER_DEGREE: usize = 2;
 /// The Chebyshev interval, as fractions of the bound on λ_max.
 const CHEBYSHEV_INTERVAL: (f64, f64) = (0.1, 1.0);
 
+/// Per node, its coarse parents (coarse node, interpolation weight).
+type Parents = Vec<Vec<(u32, f64)>>;
+
 /// Integer lattice coordinates of nodes (unused axes zero). See the module docs.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct NodeLattice {
@@ -57,10 +60,26 @@ impl NodeLattice {
         self.coords.is_empty()
     }
 
-    /// The coarse lattice (every other node per axis) and, per node of this one, its coarse
-    /// parents with their interpolation weights.
-    fn coarsen(&self) -> (NodeLattice, Vec<Vec<(u32, f64)>>) {
-        let parents_of = |c: &[u32; 3]| -> Vec<([u32; 3], f64)> {
+    /// The coarse lattice — the nodes of this one at even coordinates, halved — and, per
+    /// node of this one, its coarse parents with their interpolation weights, and per coarse
+    /// node the node of this one it sits on.
+    ///
+    /// A coarse node exists only where a fine node does, so every column of P holds a 1 on
+    /// a row no other column touches: P has full column rank and PᵀKP is positive definite
+    /// with K. (Coarse nodes placed wherever a fine node had a parent can, at the edges of
+    /// the material, share their only fine node: identical columns, a singular coarse
+    /// operator.) Where a parent is
+    /// missing (beyond the material), the weights of those present are scaled to sum to 1,
+    /// so constants are still interpolated.
+    fn coarsen(&self) -> (NodeLattice, Parents, Vec<u32>) {
+        // Coarse nodes in lexicographic order, last axis slowest, as the grid numbers them.
+        let key = |c: &[u32; 3]| [c[2], c[1], c[0]];
+        let mut coarse: Vec<([u32; 3], u32)> = (self.coords.iter().enumerate())
+            .filter(|(_, c)| c.iter().all(|x| x % 2 == 0))
+            .map(|(f, c)| (key(&c.map(|x| x / 2)), f as u32))
+            .collect();
+        coarse.par_sort_unstable();
+        let parents_of = |c: &[u32; 3]| -> Vec<(u32, f64)> {
             let mut out = vec![([0u32; 3], 1.0)];
             for (axis, &x) in c.iter().enumerate() {
                 let options: &[(u32, f64)] =
@@ -76,20 +95,17 @@ impl NodeLattice {
                     })
                     .collect();
             }
-            out
+            let present: Vec<(u32, f64)> = out
+                .iter()
+                .filter_map(|(q, w)| coarse.binary_search_by(|e| e.0.cmp(&key(q))).ok().map(|i| (i as u32, *w)))
+                .collect();
+            let total: f64 = present.iter().map(|p| p.1).sum();
+            present.into_iter().map(|(i, w)| (i, w / total)).collect()
         };
-        let fine: Vec<Vec<([u32; 3], f64)>> = self.coords.par_iter().map(parents_of).collect();
-        // Coarse nodes in lexicographic order, last axis slowest, as the grid numbers them.
-        let key = |c: &[u32; 3]| [c[2], c[1], c[0]];
-        let mut coarse: Vec<[u32; 3]> = fine.iter().flatten().map(|(c, _)| key(c)).collect();
-        coarse.par_sort_unstable();
-        coarse.dedup();
-        let parents = fine
-            .par_iter()
-            .map(|ps| ps.iter().map(|(c, w)| (coarse.binary_search(&key(c)).unwrap() as u32, *w)).collect())
-            .collect();
-        let coords = coarse.into_iter().map(|k| [k[2], k[1], k[0]]).collect();
-        (NodeLattice { coords }, parents)
+        let parents = self.coords.par_iter().map(parents_of).collect();
+        let own = coarse.iter().map(|e| e.1).collect();
+        let coords = coarse.into_iter().map(|(k, _)| [k[2], k[1], k[0]]).collect();
+        (NodeLattice { coords }, parents, own)
     }
 }
 
@@ -97,19 +113,28 @@ impl NodeLattice {
 /// node) and by columns (children of each coarse node, ascending).
 #[derive(Debug, Clone)]
 struct Transfer {
-    parents: Vec<Vec<(u32, f64)>>,
+    parents: Parents,
     children: Vec<Vec<(u32, f64)>>,
+    /// The fine node each coarse node sits on.
+    own: Vec<u32>,
 }
 
 impl Transfer {
-    fn new(parents: Vec<Vec<(u32, f64)>>, coarse_nodes: usize) -> Self {
-        let mut children = vec![Vec::new(); coarse_nodes];
+    fn new(parents: Parents, own: Vec<u32>) -> Self {
+        let mut children = vec![Vec::new(); own.len()];
         for (f, ps) in parents.iter().enumerate() {
             for &(c, w) in ps {
                 children[c as usize].push((f as u32, w));
             }
         }
-        Self { parents, children }
+        Self { parents, children, own }
+    }
+
+    /// 1 where coarse dof (c, r) is kept: its own fine dof is free. A coarse function on a
+    /// constrained node would move it.
+    #[inline]
+    fn coarse_free(&self, d: usize, free: &[f64], c: usize, r: usize) -> f64 {
+        free[self.own[c] as usize * d + r]
     }
 
     /// The coarse operator's node graph: I ~ J when a child of I couples to a child of J.
@@ -129,8 +154,9 @@ impl Transfer {
             .collect()
     }
 
-    /// `coarse = Pᵀ A P` with P masked by `free` (1 on the fine dofs it reaches, 0 on
-    /// constrained ones); a coarse dof with a zero diagonal gets 1.
+    /// `coarse = Pᵀ A P`, P masked by `free` (1 on the free fine dofs, 0 on constrained
+    /// ones) in its rows and, through the coarse nodes' own fine dofs, in its columns; a
+    /// dropped coarse dof (zero diagonal) gets 1.
     fn galerkin(&self, fine: &BlockMatrix, free: &[f64], coarse: &mut BlockMatrix) {
         let d = fine.block_size();
         let dd = d * d;
@@ -138,19 +164,23 @@ impl Transfer {
             out.iter_mut().for_each(|v| *v = 0.0);
             for &(f, w1) in &self.children[i] {
                 let f = f as usize;
+                let row: [f64; 3] = std::array::from_fn(|r| {
+                    if r < d {
+                        w1 * free[f * d + r] * self.coarse_free(d, free, i, r)
+                    } else {
+                        0.0
+                    }
+                });
                 for (blk, &g) in fine.row_values(f).chunks_exact(dd).zip(fine.row_cols(f)) {
                     let g = g as usize;
-                    let mut masked = [0.0; 9];
-                    for r in 0..d {
-                        for k in 0..d {
-                            masked[r * d + k] = blk[r * d + k] * free[f * d + r] * free[g * d + k];
-                        }
-                    }
                     for &(j, w2) in &self.parents[g] {
                         let q = cols.binary_search(&j).expect("coarse structure holds every coupling");
-                        let w = w1 * w2;
-                        for (o, m) in out[q * dd..(q + 1) * dd].iter_mut().zip(&masked[..dd]) {
-                            *o += w * m;
+                        let o = &mut out[q * dd..(q + 1) * dd];
+                        for k in 0..d {
+                            let col = w2 * free[g * d + k] * self.coarse_free(d, free, j as usize, k);
+                            for r in 0..d {
+                                o[r * d + k] += row[r] * col * blk[r * d + k];
+                            }
                         }
                     }
                 }
@@ -175,6 +205,9 @@ impl Transfer {
                     out[r] += w * free[f * d + r] * fine[f * d + r];
                 }
             }
+            for (r, o) in out.iter_mut().enumerate() {
+                *o *= self.coarse_free(d, free, i, r);
+            }
         });
     }
 
@@ -183,7 +216,8 @@ impl Transfer {
         fine.par_chunks_mut(d).with_min_len(256).enumerate().for_each(|(f, out)| {
             for &(c, w) in &self.parents[f] {
                 for r in 0..d {
-                    out[r] += w * free[f * d + r] * coarse[c as usize * d + r];
+                    out[r] +=
+                        w * free[f * d + r] * self.coarse_free(d, free, c as usize, r) * coarse[c as usize * d + r];
                 }
             }
         });
@@ -265,11 +299,11 @@ impl Multigrid {
         let mut a = BlockMatrix::structure_of(pattern);
         let mut lattice = lattice.clone();
         while a.num_nodes() > COARSEST_NODES {
-            let (coarse_lattice, parents) = lattice.coarsen();
-            if coarse_lattice.len() >= a.num_nodes() {
+            let (coarse_lattice, parents, own) = lattice.coarsen();
+            if coarse_lattice.len() >= a.num_nodes() || coarse_lattice.is_empty() {
                 break;
             }
-            let transfer = Transfer::new(parents, coarse_lattice.len());
+            let transfer = Transfer::new(parents, own);
             let coarse = BlockMatrix::with_structure(d, &transfer.coarse_structure(&a));
             levels.push(Level::new(std::mem::replace(&mut a, coarse), Some(transfer)));
             lattice = coarse_lattice;
@@ -533,16 +567,17 @@ mod tests {
     fn a_lattice_coarsens_to_every_other_node_with_hat_weights() {
         // Nodes 0..=4 on a line: coarse nodes 0, 1, 2 (fine 0, 2, 4); fine 1 and 3 between.
         let lattice = NodeLattice::new((0..5).map(|x| [x, 0, 0]).collect());
-        let (coarse, parents) = lattice.coarsen();
+        let (coarse, parents, own) = lattice.coarsen();
         assert_eq!(coarse.len(), 3);
+        assert_eq!(own, vec![0, 2, 4]);
         assert_eq!(parents[0], vec![(0, 1.0)]);
         assert_eq!(parents[1], vec![(0, 0.5), (1, 0.5)]);
         assert_eq!(parents[4], vec![(2, 1.0)]);
-        // In 2D a cell-centre node takes a quarter of each corner.
+        // In 2D a cell-centre node takes a quarter of each corner present, scaled to a
+        // partition of unity over those that are: here two of four.
         let lattice = NodeLattice::new(vec![[1, 1, 0], [0, 0, 0], [2, 2, 0]]);
-        let (coarse, parents) = lattice.coarsen();
-        assert_eq!(coarse.len(), 4);
-        assert_eq!(parents[0].iter().map(|p| p.1).sum::<f64>(), 1.0);
-        assert!(parents[0].iter().all(|p| p.1 == 0.25));
+        let (coarse, parents, own) = lattice.coarsen();
+        assert_eq!((coarse.len(), own), (2, vec![1, 2]));
+        assert_eq!(parents[0], vec![(0, 0.5), (1, 0.5)]);
     }
 }
