@@ -164,6 +164,10 @@ fn slope_examples_are_valid_scenes() {
             LoadedScene::read(Path::new(&format!("examples/{name}.ron"))).unwrap_or_else(|e| panic!("{name}: {e}"));
         scene.build::<2>().unwrap_or_else(|e| panic!("{name}: {e}"));
     }
+    let scene = LoadedScene::read(Path::new("examples/slope_3d.ron")).unwrap();
+    let analysis = scene.build::<3>().unwrap();
+    // 26 × 6 × 11 cells of 2 m, the 2:1 section's 205 cells of soil, 8 points each.
+    assert_eq!(analysis.model().points().len(), 205 * 6 * 8);
 }
 
 /// The load examples run: the cavity under a follower pressure to its full load, with the

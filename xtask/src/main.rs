@@ -61,6 +61,9 @@ enum Cmd {
         /// 2 or 3.
         #[arg(long, default_value_t = 3)]
         dim: usize,
+        /// The lower half this many times softer (1: uniform).
+        #[arg(long, default_value_t = 1.0)]
+        contrast: f64,
     },
     /// Run the criterion benchmarks (`cargo bench`), passing any extra arguments on.
     Bench {
@@ -73,7 +76,7 @@ fn main() -> Result<()> {
     match Cli::parse().command {
         Cmd::Verify { quick, out } => verify(quick, &out),
         Cmd::Steps { quick, out } => steps::run(quick, &out),
-        Cmd::Scale { cells, solver, dim } => scale::run(dim, &cells, &solver),
+        Cmd::Scale { cells, solver, dim, contrast } => scale::run(dim, &cells, &solver, contrast),
         Cmd::Bench { args } => {
             let status = std::process::Command::new(env!("CARGO"))
                 .args(["bench", "--package", "loam"])

@@ -44,6 +44,12 @@ pub enum PointsError {
     Spacing(f64),
     #[error("a polygon is only defined in 2D")]
     PolygonDimension,
+    #[error("a prism is only defined in 3D, extruded along axis 0, 1 or 2 (got {axis}) from a coordinate below the one it goes to (got {from} to {to})")]
+    Prism { axis: usize, from: f64, to: f64 },
+    #[error("a cut box needs a finite point and a finite, non-zero normal")]
+    CutPlane,
+    #[error("surfaces (for loads) are not available on a {0} yet: give the loaded part its own Box body")]
+    NoSurface(&'static str),
     #[error("box min {min:?} is not below max {max:?} on every axis")]
     BoxOrder { min: Vec<f64>, max: Vec<f64> },
     #[error("the store holds {points} points but {found} values of `{field}`; every field needs one per point")]
@@ -61,6 +67,13 @@ pub enum Shape<const D: usize> {
     Polygon(Vec<Vector2<f64>>),
     /// Disk (2D) or ball (3D).
     Ball { centre: SVector<f64, D>, radius: f64 },
+    /// 3D only: the simple polygon `section`, in the coordinates of the two axes other than
+    /// `axis` (in increasing axis order), extruded along `axis` from `from` to `to`. A
+    /// slope's cross-section extruded across its width.
+    Prism { section: Vec<Vector2<f64>>, axis: usize, from: f64, to: f64 },
+    /// An axis-aligned box less the half-space beyond a plane: the points of the box with
+    /// (x − point) · normal ≤ 0 (the normal points out of the material).
+    CutBox { min: SVector<f64, D>, max: SVector<f64, D>, point: SVector<f64, D>, normal: SVector<f64, D> },
 }
 
 impl<const D: usize> Shape<D> {
@@ -80,6 +93,25 @@ impl<const D: usize> Shape<D> {
                     return Err(PointsError::Radius(*radius));
                 }
                 Ok((centre.add_scalar(-radius), centre.add_scalar(*radius)))
+            }
+            Shape::CutBox { min, max, point, normal } => {
+                let ok = point.iter().chain(normal.iter()).all(|v| v.is_finite()) && normal.norm() > 0.0;
+                if !ok {
+                    return Err(PointsError::CutPlane);
+                }
+                Shape::Box { min: *min, max: *max }.bounds()
+            }
+            Shape::Prism { section, axis, from, to } => {
+                if D != 3 || *axis > 2 || !(from < to && from.is_finite() && to.is_finite()) {
+                    return Err(PointsError::Prism { axis: *axis, from: *from, to: *to });
+                }
+                let (lo2, hi2) = Shape::<2>::Polygon(section.clone()).bounds()?;
+                let (a, b) = prism_section_axes(*axis);
+                let mut lo = SVector::<f64, D>::zeros();
+                let mut hi = SVector::<f64, D>::zeros();
+                (lo[a], lo[b], lo[*axis]) = (lo2[0], lo2[1], *from);
+                (hi[a], hi[b], hi[*axis]) = (hi2[0], hi2[1], *to);
+                Ok((lo, hi))
             }
             Shape::Polygon(v) => {
                 if D != 2 {
@@ -106,20 +138,38 @@ impl<const D: usize> Shape<D> {
         match self {
             Shape::Box { min, max } => (0..D).all(|a| x[a] >= min[a] && x[a] <= max[a]),
             Shape::Ball { centre, radius } => (x - centre).norm() <= *radius,
-            Shape::Polygon(v) => {
-                let (px, py) = (x[0], x[1]);
-                let mut inside = false;
-                let mut j = v.len() - 1;
-                for i in 0..v.len() {
-                    let (xi, yi, xj, yj) = (v[i].x, v[i].y, v[j].x, v[j].y);
-                    if (yi > py) != (yj > py) && px < (xj - xi) * (py - yi) / (yj - yi) + xi {
-                        inside = !inside;
-                    }
-                    j = i;
-                }
-                inside
+            Shape::CutBox { min, max, point, normal } => {
+                Shape::Box { min: *min, max: *max }.contains(x) && (x - point).dot(normal) <= 0.0
             }
+            Shape::Prism { section, axis, from, to } => {
+                let (a, b) = prism_section_axes(*axis);
+                x[*axis] >= *from && x[*axis] <= *to && polygon_contains(section, x[a], x[b])
+            }
+            Shape::Polygon(v) => polygon_contains(v, x[0], x[1]),
         }
+    }
+}
+
+/// Whether (px, py) is inside the polygon `v` (even–odd rule).
+fn polygon_contains(v: &[Vector2<f64>], px: f64, py: f64) -> bool {
+    let mut inside = false;
+    let mut j = v.len() - 1;
+    for i in 0..v.len() {
+        let (xi, yi, xj, yj) = (v[i].x, v[i].y, v[j].x, v[j].y);
+        if (yi > py) != (yj > py) && px < (xj - xi) * (py - yi) / (yj - yi) + xi {
+            inside = !inside;
+        }
+        j = i;
+    }
+    inside
+}
+
+/// The two axes of a prism's section, in increasing order, for extrusion along `axis`.
+fn prism_section_axes(axis: usize) -> (usize, usize) {
+    match axis {
+        0 => (1, 2),
+        1 => (0, 2),
+        _ => (0, 1),
     }
 }
 
@@ -356,6 +406,37 @@ mod tests {
         assert_relative_eq!(s.total_mass(), 3000.0, epsilon = 1e-9);
         assert_eq!(s.half_length[0], Vector2::new(0.125, 0.0625));
         assert_eq!(s.position[0], Vector2::new(0.125, 0.0625));
+    }
+
+    /// A prism of a right triangle (legs 8 and 4 in x and z) across y from 1 to 4: its
+    /// points are those of the triangle's fill repeated along y, volume 16 × 3 = 48 to the
+    /// staircase of the diagonal; and the same volume as a box cut by the hypotenuse's plane.
+    #[test]
+    fn a_prism_and_a_cut_box_fill_the_extruded_triangle() {
+        let g = Grid::<3>::new(Vector3::zeros(), Vector3::new(1.0, 1.0, 1.0), [10, 6, 6]).unwrap();
+        let tri = vec![Vector2::new(0.0, 0.0), Vector2::new(8.0, 0.0), Vector2::new(0.0, 4.0)];
+        let mut prism = PointStore::<3>::new();
+        prism.fill(&g, &Shape::Prism { section: tri.clone(), axis: 1, from: 1.0, to: 4.0 }, 2, 1.0, 0).unwrap();
+        let g2 = Grid::<2>::new(Vector2::zeros(), Vector2::new(1.0, 1.0), [10, 6]).unwrap();
+        let mut flat = PointStore::<2>::new();
+        flat.fill(&g2, &Shape::Polygon(tri), 2, 1.0, 0).unwrap();
+        assert_eq!(prism.len(), flat.len() * 6, "two points per cell over three cells in y");
+        let volume: f64 = prism.volume.iter().sum();
+        assert_relative_eq!(volume, flat.volume.iter().sum::<f64>() * 3.0, epsilon = 1e-9);
+        assert!(prism.position.iter().all(|x| x[1] > 1.0 && x[1] < 4.0 && x[0] / 8.0 + x[2] / 4.0 <= 1.0));
+        // The same solid: the box [0, 8] × [1, 4] × [0, 4] less the side of x/8 + z/4 > 1.
+        let cut = Shape::CutBox {
+            min: Vector3::new(0.0, 1.0, 0.0),
+            max: Vector3::new(8.0, 4.0, 4.0),
+            point: Vector3::new(8.0, 0.0, 0.0),
+            normal: Vector3::new(0.5, 0.0, 1.0),
+        };
+        let mut boxed = PointStore::<3>::new();
+        boxed.fill(&g, &cut, 2, 1.0, 0).unwrap();
+        assert_eq!(boxed.position, prism.position);
+        assert!(matches!(cut.boundary(0.5), Err(PointsError::NoSurface("CutBox"))));
+        let flat_prism = Shape::<2>::Prism { section: vec![], axis: 1, from: 0.0, to: 1.0 };
+        assert!(matches!(PointStore::<2>::new().fill(&g2, &flat_prism, 2, 1.0, 0), Err(PointsError::Prism { .. })));
     }
 
     #[test]

@@ -143,6 +143,8 @@ impl<const D: usize> Shape<D> {
                     .collect();
                 s.push_chain(&corners, true, spacing);
             }
+            (Shape::Prism { .. }, _) => return Err(PointsError::NoSurface("Prism")),
+            (Shape::CutBox { .. }, _) => return Err(PointsError::NoSurface("CutBox")),
             (Shape::Ball { centre, radius }, _) => {
                 // The cube's faces pushed out onto the sphere (a cube-sphere), the cube cut
                 // finely enough that the arcs are at most `spacing`.

@@ -21,12 +21,28 @@ pub const BLOCK_POISSON: f64 = 0.3;
 /// The block of `n` cells a side; `fixed_base` holds the base in every direction, else
 /// only vertically.
 pub fn elastic_block<const D: usize>(n: usize, kinematics: Kinematics, fixed_base: bool) -> Model<D> {
+    layered_block(n, kinematics, fixed_base, 1.0)
+}
+
+/// [`elastic_block`] with its lower half `contrast` times softer (the stiffness-contrast
+/// hard case in a block: docs/verification.md §H); `contrast` 1 is the uniform block.
+pub fn layered_block<const D: usize>(n: usize, kinematics: Kinematics, fixed_base: bool, contrast: f64) -> Model<D> {
     let grid = Grid::new(SVector::zeros(), SVector::repeat(1.0), [n + 2; D]).expect("valid block grid");
     let mut points = PointStore::new();
     let v = D - 1;
     let min = SVector::<f64, D>::from_fn(|a, _| if a == v { 0.0 } else { 1.0 });
     let max = SVector::<f64, D>::from_fn(|a, _| if a == v { n as f64 } else { n as f64 + 1.0 });
-    points.fill(&grid, &Shape::Box { min, max }, 2, BLOCK_DENSITY, 0).expect("the block lies in its grid");
+    let layered = contrast != 1.0;
+    let mut middle = max;
+    middle[v] = (n / 2) as f64;
+    let mut upper = min;
+    upper[v] = (n / 2) as f64;
+    if layered {
+        points.fill(&grid, &Shape::Box { min, max: middle }, 2, BLOCK_DENSITY, 1).expect("the layer lies in its grid");
+        points.fill(&grid, &Shape::Box { min: upper, max }, 2, BLOCK_DENSITY, 0).expect("the layer lies in its grid");
+    } else {
+        points.fill(&grid, &Shape::Box { min, max }, 2, BLOCK_DENSITY, 0).expect("the block lies in its grid");
+    }
     let mut base = [fixed_base; 3];
     base[v] = true;
     let mut constraints = vec![PlaneConstraint::new(v, 0, base)];
@@ -37,7 +53,10 @@ pub fn elastic_block<const D: usize>(n: usize, kinematics: Kinematics, fixed_bas
         constraints.push(PlaneConstraint::new(a, n + 1, roller));
     }
     let law = Elastic::new(BLOCK_YOUNG, BLOCK_POISSON).expect("valid elastic constants");
+    let mut laws: Vec<Arc<dyn loam_constitutive::ConstitutiveLaw>> = vec![Arc::new(law)];
+    if layered {
+        laws.push(Arc::new(Elastic::new(BLOCK_YOUNG / contrast, BLOCK_POISSON).expect("valid soft layer")));
+    }
     let gravity = SVector::<f64, D>::from_fn(|a, _| if a == v { -BLOCK_GRAVITY } else { 0.0 });
-    Model::new(grid, BasisKind::Gimp, kinematics, points, vec![Arc::new(law)], constraints, gravity)
-        .expect("valid block model")
+    Model::new(grid, BasisKind::Gimp, kinematics, points, laws, constraints, gravity).expect("valid block model")
 }

@@ -124,9 +124,41 @@ impl LoadedScene {
             }
             ShapeSpec::Polygon { vertices } => {
                 if D != 2 {
-                    return Err(self.error(&body_key(i, "shape"), "Polygon shapes are 2D only; use Box in 3D"));
+                    return Err(self.error(
+                        &body_key(i, "shape"),
+                        "Polygon shapes are 2D only; in 3D use Prism (a polygon extruded along an axis), CutBox or Box",
+                    ));
                 }
                 Shape::Polygon(vertices.iter().map(|v| Vector2::new(v[0], v[1])).collect())
+            }
+            ShapeSpec::Prism { section, axis, from, to } => {
+                if D != 3 {
+                    return Err(self.error(&body_key(i, "shape"), "Prism shapes are 3D only; in 2D use Polygon"));
+                }
+                if from.partial_cmp(to) != Some(std::cmp::Ordering::Less) {
+                    return Err(self.error(&at("to"), format!("Prism from {from} to {to}: `to` must exceed `from`")));
+                }
+                if section.len() < 3 || section.iter().flatten().any(|v| !v.is_finite()) {
+                    return Err(self.error(&at("section"), "a Prism section needs at least 3 finite vertices"));
+                }
+                Shape::Prism {
+                    section: section.iter().map(|v| Vector2::new(v[0], v[1])).collect(),
+                    axis: axis.index(),
+                    from: *from,
+                    to: *to,
+                }
+            }
+            ShapeSpec::CutBox { min, max, point, normal } => {
+                let normal: nalgebra::SVector<f64, D> = self.vector(normal, &at("normal"), "CutBox normal")?;
+                if normal.norm() == 0.0 {
+                    return Err(self.error(&at("normal"), "a CutBox normal must not be zero"));
+                }
+                Shape::CutBox {
+                    min: self.vector(min, &at("min"), "CutBox min")?,
+                    max: self.vector(max, &at("max"), "CutBox max")?,
+                    point: self.vector(point, &at("point"), "CutBox point")?,
+                    normal,
+                }
             }
         })
     }

@@ -222,6 +222,21 @@ pub enum ShapeSpec {
         centre: Vec<f64>,
         radius: f64,
     },
+    /// 3D only: the polygon `section` (vertices in the two other axes, in increasing axis
+    /// order: (x, z) for `axis: Y`) extruded along `axis` from `from` to `to`.
+    Prism {
+        section: Vec<[f64; 2]>,
+        axis: Axis,
+        from: f64,
+        to: f64,
+    },
+    /// A box less the half-space on the side of `normal` of the plane through `point`.
+    CutBox {
+        min: Vec<f64>,
+        max: Vec<f64>,
+        point: Vec<f64>,
+        normal: Vec<f64>,
+    },
 }
 
 #[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
