@@ -19,7 +19,7 @@ use loam_kernels::{
 use loam_model::{Kinematics, LoadLevel, Model};
 use loam_solve::{
     norm, BlockPattern, LinearSolveError, LinearSolver, LinearSolverChoice, LinearSolverKind, LinearSystem,
-    NewtonControl, NewtonError, NewtonReport, NewtonSettings, NodeLattice, SparseDirectSolver,
+    NewtonControl, NewtonError, NewtonReport, NewtonSettings, NodeLattice, SparseDirectSolver, SystemMatrix,
 };
 use nalgebra::SVector;
 use rayon::prelude::*;
@@ -33,7 +33,8 @@ pub(crate) struct Engine<const D: usize> {
     /// that moved the points).
     conn_current: bool,
     pub pattern: BlockPattern,
-    pub values: Vec<f64>,
+    /// The tangent, in the layout of the linear solver.
+    pub matrix: SystemMatrix,
     pub constrained: Vec<bool>,
     pub f_ext: Vec<f64>,
     /// The loads' vertices on the active nodes, and the level the external forces are at.
@@ -107,12 +108,13 @@ impl<const D: usize> Engine<D> {
             LinearSolverChoice::Iterative => LinearSolverKind::for_tangent(true, definite),
             LinearSolverChoice::Direct | LinearSolverChoice::Auto => LinearSolverKind::for_tangent(false, definite),
         };
+        let linear = kind.solver();
         Self {
             conn: Connectivity::new(model.basis()),
             model,
             conn_current: false,
             pattern: BlockPattern::new(D),
-            values: Vec::new(),
+            matrix: SystemMatrix::new(linear.layout()),
             constrained: Vec::new(),
             f_ext: Vec::new(),
             loads: LoadSupports::default(),
@@ -131,7 +133,7 @@ impl<const D: usize> Engine<D> {
             extra_couplings: Vec::new(),
             trial: TrialState::default(),
             newton,
-            linear: kind.solver(),
+            linear,
             fallback: None,
             fallbacks: 0,
             linear_choice,
@@ -162,6 +164,7 @@ impl<const D: usize> Engine<D> {
                     && self.linear.kind() == LinearSolverKind::Cholesky =>
             {
                 self.linear = LinearSolverKind::Cg.solver();
+                self.matrix = SystemMatrix::new(self.linear.layout());
                 "from the number of dofs (iterative from this size) and the tangent (symmetric positive definite)"
             }
             LinearSolverChoice::Auto => {
@@ -362,7 +365,7 @@ impl<const D: usize> Engine<D> {
             mass: &self.model.points().mass,
             water_force: if self.model.kinematics() == Kinematics::FiniteStrain { &self.water_force } else { &[] },
         };
-        assemble(&inputs, &self.trial, inertia, &mut self.values);
+        assemble(&inputs, &self.trial, inertia, &mut self.matrix);
         if has_follower(self.model.loads()) {
             let inputs = FollowerInputs {
                 model: &self.model,
@@ -372,7 +375,7 @@ impl<const D: usize> Engine<D> {
                 du: &self.du,
                 delta_f: &self.trial.delta_f,
             };
-            add_follower_tangent(&inputs, &self.pattern, &self.constrained, &mut self.values);
+            add_follower_tangent(&inputs, &self.pattern, &self.constrained, &mut self.matrix);
         }
     }
 
@@ -383,7 +386,7 @@ impl<const D: usize> Engine<D> {
         let start = std::time::Instant::now();
         let system = LinearSystem {
             pattern: &self.pattern,
-            values: &self.values,
+            matrix: &self.matrix,
             constrained: &self.constrained,
             lattice: self.lattice.as_ref(),
         };
@@ -392,15 +395,17 @@ impl<const D: usize> Engine<D> {
         for (b, r) in self.rhs.iter_mut().zip(&self.residual) {
             *b = -r;
         }
-        let stats = match self.linear.solve(&self.rhs, &mut self.correction, tolerance) {
+        let stats = match self.linear.solve(&system, &self.rhs, &mut self.correction, tolerance) {
             Err(e @ (LinearSolveError::NotConverged(_) | LinearSolveError::NotPositiveDefinite(_)))
                 if self.linear.kind().is_iterative() && self.num_dofs() <= DIRECT_FALLBACK_MAX_DOFS[D - 1] =>
             {
                 tracing::warn!(error = %e, "the Krylov solve failed; solving this correction by sparse LU");
                 self.fallbacks += 1;
                 let direct = self.fallback.get_or_insert_with(|| SparseDirectSolver::new(LinearSolverKind::Lu));
+                let columns = SystemMatrix::Columns(self.matrix.to_columns(&self.pattern).into_owned());
+                let system = LinearSystem { matrix: &columns, ..system };
                 direct.prepare(&system)?;
-                direct.solve(&self.rhs, &mut self.correction, tolerance)?
+                direct.solve(&system, &self.rhs, &mut self.correction, tolerance)?
             }
             result => result?,
         };
@@ -414,7 +419,7 @@ impl<const D: usize> Engine<D> {
     pub fn linear_system(&self) -> LinearSystem<'_> {
         LinearSystem {
             pattern: &self.pattern,
-            values: &self.values,
+            matrix: &self.matrix,
             constrained: &self.constrained,
             lattice: self.lattice.as_ref(),
         }

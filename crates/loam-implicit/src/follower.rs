@@ -12,7 +12,7 @@
 use loam_grid::Connectivity;
 use loam_kernels::{trial_vertices, LoadSupports};
 use loam_model::{Load, LoadKind, LoadLevel, Model};
-use loam_solve::BlockPattern;
+use loam_solve::{BlockPattern, SystemMatrix};
 use nalgebra::{SMatrix, SVector};
 
 /// The node couplings the follower loads add to the pattern: every node a vertex's force
@@ -57,7 +57,7 @@ pub(crate) fn add_follower_tangent<const D: usize>(
     inputs: &FollowerInputs<D>,
     pattern: &BlockPattern,
     constrained: &[bool],
-    values: &mut [f64],
+    matrix: &mut SystemMatrix,
 ) {
     let FollowerInputs { model, conn, supports, level, du, delta_f } = *inputs;
     let points = model.points();
@@ -75,7 +75,7 @@ pub(crate) fn add_follower_tangent<const D: usize>(
                     let coefficient = scale * pressure[v as usize] / D as f64;
                     let (nodes_j, weights) = supports.support(k, v as usize);
                     for (&j, &omega) in nodes_j.iter().zip(weights) {
-                        add_moving_blocks(conn, &carry, &(da * (coefficient * omega)), j, pattern, constrained, values);
+                        add_moving_blocks(conn, &carry, &(da * (coefficient * omega)), j, pattern, constrained, matrix);
                     }
                 }
             }
@@ -100,7 +100,7 @@ fn add_moving_blocks<const D: usize>(
     j: u32,
     pattern: &BlockPattern,
     constrained: &[bool],
-    values: &mut [f64],
+    matrix: &mut SystemMatrix,
 ) {
     let p = carry.p;
     let mut flat = [0.0; 9];
@@ -112,7 +112,7 @@ fn add_moving_blocks<const D: usize>(
                 flat[a * D + b] = c * block[(a, b)];
             }
         }
-        pattern.add_block(values, constrained, j as usize, i as usize, &flat[..D * D]);
+        matrix.add_block(pattern, constrained, j as usize, i as usize, &flat[..D * D]);
     }
 }
 

@@ -4,7 +4,7 @@
 
 use loam_grid::{ghost_faces, Connectivity, GhostFace, INACTIVE};
 use loam_model::Model;
-use loam_solve::BlockPattern;
+use loam_solve::{BlockPattern, SystemMatrix};
 
 /// The ghost faces of the committed configuration: cell fill from the volumes of the
 /// points whose centres lie in each cell, faces of cut cells whose nodes are all active,
@@ -67,7 +67,7 @@ pub(crate) fn add_ghost_tangent<const D: usize>(
     ghost: &[GhostFace],
     pattern: &BlockPattern,
     constrained: &[bool],
-    values: &mut [f64],
+    matrix: &mut SystemMatrix,
 ) {
     let mut block = [0.0; 9];
     for face in ghost {
@@ -77,7 +77,7 @@ pub(crate) fn add_ghost_tangent<const D: usize>(
                 for i in 0..D {
                     block[i * D + i] = face.matrix[a * n + b];
                 }
-                pattern.add_block(values, constrained, na as usize, nb as usize, &block[..D * D]);
+                matrix.add_block(pattern, constrained, na as usize, nb as usize, &block[..D * D]);
             }
         }
     }

@@ -197,14 +197,15 @@ impl<const D: usize> QuasiStatic<D> {
         let assembly = t.elapsed();
         let e = &self.engine;
         let mut solver = e.linear_solver().kind().solver();
-        solver.prepare(&e.linear_system()).map_err(|e| not_converged(e.to_string()))?;
+        let system = e.linear_system();
+        solver.prepare(&system).map_err(|e| not_converged(e.to_string()))?;
         let rhs: Vec<f64> = e.residual().iter().map(|v| -v).collect();
         let mut x = vec![0.0; rhs.len()];
         // The first Newton iteration's forcing term (an iterative solver's tolerance).
         let tolerance = loam_solve::NewtonControl::start::<PointUpdateError>(self.settings.newton, 1.0, 1.0)
             .map(|c| c.linear_tolerance())
             .unwrap_or(1e-3);
-        let stats = solver.solve(&rhs, &mut x, tolerance).map_err(|e| not_converged(e.to_string()))?;
+        let stats = solver.solve(&system, &rhs, &mut x, tolerance).map_err(|e| not_converged(e.to_string()))?;
         let lt = solver.timings();
         Ok(IterationProfile {
             dofs: rhs.len(),
@@ -229,7 +230,7 @@ impl<const D: usize> QuasiStatic<D> {
         self.engine.update_points_and_residual(None).map_err(|e| inspection_error(step, lambda, e.to_string()))?;
         self.engine.assemble(None);
         let e = &self.engine;
-        Ok((e.pattern.clone(), e.values.clone(), e.constrained.clone()))
+        Ok((e.pattern.clone(), e.matrix.to_columns(&e.pattern).into_owned(), e.constrained.clone()))
     }
 
     /// Set up the next load step at zero increment (the committed state) with its external

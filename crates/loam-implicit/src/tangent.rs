@@ -8,7 +8,7 @@ use crate::ghost::add_ghost_tangent;
 use crate::inertia::Inertia;
 use crate::points::TrialState;
 use loam_grid::{Connectivity, GhostFace};
-use loam_solve::{BlockPattern, Couplings};
+use loam_solve::{BlockPattern, Couplings, SystemMatrix};
 
 /// Point–node connectivity seen as the coupling structure of assembly: points are the
 /// elements.
@@ -39,17 +39,17 @@ pub(crate) struct TangentInputs<'a, const D: usize> {
     pub water_force: &'a [nalgebra::SVector<f64, D>],
 }
 
-/// Assemble the tangent at the trial state into `values` (the pattern's layout).
+/// Assemble the tangent at the trial state into `matrix` (on the pattern, in its layout).
 pub(crate) fn assemble<const D: usize>(
     inputs: &TangentInputs<'_, D>,
     trial: &TrialState<D>,
     inertia: Option<&Inertia>,
-    values: &mut Vec<f64>,
+    matrix: &mut SystemMatrix,
 ) {
     let conn = inputs.conn;
     let stride = conn.stride();
     let average = inputs.average;
-    inputs.pattern.assemble(&PointCouplings(conn), inputs.constrained, values, |p, a, b, out| {
+    matrix.assemble(inputs.pattern, &PointCouplings(conn), inputs.constrained, |p, a, b, out| {
         if let Some(inertia) = inertia {
             let m = inertia.tangent_coefficient(conn, inputs.mass, p, a, b);
             for i in 0..D {
@@ -85,7 +85,7 @@ pub(crate) fn assemble<const D: usize>(
             }
         }
     });
-    add_ghost_tangent::<D>(inputs.ghost, inputs.pattern, inputs.constrained, values);
+    add_ghost_tangent::<D>(inputs.ghost, inputs.pattern, inputs.constrained, matrix);
 }
 
 /// With E_a,i = e_i ⊗ c_a + ⅓ d_a,i I, d = b̄ − c (c the strain gradients `ga`, `gb`): the

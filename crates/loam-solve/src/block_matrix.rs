@@ -58,6 +58,93 @@ impl BlockMatrix {
         self.cols.len()
     }
 
+    /// Whether this matrix has the node graph of `pattern`.
+    pub fn has_structure_of(&self, pattern: &BlockPattern) -> bool {
+        self.d == pattern.dofs_per_node()
+            && self.num_nodes() == pattern.num_nodes()
+            && (0..self.num_nodes()).all(|i| self.row_cols(i) == pattern.neighbours(i))
+    }
+
+    /// All values, row after row.
+    pub fn values_mut(&mut self) -> &mut [f64] {
+        &mut self.values
+    }
+
+    /// Add the d×d `block` (row-major) coupling node `i` (rows) to node `j` (columns),
+    /// eliminating constrained dofs as assembly does. The pair must be coupled.
+    pub fn add_block(&mut self, constrained: &[bool], i: usize, j: usize, block: &[f64]) {
+        let d = self.d;
+        let q = self
+            .row_cols(i)
+            .binary_search(&(j as u32))
+            .unwrap_or_else(|_| panic!("add_block: nodes {i} and {j} are not coupled"));
+        let start = (self.row_ptr[i] + q) * d * d;
+        for r in 0..d {
+            for k in 0..d {
+                if (i == j && r == k) || !(constrained[i * d + r] || constrained[j * d + k]) {
+                    self.values[start + r * d + k] += block[r * d + k];
+                }
+            }
+        }
+    }
+
+    /// Entry (i·d + r, j·d + k), zero where the nodes are not coupled.
+    pub fn entry(&self, i: usize, r: usize, j: usize, k: usize) -> f64 {
+        let d = self.d;
+        match self.row_cols(i).binary_search(&(j as u32)) {
+            Ok(q) => self.row_values(i)[q * d * d + r * d + k],
+            Err(_) => 0.0,
+        }
+    }
+
+    /// The values in the compressed-column layout of `pattern` (whose node graph this
+    /// matrix has), for a factorisation.
+    pub fn to_columns(&self, pattern: &BlockPattern) -> Vec<f64> {
+        let d = self.d;
+        assert!(self.has_structure_of(pattern), "to_columns: another node graph");
+        let mut values = vec![0.0; pattern.nnz()];
+        let mut chunks: Vec<&mut [f64]> = Vec::with_capacity(self.num_nodes());
+        let mut rest: &mut [f64] = &mut values;
+        for j in 0..self.num_nodes() {
+            let (head, tail) = rest.split_at_mut(pattern.neighbours(j).len() * d * d);
+            chunks.push(head);
+            rest = tail;
+        }
+        chunks.into_par_iter().enumerate().with_min_len(MIN_ROWS_PER_TASK).for_each(|(j, out)| {
+            let nb = pattern.neighbours(j);
+            for k in 0..d {
+                for (q, &i) in nb.iter().enumerate() {
+                    for r in 0..d {
+                        out[k * nb.len() * d + q * d + r] = self.entry(i as usize, r, j, k);
+                    }
+                }
+            }
+        });
+        values
+    }
+
+    /// Largest |A_ij − A_ji| relative to the largest |A_ij|: zero for a symmetric matrix.
+    pub fn asymmetry(&self) -> f64 {
+        let d = self.d;
+        let (mut max_diff, mut max_abs) = (0.0f64, 0.0f64);
+        for i in 0..self.num_nodes() {
+            for &j in self.row_cols(i) {
+                for r in 0..d {
+                    for k in 0..d {
+                        let a = self.entry(i, r, j as usize, k);
+                        max_diff = max_diff.max((a - self.entry(j as usize, k, i, r)).abs());
+                        max_abs = max_abs.max(a.abs());
+                    }
+                }
+            }
+        }
+        if max_abs > 0.0 {
+            max_diff / max_abs
+        } else {
+            0.0
+        }
+    }
+
     /// Bytes held by the values and indices.
     pub fn bytes(&self) -> usize {
         self.values.len() * 8 + self.cols.len() * 4 + self.row_ptr.len() * 8
@@ -102,18 +189,12 @@ impl BlockMatrix {
     /// has): the pattern stores columns, this matrix rows.
     pub fn copy_from_pattern(&mut self, pattern: &BlockPattern, values: &[f64]) {
         let d = self.d;
-        assert_eq!(pattern.dofs_per_node(), d);
-        assert_eq!(pattern.num_nodes(), self.num_nodes());
-        let col_ptr = pattern.col_ptr();
+        assert!(self.has_structure_of(pattern), "copy_from_pattern: another node graph");
         self.rows_mut().with_min_len(MIN_ROWS_PER_TASK).for_each(|(i, cols, out)| {
             for (p, &j) in cols.iter().enumerate() {
-                let nb = pattern.neighbours(j as usize);
-                // Block (i, j) lives in column j, at i's place among j's neighbours.
-                let q = nb.binary_search(&(i as u32)).expect("the pattern is structurally symmetric");
-                let (base, col_len) = (col_ptr[j as usize * d], nb.len() * d);
                 for r in 0..d {
                     for k in 0..d {
-                        out[p * d * d + r * d + k] = values[base + k * col_len + q * d + r];
+                        out[p * d * d + r * d + k] = pattern.entry(values, i, r, j as usize, k);
                     }
                 }
             }

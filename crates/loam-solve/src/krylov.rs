@@ -15,7 +15,7 @@
 
 use crate::linear::{KrylovFailure, LinearSolveStats, LinearSolver, LinearSystem};
 use crate::multigrid::{dot, Multigrid};
-use crate::{BlockMatrix, LinearSolveError, LinearSolverKind, LinearSolverTimings};
+use crate::{BlockMatrix, LinearSolveError, LinearSolverKind, LinearSolverTimings, MatrixLayout, SystemMatrix};
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::matrix_free::bicgstab::{bicgstab, bicgstab_scratch, BicgError, BicgParams};
 use faer::matrix_free::conjugate_gradient::{conjugate_gradient, conjugate_gradient_scratch, CgError, CgParams};
@@ -30,9 +30,9 @@ const MAX_ITERATIONS: usize = 400;
 #[derive(Debug)]
 struct Operator<'a>(&'a BlockMatrix);
 
-/// One V-cycle as a faer preconditioner.
+/// One V-cycle on a fine operator as a faer preconditioner.
 #[derive(Debug)]
-struct VCycle<'a>(&'a Multigrid);
+struct VCycle<'a>(&'a Multigrid, &'a BlockMatrix);
 
 /// Apply `f(x, y)` to every column of `rhs` into `out`, through contiguous copies where a
 /// column is strided.
@@ -54,10 +54,10 @@ macro_rules! real_linop {
                 StackReq::EMPTY
             }
             fn nrows(&self) -> usize {
-                self.0.num_dofs_of()
+                self.fine().num_dofs()
             }
             fn ncols(&self) -> usize {
-                self.0.num_dofs_of()
+                self.fine().num_dofs()
             }
             fn apply(&self, out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, _par: Par, _stack: &mut MemStack) {
                 columns(out, rhs, |x, y| $apply(self, x, y));
@@ -69,22 +69,20 @@ macro_rules! real_linop {
     };
 }
 
-trait Dofs {
-    fn num_dofs_of(&self) -> usize;
-}
-impl Dofs for BlockMatrix {
-    fn num_dofs_of(&self) -> usize {
-        self.num_dofs()
+impl Operator<'_> {
+    fn fine(&self) -> &BlockMatrix {
+        self.0
     }
 }
-impl Dofs for Multigrid {
-    fn num_dofs_of(&self) -> usize {
-        self.operator().num_dofs()
+
+impl VCycle<'_> {
+    fn fine(&self) -> &BlockMatrix {
+        self.1
     }
 }
 
 real_linop!(Operator<'_>, |s: &Operator<'_>, x: &[f64], y: &mut [f64]| s.0.apply(x, y));
-real_linop!(VCycle<'_>, |s: &VCycle<'_>, x: &[f64], y: &mut [f64]| s.0.apply(x, y));
+real_linop!(VCycle<'_>, |s: &VCycle<'_>, x: &[f64], y: &mut [f64]| s.0.apply(s.1, x, y));
 impl Precond<f64> for VCycle<'_> {}
 
 /// A multigrid-preconditioned Krylov solver. See the module docs.
@@ -92,6 +90,8 @@ impl Precond<f64> for VCycle<'_> {}
 pub struct IterativeSolver {
     kind: LinearSolverKind,
     multigrid: Multigrid,
+    /// The operator in rows, where the system came in columns (a copy).
+    converted: BlockMatrix,
     max_iterations: usize,
     timings: LinearSolverTimings,
 }
@@ -103,6 +103,7 @@ impl IterativeSolver {
         Self {
             kind,
             multigrid: Multigrid::new(),
+            converted: BlockMatrix::default(),
             max_iterations: MAX_ITERATIONS,
             timings: LinearSolverTimings::default(),
         }
@@ -121,14 +122,21 @@ impl IterativeSolver {
 
     /// One Krylov solve from a zero guess; `history` asks for the relative residual of
     /// every iterate (one extra product per iteration).
-    fn krylov(&self, rhs: &[f64], x: &mut [f64], rel_tol: f64, history: Option<&mut Vec<f64>>) -> KrylovOutcome {
+    fn krylov(
+        &self,
+        fine: &BlockMatrix,
+        rhs: &[f64],
+        x: &mut [f64],
+        rel_tol: f64,
+        history: Option<&mut Vec<f64>>,
+    ) -> KrylovOutcome {
         let n = rhs.len();
         // A zero start, declared as a possibly non-zero one: with `InitialGuessStatus::Zero`
         // faer 0.24.4's CG and BiCGStab start from an uninitialised residual instead of b.
         // The price is one product.
         x.iter_mut().for_each(|v| *v = 0.0);
-        let a = Operator(self.multigrid.operator());
-        let m = VCycle(&self.multigrid);
+        let a = Operator(fine);
+        let m = VCycle(&self.multigrid, fine);
         let b = MatRef::from_column_major_slice(rhs, n, 1);
         let out = MatMut::from_column_major_slice_mut(x, n, 1);
         let b_norm = dot(rhs, rhs).sqrt();
@@ -137,7 +145,7 @@ impl IterativeSolver {
         let callback = |xk: MatRef<'_, f64>| {
             if let Some(h) = hist.as_deref_mut() {
                 let xs: Vec<f64> = xk.col(0).iter().copied().collect();
-                self.multigrid.operator().residual(rhs, &xs, &mut r);
+                fine.residual(rhs, &xs, &mut r);
                 h.push(dot(&r, &r).sqrt() / b_norm);
             }
         };
@@ -177,6 +185,14 @@ impl IterativeSolver {
     }
 }
 
+/// The system's operator in rows: its own, or `converted`, the copy `prepare` made.
+fn operator<'a>(converted: &'a BlockMatrix, system: &'a LinearSystem<'_>) -> &'a BlockMatrix {
+    match system.matrix {
+        SystemMatrix::Rows(m) => m,
+        SystemMatrix::Columns(_) => converted,
+    }
+}
+
 enum KrylovOutcome {
     Converged(usize, f64),
     NotConverged(f64),
@@ -193,6 +209,10 @@ impl LinearSolver for IterativeSolver {
         true
     }
 
+    fn layout(&self) -> MatrixLayout {
+        MatrixLayout::Rows
+    }
+
     fn prepare(&mut self, system: &LinearSystem<'_>) -> Result<(), LinearSolveError> {
         let lattice = system.lattice.ok_or(LinearSolveError::NoLattice)?;
         let t = Instant::now();
@@ -201,17 +221,28 @@ impl LinearSolver for IterativeSolver {
             self.timings.symbolic_count += 1;
         }
         let t = Instant::now();
-        self.multigrid
-            .set_values(system.pattern, system.values, system.constrained)
-            .map_err(LinearSolveError::Singular)?;
+        if let SystemMatrix::Columns(values) = system.matrix {
+            if !self.converted.has_structure_of(system.pattern) {
+                self.converted = BlockMatrix::structure_of(system.pattern);
+            }
+            self.converted.copy_from_pattern(system.pattern, values);
+        }
+        let fine = operator(&self.converted, system);
+        self.multigrid.set_values(fine, system.constrained).map_err(LinearSolveError::Singular)?;
         self.timings.numeric += t.elapsed();
         self.timings.numeric_count += 1;
         Ok(())
     }
 
-    fn solve(&mut self, rhs: &[f64], x: &mut [f64], rel_tol: f64) -> Result<LinearSolveStats, LinearSolveError> {
+    fn solve(
+        &mut self,
+        system: &LinearSystem<'_>,
+        rhs: &[f64],
+        x: &mut [f64],
+        rel_tol: f64,
+    ) -> Result<LinearSolveStats, LinearSolveError> {
         let t = Instant::now();
-        let outcome = self.krylov(rhs, x, rel_tol, None);
+        let outcome = self.krylov(operator(&self.converted, system), rhs, x, rel_tol, None);
         self.timings.solve += t.elapsed();
         match outcome {
             KrylovOutcome::Converged(iterations, residual) => {
@@ -226,7 +257,7 @@ impl LinearSolver for IterativeSolver {
                 // faer reports no usable residual on failure (1.0 in 0.24.4): the history's
                 // last entry is the true one.
                 let mut history = Vec::new();
-                self.krylov(rhs, x, rel_tol, Some(&mut history));
+                self.krylov(operator(&self.converted, system), rhs, x, rel_tol, Some(&mut history));
                 let residual = history.last().copied().unwrap_or(reported);
                 Err(LinearSolveError::NotConverged(Box::new(KrylovFailure {
                     method: self.kind,
@@ -305,13 +336,13 @@ mod tests {
         n: u32,
         k: [f64; 4],
         contrast: f64,
-    ) -> (BlockPattern, Vec<f64>, Vec<bool>, NodeLattice, Vec<f64>) {
+    ) -> (BlockPattern, SystemMatrix, Vec<bool>, NodeLattice, Vec<f64>) {
         let mesh = LatticeEdges::new(n);
         let mut pattern = BlockPattern::new(2);
         pattern.update(&mesh);
         let constrained: Vec<bool> = (0..n * n * 2).map(|dof| dof / 2 < n).collect();
-        let mut values = Vec::new();
-        pattern.assemble(&mesh, &constrained, &mut values, |e, a, b, out| {
+        let mut values = SystemMatrix::new(MatrixLayout::Rows);
+        values.assemble(&pattern, &mesh, &constrained, |e, a, b, out| {
             let y = mesh.edges[e][0] / n;
             let s = if a == b { 1.0 } else { -1.0 } * if y >= n / 2 { contrast } else { 1.0 };
             out.iter_mut().zip(k).for_each(|(o, kv)| *o += s * kv);
@@ -327,15 +358,15 @@ mod tests {
     fn against_direct(kind: LinearSolverKind, n: u32, k: [f64; 4], contrast: f64, tol: f64) -> (usize, f64) {
         let (pattern, values, constrained, lattice, rhs) = lattice_system(n, k, contrast);
         let system =
-            LinearSystem { pattern: &pattern, values: &values, constrained: &constrained, lattice: Some(&lattice) };
+            LinearSystem { pattern: &pattern, matrix: &values, constrained: &constrained, lattice: Some(&lattice) };
         let mut direct = SparseDirectSolver::new(LinearSolverKind::Lu);
         direct.prepare(&system).unwrap();
         let mut exact = vec![0.0; rhs.len()];
-        LinearSolver::solve(&mut direct, &rhs, &mut exact, 0.0).unwrap();
+        LinearSolver::solve(&mut direct, &system, &rhs, &mut exact, 0.0).unwrap();
         let mut iterative = IterativeSolver::new(kind);
         iterative.prepare(&system).unwrap();
         let mut x = vec![0.0; rhs.len()];
-        let stats = iterative.solve(&rhs, &mut x, tol).unwrap();
+        let stats = iterative.solve(&system, &rhs, &mut x, tol).unwrap();
         let scale = exact.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         let err = x.iter().zip(&exact).fold(0.0f64, |m, (a, b)| m.max((a - b).abs())) / scale;
         (stats.iterations, err)
@@ -377,11 +408,11 @@ mod tests {
     fn a_solve_that_cannot_converge_is_an_error_with_its_history() {
         let (pattern, values, constrained, lattice, rhs) = lattice_system(33, [2.0, 0.5, 0.5, 1.0], 1.0);
         let system =
-            LinearSystem { pattern: &pattern, values: &values, constrained: &constrained, lattice: Some(&lattice) };
+            LinearSystem { pattern: &pattern, matrix: &values, constrained: &constrained, lattice: Some(&lattice) };
         let mut s = IterativeSolver::new(LinearSolverKind::Cg).with_max_iterations(3);
         s.prepare(&system).unwrap();
         let mut x = vec![0.0; rhs.len()];
-        let err = s.solve(&rhs, &mut x, 1e-14).unwrap_err();
+        let err = s.solve(&system, &rhs, &mut x, 1e-14).unwrap_err();
         let LinearSolveError::NotConverged(failure) = &err else { panic!("{err}") };
         let KrylovFailure { history, residual, .. } = failure.as_ref();
         // The history is the true residual of each iterate, decreasing, the last reported.
@@ -391,17 +422,32 @@ mod tests {
     }
 
     #[test]
+    fn a_system_in_columns_is_solved_as_in_rows() {
+        let (pattern, rows, constrained, lattice, rhs) = lattice_system(33, [2.0, 0.6, 0.2, 1.0], 1.0);
+        let columns = SystemMatrix::Columns(rows.to_columns(&pattern).into_owned());
+        let solve = |matrix: &SystemMatrix| {
+            let system = LinearSystem { pattern: &pattern, matrix, constrained: &constrained, lattice: Some(&lattice) };
+            let mut s = IterativeSolver::new(LinearSolverKind::BiCgStab);
+            s.prepare(&system).unwrap();
+            let mut x = vec![0.0; rhs.len()];
+            s.solve(&system, &rhs, &mut x, 1e-8).unwrap();
+            x
+        };
+        assert_eq!(solve(&rows), solve(&columns));
+    }
+
+    #[test]
     fn same_solution_on_one_and_several_threads() {
         let (pattern, values, constrained, lattice, rhs) = lattice_system(65, [2.0, 0.6, 0.2, 1.0], 1.0);
         let system =
-            LinearSystem { pattern: &pattern, values: &values, constrained: &constrained, lattice: Some(&lattice) };
+            LinearSystem { pattern: &pattern, matrix: &values, constrained: &constrained, lattice: Some(&lattice) };
         let run = |threads: usize| {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
             pool.install(|| {
                 let mut s = IterativeSolver::new(LinearSolverKind::BiCgStab);
                 s.prepare(&system).unwrap();
                 let mut x = vec![0.0; rhs.len()];
-                s.solve(&rhs, &mut x, 1e-8).unwrap();
+                s.solve(&system, &rhs, &mut x, 1e-8).unwrap();
                 x
             })
         };

@@ -11,6 +11,7 @@ mod linear;
 mod multigrid;
 mod newton;
 mod pattern;
+mod system_matrix;
 
 pub use block_matrix::BlockMatrix;
 pub use krylov::IterativeSolver;
@@ -21,3 +22,4 @@ pub use linear::{
 pub use multigrid::{Multigrid, NodeLattice};
 pub use newton::{norm, NewtonControl, NewtonError, NewtonReport, NewtonSettings};
 pub use pattern::{BlockPattern, Couplings};
+pub use system_matrix::{MatrixLayout, SystemMatrix};

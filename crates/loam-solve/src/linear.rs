@@ -13,7 +13,7 @@
 //! backend (PETSc's KSP over MPI) would hold a contiguous range of node rows and implement
 //! the same two calls (docs/theory.md §19).
 
-use crate::{BlockPattern, NodeLattice};
+use crate::{BlockPattern, MatrixLayout, NodeLattice, SystemMatrix};
 use faer::linalg::solvers::Solve;
 use faer::sparse::linalg::solvers::{Llt, Lu, SymbolicLlt, SymbolicLu};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
@@ -86,13 +86,14 @@ pub enum LinearSolverChoice {
     Forced(LinearSolverKind),
 }
 
-/// A linear system as the solvers see it: the node graph, the values assembled on it, the
-/// constrained dofs (rows and columns eliminated but for the diagonal) and, where the nodes
-/// lie on a grid, their lattice coordinates (for multigrid).
+/// A linear system as the solvers see it: the node graph, the matrix assembled on it (in
+/// the layout the solver asks for, or converted), the constrained dofs (rows and columns
+/// eliminated but for the diagonal) and, where the nodes lie on a grid, their lattice
+/// coordinates (for multigrid).
 #[derive(Debug, Clone, Copy)]
 pub struct LinearSystem<'a> {
     pub pattern: &'a BlockPattern,
-    pub values: &'a [f64],
+    pub matrix: &'a SystemMatrix,
     pub constrained: &'a [bool],
     pub lattice: Option<&'a NodeLattice>,
 }
@@ -109,6 +110,10 @@ pub struct LinearSolveStats {
 /// A linear solver. See the module docs.
 pub trait LinearSolver: Send {
     fn kind(&self) -> LinearSolverKind;
+    /// The layout to assemble the matrix in (another is converted, at the cost of a copy).
+    fn layout(&self) -> MatrixLayout {
+        MatrixLayout::Columns
+    }
     /// Whether `prepare` needs the node lattice.
     fn wants_lattice(&self) -> bool {
         false
@@ -116,8 +121,14 @@ pub trait LinearSolver: Send {
     /// Prepare for the matrix of `system`: factorise it, or build the preconditioner.
     fn prepare(&mut self, system: &LinearSystem<'_>) -> Result<(), LinearSolveError>;
     /// Solve A x = rhs into `x` to the relative residual `rel_tol` (a direct solver does
-    /// better).
-    fn solve(&mut self, rhs: &[f64], x: &mut [f64], rel_tol: f64) -> Result<LinearSolveStats, LinearSolveError>;
+    /// better), `system` the one of the last `prepare`.
+    fn solve(
+        &mut self,
+        system: &LinearSystem<'_>,
+        rhs: &[f64],
+        x: &mut [f64],
+        rel_tol: f64,
+    ) -> Result<LinearSolveStats, LinearSolveError>;
     fn timings(&self) -> LinearSolverTimings;
     /// Bytes the solver holds beyond the assembled system (a factor, a hierarchy); 0 where
     /// it is not known.
@@ -286,10 +297,16 @@ impl LinearSolver for SparseDirectSolver {
     }
 
     fn prepare(&mut self, system: &LinearSystem<'_>) -> Result<(), LinearSolveError> {
-        self.factorize(system.pattern, system.values)
+        self.factorize(system.pattern, &system.matrix.to_columns(system.pattern))
     }
 
-    fn solve(&mut self, rhs: &[f64], x: &mut [f64], _rel_tol: f64) -> Result<LinearSolveStats, LinearSolveError> {
+    fn solve(
+        &mut self,
+        _system: &LinearSystem<'_>,
+        rhs: &[f64],
+        x: &mut [f64],
+        _rel_tol: f64,
+    ) -> Result<LinearSolveStats, LinearSolveError> {
         x.copy_from_slice(rhs);
         self.solve_in_place(x)?;
         Ok(LinearSolveStats::default())

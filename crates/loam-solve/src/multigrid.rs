@@ -20,8 +20,10 @@
 //!   parallel LU gave results that depended on the thread count.
 //!
 //! The structure (lattices, transfers, coarse patterns) is built when the fine pattern's
-//! generation changes; the values at every `set_values`. Every product and transfer is
-//! row-parallel with sums in a fixed order: results do not depend on the thread count.
+//! generation changes; the values at every `set_values`. The fine operator is the caller's
+//! (the assembled tangent, not a copy): `set_values` and `apply` borrow it. Every product
+//! and transfer is row-parallel with sums in a fixed order: results do not depend on the
+//! thread count.
 
 use crate::{BlockMatrix, BlockPattern};
 use faer::dyn_stack::{MemBuffer, MemStack};
@@ -138,7 +140,7 @@ impl Transfer {
     }
 
     /// The coarse operator's node graph: I ~ J when a child of I couples to a child of J.
-    fn coarse_structure(&self, fine: &BlockMatrix) -> Vec<Vec<u32>> {
+    fn coarse_structure(&self, fine: &impl NodeGraph) -> Vec<Vec<u32>> {
         self.children
             .par_iter()
             .map(|kids| {
@@ -224,10 +226,30 @@ impl Transfer {
     }
 }
 
-/// One level: its operator, block-Jacobi inverse, λ_max(D⁻¹A), and the transfer to the
-/// next coarser level (none on the coarsest).
+/// A node graph: the column nodes of each row.
+trait NodeGraph: Sync {
+    fn row_cols(&self, i: usize) -> &[u32];
+}
+
+impl NodeGraph for BlockMatrix {
+    fn row_cols(&self, i: usize) -> &[u32] {
+        BlockMatrix::row_cols(self, i)
+    }
+}
+
+impl NodeGraph for BlockPattern {
+    fn row_cols(&self, i: usize) -> &[u32] {
+        self.neighbours(i)
+    }
+}
+
+/// One level: its operator (empty on the finest, whose operator the caller holds),
+/// block-Jacobi inverse, λ_max(D⁻¹A), and the transfer to the next coarser level (none on
+/// the coarsest).
 #[derive(Debug, Clone)]
 struct Level {
+    /// Dofs per node.
+    d: usize,
     a: BlockMatrix,
     inv_diag: Vec<f64>,
     lambda_max: f64,
@@ -274,17 +296,22 @@ impl Multigrid {
 
     /// Nodes per level, finest first.
     pub fn level_sizes(&self) -> Vec<usize> {
-        self.levels.iter().map(|l| l.a.num_nodes()).collect()
+        self.levels.iter().map(|l| l.free.len() / l.d.max(1)).collect()
     }
 
-    /// Bytes held by the operators of every level (the finest included).
+    /// Bytes held by the hierarchy (the coarse operators, smoothers and masks; the fine
+    /// operator is the caller's).
     pub fn bytes(&self) -> usize {
         self.levels.iter().map(|l| l.a.bytes() + l.inv_diag.len() * 8 + l.free.len() * 8).sum()
     }
 
-    /// The fine operator.
-    pub fn operator(&self) -> &BlockMatrix {
-        &self.levels[0].a
+    /// The operator of level `l`, `fine` on the finest.
+    fn operator<'a>(&'a self, l: usize, fine: &'a BlockMatrix) -> &'a BlockMatrix {
+        if l == 0 {
+            fine
+        } else {
+            &self.levels[l].a
+        }
     }
 
     /// Build the structure for `pattern` on `lattice` when the pattern's generation
@@ -296,42 +323,49 @@ impl Multigrid {
         assert_eq!(lattice.len(), pattern.num_nodes(), "one lattice coordinate per node");
         let d = pattern.dofs_per_node();
         let mut levels = Vec::new();
-        let mut a = BlockMatrix::structure_of(pattern);
+        // The finest operator is the caller's: its level holds an empty one.
+        let mut a = BlockMatrix::default();
+        let mut nodes = pattern.num_nodes();
         let mut lattice = lattice.clone();
-        while a.num_nodes() > COARSEST_NODES {
+        while nodes > COARSEST_NODES {
             let (coarse_lattice, parents, own) = lattice.coarsen();
-            if coarse_lattice.len() >= a.num_nodes() || coarse_lattice.is_empty() {
+            if coarse_lattice.len() >= nodes || coarse_lattice.is_empty() {
                 break;
             }
             let transfer = Transfer::new(parents, own);
-            let coarse = BlockMatrix::with_structure(d, &transfer.coarse_structure(&a));
-            levels.push(Level::new(std::mem::replace(&mut a, coarse), Some(transfer)));
+            let structure =
+                if levels.is_empty() { transfer.coarse_structure(pattern) } else { transfer.coarse_structure(&a) };
+            let coarse = BlockMatrix::with_structure(d, &structure);
+            levels.push(Level::new(d, nodes, std::mem::replace(&mut a, coarse), Some(transfer)));
+            nodes = coarse_lattice.len();
             lattice = coarse_lattice;
         }
-        levels.push(Level::new(a, None));
+        levels.push(Level::new(d, nodes, a, None));
         self.levels = levels;
         self.generation = Some(pattern.generation());
-        let scratch = self.levels.windows(2).map(|w| Scratch::sized(w[0].a.num_dofs(), w[1].a.num_dofs())).collect();
+        let scratch = self.levels.windows(2).map(|w| Scratch::sized(w[0].free.len(), w[1].free.len())).collect();
         *self.scratch.get_mut().unwrap() = scratch;
         true
     }
 
-    /// Set the fine operator's values (assembled on the pattern of `set_structure`, with
-    /// the dofs flagged in `constrained` eliminated) and recompute every coarse level.
-    pub fn set_values(&mut self, pattern: &BlockPattern, values: &[f64], constrained: &[bool]) -> Result<(), String> {
-        assert_eq!(self.generation, Some(pattern.generation()), "set_values on a stale structure");
-        self.levels[0].a.copy_from_pattern(pattern, values);
+    /// Recompute every level from the fine operator `fine` (assembled on the pattern of
+    /// `set_structure`, with the dofs flagged in `constrained` eliminated).
+    pub fn set_values(&mut self, fine: &BlockMatrix, constrained: &[bool]) -> Result<(), String> {
+        assert!(self.generation.is_some(), "set_values before set_structure");
+        assert_eq!(fine.num_dofs(), self.levels[0].free.len(), "set_values on a stale structure");
         self.levels[0].free = constrained.iter().map(|&c| if c { 0.0 } else { 1.0 }).collect();
         for l in 0..self.levels.len() {
             let (head, tail) = self.levels.split_at_mut(l + 1);
             let level = &mut head[l];
-            level.prepare_smoother();
+            let a = if l == 0 { fine } else { &level.a };
+            let (inv_diag, lambda_max) = smoother_of(a);
             if let (Some(t), Some(next)) = (&level.transfer, tail.first_mut()) {
-                t.galerkin(&level.a, &level.free, &mut next.a);
+                t.galerkin(a, &level.free, &mut next.a);
                 next.free = vec![1.0; next.a.num_dofs()];
             }
+            (level.inv_diag, level.lambda_max) = (inv_diag, lambda_max);
         }
-        let lu = DenseLu::new(&self.levels.last().unwrap().a);
+        let lu = DenseLu::new(self.operator(self.levels.len() - 1, fine));
         let mut check = vec![1.0; lu.dim()];
         lu.solve(&mut check);
         if check.iter().any(|v| !v.is_finite()) {
@@ -341,13 +375,13 @@ impl Multigrid {
         Ok(())
     }
 
-    /// One V-cycle from a zero guess: `x ≈ A⁻¹ b`.
-    pub fn apply(&self, b: &[f64], x: &mut [f64]) {
+    /// One V-cycle from a zero guess: `x ≈ A⁻¹ b`, `fine` the operator of `set_values`.
+    pub fn apply(&self, fine: &BlockMatrix, b: &[f64], x: &mut [f64]) {
         let mut scratch = self.scratch.lock().unwrap_or_else(|e| e.into_inner());
-        self.cycle(0, b, x, &mut scratch);
+        self.cycle(0, fine, b, x, &mut scratch);
     }
 
-    fn cycle(&self, l: usize, b: &[f64], x: &mut [f64], scratch: &mut [Scratch]) {
+    fn cycle(&self, l: usize, fine: &BlockMatrix, b: &[f64], x: &mut [f64], scratch: &mut [Scratch]) {
         let level = &self.levels[l];
         let Some(transfer) = &level.transfer else {
             x.copy_from_slice(b);
@@ -355,14 +389,14 @@ impl Multigrid {
             return;
         };
         let (s, rest) = scratch.split_first_mut().expect("scratch per level");
-        let d = level.a.block_size();
+        let a = self.operator(l, fine);
         x.iter_mut().for_each(|v| *v = 0.0);
-        level.smooth(b, x, true, s);
-        level.a.residual(b, x, &mut s.r);
-        transfer.restrict(d, &level.free, &s.r, &mut s.bc);
-        self.cycle(l + 1, &s.bc, &mut s.xc, rest);
-        transfer.prolong_add(d, &level.free, &s.xc, x);
-        level.smooth(b, x, false, s);
+        level.smooth(a, b, x, true, s);
+        a.residual(b, x, &mut s.r);
+        transfer.restrict(level.d, &level.free, &s.r, &mut s.bc);
+        self.cycle(l + 1, fine, &s.bc, &mut s.xc, rest);
+        transfer.prolong_add(level.d, &level.free, &s.xc, x);
+        level.smooth(a, b, x, false, s);
     }
 }
 
@@ -419,48 +453,14 @@ impl Scratch {
 }
 
 impl Level {
-    fn new(a: BlockMatrix, transfer: Option<Transfer>) -> Self {
-        Self { a, inv_diag: Vec::new(), lambda_max: 0.0, free: Vec::new(), transfer }
-    }
-
-    /// The block-Jacobi inverse and the λ_max estimate of the current values.
-    fn prepare_smoother(&mut self) {
-        let d = self.a.block_size();
-        let a = &self.a;
-        self.inv_diag = vec![0.0; a.num_nodes() * d * d];
-        self.inv_diag.par_chunks_mut(d * d).enumerate().for_each(|(i, out)| invert_block(d, &a.diagonal_block(i), out));
-        self.lambda_max = self.estimate_lambda_max();
-    }
-
-    /// An upper bound of the spectral radius of D⁻¹A: its largest absolute row sum (every
-    /// induced norm bounds the spectral radius). Chebyshev smoothing is only safe with an
-    /// interval that reaches λ_max: a power-iteration estimate from below left the
-    /// preconditioner indefinite (CG broke down) unless run for some forty products.
-    fn estimate_lambda_max(&self) -> f64 {
-        let d = self.a.block_size();
-        let dd = d * d;
-        (0..self.a.num_nodes())
-            .into_par_iter()
-            .with_min_len(256)
-            .map(|i| {
-                let inv = &self.inv_diag[i * dd..(i + 1) * dd];
-                let mut sums = [0.0f64; 3];
-                for blk in self.a.row_values(i).chunks_exact(dd) {
-                    for r in 0..d {
-                        for k in 0..d {
-                            let v: f64 = (0..d).map(|m| inv[r * d + m] * blk[m * d + k]).sum();
-                            sums[r] += v.abs();
-                        }
-                    }
-                }
-                sums[..d].iter().fold(0.0f64, |m, &v| m.max(v))
-            })
-            .reduce(|| 0.0, f64::max)
+    /// A level of `nodes` nodes; `free` is sized (all free) until values come.
+    fn new(d: usize, nodes: usize, a: BlockMatrix, transfer: Option<Transfer>) -> Self {
+        Self { d, a, inv_diag: Vec::new(), lambda_max: 0.0, free: vec![1.0; nodes * d], transfer }
     }
 
     /// `out = D⁻¹ r`.
     fn jacobi(&self, r: &[f64], out: &mut [f64]) {
-        let d = self.a.block_size();
+        let d = self.d;
         out.par_chunks_mut(d).with_min_len(256).enumerate().for_each(|(i, o)| {
             let inv = &self.inv_diag[i * d * d..(i + 1) * d * d];
             for a in 0..d {
@@ -469,9 +469,9 @@ impl Level {
         });
     }
 
-    /// Chebyshev smoothing of `A x = b` (Saad, Iterative Methods, Alg. 12.1, with the
+    /// Chebyshev smoothing of `a x = b` (Saad, Iterative Methods, Alg. 12.1, with the
     /// block-Jacobi preconditioner); `zero` says `x` is zero on entry.
-    fn smooth(&self, b: &[f64], x: &mut [f64], zero: bool, s: &mut Scratch) {
+    fn smooth(&self, a: &BlockMatrix, b: &[f64], x: &mut [f64], zero: bool, s: &mut Scratch) {
         let (lo, hi) = (CHEBYSHEV_INTERVAL.0 * self.lambda_max, CHEBYSHEV_INTERVAL.1 * self.lambda_max);
         if hi <= 0.0 || !hi.is_finite() {
             return;
@@ -482,7 +482,7 @@ impl Level {
         if zero {
             s.r.copy_from_slice(b);
         } else {
-            self.a.residual(b, x, &mut s.r);
+            a.residual(b, x, &mut s.r);
         }
         self.jacobi(&s.r, &mut s.dir);
         s.dir.iter_mut().for_each(|v| *v /= theta);
@@ -491,7 +491,7 @@ impl Level {
             if k + 1 == SMOOTHER_DEGREE {
                 break;
             }
-            self.a.apply(&s.dir, &mut s.tmp);
+            a.apply(&s.dir, &mut s.tmp);
             s.r.par_iter_mut().zip(s.tmp.par_iter()).with_min_len(1024).for_each(|(ri, ti)| *ri -= ti);
             let rho_new = 1.0 / (2.0 * sigma - rho);
             self.jacobi(&s.r, &mut s.tmp);
@@ -500,6 +500,41 @@ impl Level {
             rho = rho_new;
         }
     }
+}
+
+/// The block-Jacobi inverse of `a` and the bound on λ_max(D⁻¹A) its smoother uses.
+fn smoother_of(a: &BlockMatrix) -> (Vec<f64>, f64) {
+    let d = a.block_size();
+    let mut inv_diag = vec![0.0; a.num_nodes() * d * d];
+    inv_diag.par_chunks_mut(d * d).enumerate().for_each(|(i, out)| invert_block(d, &a.diagonal_block(i), out));
+    let lambda_max = estimate_lambda_max(a, &inv_diag);
+    (inv_diag, lambda_max)
+}
+
+/// An upper bound of the spectral radius of D⁻¹A: its largest absolute row sum (every
+/// induced norm bounds the spectral radius). Chebyshev smoothing is only safe with an
+/// interval that reaches λ_max: a power-iteration estimate from below left the
+/// preconditioner indefinite (CG broke down) unless run for some forty products.
+fn estimate_lambda_max(a: &BlockMatrix, inv_diag: &[f64]) -> f64 {
+    let d = a.block_size();
+    let dd = d * d;
+    (0..a.num_nodes())
+        .into_par_iter()
+        .with_min_len(256)
+        .map(|i| {
+            let inv = &inv_diag[i * dd..(i + 1) * dd];
+            let mut sums = [0.0f64; 3];
+            for blk in a.row_values(i).chunks_exact(dd) {
+                for r in 0..d {
+                    for k in 0..d {
+                        let v: f64 = (0..d).map(|m| inv[r * d + m] * blk[m * d + k]).sum();
+                        sums[r] += v.abs();
+                    }
+                }
+            }
+            sums[..d].iter().fold(0.0f64, |m, &v| m.max(v))
+        })
+        .reduce(|| 0.0, f64::max)
 }
 
 /// The inverse of a `d × d` block (row-major) by cofactors; a block too close to singular

@@ -2,15 +2,22 @@
 //!
 //! "Elements" are anything that couples a set of nodes: in MPM, a material point couples
 //! the nodes its basis touches. The pattern is the node–node coupling graph with a dense
-//! `d × d` block per coupled pair, stored as a compressed-column matrix over degrees of
-//! freedom (dof = node·d + component), columns of one node contiguous.
+//! `d × d` block per coupled pair. A matrix on it is stored in one of two layouts
+//! ([`SystemMatrix`](crate::SystemMatrix)): compressed columns over degrees of freedom
+//! (dof = node·d + component, the columns of one node contiguous), which faer's
+//! factorisations read, or block compressed rows ([`BlockMatrix`]), which the Krylov
+//! solvers read. The scalar column structure is built only when a factorisation asks
+//! for it: at 3 × 3 blocks its row indices take as much memory as the values.
 //!
-//! Assembly *gathers*: each node's columns are owned by one task, which adds the blocks of
-//! the elements touching it in ascending element order. No two tasks write the same value
-//! and the summation order is fixed, so the result is bitwise identical for any number of
-//! threads (docs/theory.md §7).
+//! Assembly *gathers*: each node's column (or row) is owned by one task, which adds the
+//! blocks of the elements touching it in ascending element order. No two tasks write the
+//! same value and the summation order is fixed, so the result is bitwise identical for any
+//! number of threads (docs/theory.md §7), and the same in both layouts: block (i, j) sums
+//! the elements shared by i and j in ascending order either way.
 
+use crate::BlockMatrix;
 use rayon::prelude::*;
+use std::sync::OnceLock;
 
 /// The coupling structure the pattern is built from.
 pub trait Couplings: Sync {
@@ -28,8 +35,9 @@ pub struct BlockPattern {
     dofs_per_node: usize,
     nbr_offsets: Vec<usize>,
     nbrs: Vec<u32>,
-    col_ptr: Vec<usize>,
-    row_idx: Vec<usize>,
+    /// The scalar compressed-column structure (column pointers, row indices), built on
+    /// first use.
+    scalar: OnceLock<(Vec<usize>, Vec<usize>)>,
     generation: u64,
 }
 
@@ -51,16 +59,48 @@ impl BlockPattern {
         self.num_nodes() * self.dofs_per_node
     }
 
+    /// Scalar non-zeros: `d²` per coupled node pair.
     pub fn nnz(&self) -> usize {
-        self.row_idx.len()
+        self.nbrs.len() * self.dofs_per_node * self.dofs_per_node
     }
 
+    /// Coupled node pairs (blocks).
+    pub fn num_blocks(&self) -> usize {
+        self.nbrs.len()
+    }
+
+    /// Column pointers of the scalar compressed-column structure.
     pub fn col_ptr(&self) -> &[usize] {
-        &self.col_ptr
+        &self.scalar_structure().0
     }
 
+    /// Row indices of the scalar compressed-column structure.
     pub fn row_idx(&self) -> &[usize] {
-        &self.row_idx
+        &self.scalar_structure().1
+    }
+
+    /// The scalar compressed-column structure, built on first use.
+    fn scalar_structure(&self) -> &(Vec<usize>, Vec<usize>) {
+        self.scalar.get_or_init(|| {
+            let d = self.dofs_per_node;
+            let mut col_ptr = Vec::with_capacity(self.num_dofs() + 1);
+            let mut row_idx = Vec::with_capacity(self.nnz());
+            col_ptr.push(0);
+            for j in 0..self.num_nodes() {
+                for _k in 0..d {
+                    for &i in self.neighbours(j) {
+                        row_idx.extend((0..d).map(|c| i as usize * d + c));
+                    }
+                    col_ptr.push(row_idx.len());
+                }
+            }
+            (col_ptr, row_idx)
+        })
+    }
+
+    /// Where node `j`'s columns start in the compressed-column values.
+    fn column_start(&self, j: usize) -> usize {
+        self.nbr_offsets[j] * self.dofs_per_node * self.dofs_per_node
     }
 
     /// Changes whenever `update` finds a different structure: a linear solver keeps its
@@ -112,26 +152,45 @@ impl BlockPattern {
         }
         self.nbr_offsets = offsets;
         self.nbrs = lists.concat();
-        let d = self.dofs_per_node;
-        self.col_ptr.clear();
-        self.row_idx.clear();
-        self.col_ptr.push(0);
-        for j in 0..n {
-            let nb = &self.nbrs[self.nbr_offsets[j]..self.nbr_offsets[j + 1]];
-            for _k in 0..d {
-                for &i in nb {
-                    for c in 0..d {
-                        self.row_idx.push(i as usize * d + c);
-                    }
-                }
-                self.col_ptr.push(self.row_idx.len());
-            }
-        }
+        self.scalar = OnceLock::new();
         self.generation += 1;
         true
     }
 
-    /// Assemble a matrix with this pattern into `values` (resized to `nnz`).
+    /// For every node `j` in parallel, with `out` the values `chunk(j)` long that
+    /// `values` holds from `start(j)`: `visit(j, out, e, slot_j, i, q, slot_i)` for each
+    /// element `e` touching `j` (ascending) and each node `i` of it, `q` the place of `i`
+    /// among `j`'s neighbours. The one gather loop of both layouts.
+    fn gather<C, F>(&self, couplings: &C, values: &mut [f64], visit: F)
+    where
+        C: Couplings,
+        F: Fn(usize, &mut [f64], usize, usize, usize, usize, usize) + Sync,
+    {
+        let dd = self.dofs_per_node * self.dofs_per_node;
+        let mut chunks: Vec<&mut [f64]> = Vec::with_capacity(self.num_nodes());
+        let mut rest: &mut [f64] = values;
+        for j in 0..self.num_nodes() {
+            let (head, tail) = rest.split_at_mut(self.neighbours(j).len() * dd);
+            chunks.push(head);
+            rest = tail;
+        }
+        chunks.into_par_iter().enumerate().for_each(|(j, out)| {
+            let nb = self.neighbours(j);
+            for &(e, b) in couplings.elements_of(j) {
+                let nodes = couplings.nodes_of(e as usize);
+                let mut q = 0;
+                for (a, &i) in nodes.iter().enumerate() {
+                    while nb[q] != i {
+                        q += 1;
+                    }
+                    visit(j, out, e as usize, b as usize, i as usize, q, a);
+                }
+            }
+        });
+    }
+
+    /// Assemble a matrix with this pattern into `values` (resized to `nnz`), in the
+    /// compressed-column layout.
     ///
     /// `block(element, a, b, out)` adds the d×d block coupling local node `a` (rows) and
     /// local node `b` (columns) of `element` into `out` (row-major, `out[i*d + k]`).
@@ -145,37 +204,41 @@ impl BlockPattern {
         let d = self.dofs_per_node;
         values.clear();
         values.resize(self.nnz(), 0.0);
-        let mut chunks: Vec<&mut [f64]> = Vec::with_capacity(self.num_nodes());
-        let mut rest: &mut [f64] = values;
-        for j in 0..self.num_nodes() {
-            let len = self.col_ptr[(j + 1) * d] - self.col_ptr[j * d];
-            let (head, tail) = rest.split_at_mut(len);
-            chunks.push(head);
-            rest = tail;
-        }
-        chunks.into_par_iter().enumerate().for_each(|(j, out)| {
-            let nb = self.neighbours(j);
-            let col_len = nb.len() * d;
+        self.gather(couplings, values, |j, out, e, b, i, q, a| {
+            let col_len = self.neighbours(j).len() * d;
             let mut buf = [0.0f64; 9];
-            for &(e, b) in couplings.elements_of(j) {
-                let nodes = couplings.nodes_of(e as usize);
-                let mut q = 0;
-                for (a, &i) in nodes.iter().enumerate() {
-                    while nb[q] != i {
-                        q += 1;
+            block(e, a, b, &mut buf[..d * d]);
+            for k in 0..d {
+                for r in 0..d {
+                    if kept(constrained, d, i, r, j, k) {
+                        out[k * col_len + q * d + r] += buf[r * d + k];
                     }
-                    buf[..d * d].iter_mut().for_each(|v| *v = 0.0);
-                    block(e as usize, a, b as usize, &mut buf[..d * d]);
-                    for k in 0..d {
-                        let col_fixed = constrained[j * d + k];
-                        for r in 0..d {
-                            let row_fixed = constrained[i as usize * d + r];
-                            let diagonal = i as usize == j && r == k;
-                            if (row_fixed || col_fixed) && !diagonal {
-                                continue;
-                            }
-                            out[k * col_len + q * d + r] += buf[r * d + k];
-                        }
+                }
+            }
+        });
+    }
+
+    /// As [`assemble`](Self::assemble), into the block rows of `matrix` (given this
+    /// pattern's structure if it has another): node `j`'s task fills row `j`.
+    pub fn assemble_rows<C, F>(&self, couplings: &C, constrained: &[bool], matrix: &mut BlockMatrix, block: F)
+    where
+        C: Couplings,
+        F: Fn(usize, usize, usize, &mut [f64]) + Sync,
+    {
+        let d = self.dofs_per_node;
+        if !matrix.has_structure_of(self) {
+            *matrix = BlockMatrix::structure_of(self);
+        }
+        let values = matrix.values_mut();
+        values.iter_mut().for_each(|v| *v = 0.0);
+        self.gather(couplings, values, |j, out, e, b, i, q, a| {
+            let mut buf = [0.0f64; 9];
+            // Block (j, i): node j's slot gives the rows.
+            block(e, b, a, &mut buf[..d * d]);
+            for r in 0..d {
+                for k in 0..d {
+                    if kept(constrained, d, j, r, i, k) {
+                        out[q * d * d + r * d + k] += buf[r * d + k];
                     }
                 }
             }
@@ -192,25 +255,34 @@ impl BlockPattern {
             .binary_search(&(i as u32))
             .unwrap_or_else(|_| panic!("add_block: nodes {i} and {j} are not coupled in the pattern"));
         let col_len = nb.len() * d;
-        let start = self.col_ptr[j * d];
+        let start = self.column_start(j);
         for k in 0..d {
             for r in 0..d {
-                let fixed = constrained[j * d + k] || constrained[i * d + r];
-                if fixed && !(i == j && r == k) {
-                    continue;
+                if kept(constrained, d, i, r, j, k) {
+                    values[start + k * col_len + q * d + r] += block[r * d + k];
                 }
-                values[start + k * col_len + q * d + r] += block[r * d + k];
             }
+        }
+    }
+
+    /// Entry (i·d + r, j·d + k) of the compressed-column `values`.
+    pub fn entry(&self, values: &[f64], i: usize, r: usize, j: usize, k: usize) -> f64 {
+        let d = self.dofs_per_node;
+        let nb = self.neighbours(j);
+        match nb.binary_search(&(i as u32)) {
+            Ok(q) => values[self.column_start(j) + k * nb.len() * d + q * d + r],
+            Err(_) => 0.0,
         }
     }
 
     /// `y = A x` for a matrix with this pattern.
     pub fn mul_vec(&self, values: &[f64], x: &[f64], y: &mut [f64]) {
         assert_eq!(x.len(), self.num_dofs(), "mul_vec: x has one value per dof");
+        let (col_ptr, row_idx) = self.scalar_structure();
         y.iter_mut().for_each(|v| *v = 0.0);
         for (c, xc) in x.iter().enumerate() {
-            for idx in self.col_ptr[c]..self.col_ptr[c + 1] {
-                y[self.row_idx[idx]] += values[idx] * xc;
+            for idx in col_ptr[c]..col_ptr[c + 1] {
+                y[row_idx[idx]] += values[idx] * xc;
             }
         }
     }
@@ -230,8 +302,8 @@ impl BlockPattern {
                 let len_i = self.neighbours(i).len() * d;
                 for k in 0..d {
                     for r in 0..d {
-                        let a = values[self.col_ptr[j * d] + k * len_j + q * d + r];
-                        let at = values[self.col_ptr[i * d] + r * len_i + p * d + k];
+                        let a = values[self.column_start(j) + k * len_j + q * d + r];
+                        let at = values[self.column_start(i) + r * len_i + p * d + k];
                         max_diff = max_diff.max((a - at).abs());
                         max_abs = max_abs.max(a.abs());
                     }
@@ -244,6 +316,13 @@ impl BlockPattern {
             0.0
         }
     }
+}
+
+/// Whether entry (i·d + r, j·d + k) survives the elimination of the constrained dofs: a
+/// constrained row or column keeps only its diagonal.
+#[inline]
+fn kept(constrained: &[bool], d: usize, i: usize, r: usize, j: usize, k: usize) -> bool {
+    (i == j && r == k) || !(constrained[i * d + r] || constrained[j * d + k])
 }
 
 #[cfg(test)]
