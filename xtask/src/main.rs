@@ -15,6 +15,7 @@ mod slope;
 mod soil;
 mod steps;
 mod svg;
+mod tangents;
 mod water;
 
 use anyhow::{bail, Context, Result};
@@ -65,6 +66,13 @@ enum Cmd {
         #[arg(long, default_value_t = 1.0)]
         contrast: f64,
     },
+    /// Export the systems the iterative solver meets, for other preconditioners
+    /// (`tangents.rs`).
+    Tangents {
+        /// Output folder.
+        #[arg(long, default_value = "target/tangents")]
+        out: PathBuf,
+    },
     /// Run the criterion benchmarks (`cargo bench`), passing any extra arguments on.
     Bench {
         #[arg(trailing_var_arg = true)]
@@ -77,6 +85,7 @@ fn main() -> Result<()> {
         Cmd::Verify { quick, out } => verify(quick, &out),
         Cmd::Steps { quick, out } => steps::run(quick, &out),
         Cmd::Scale { cells, solver, dim, contrast } => scale::run(dim, &cells, &solver, contrast),
+        Cmd::Tangents { out } => tangents::run(&out),
         Cmd::Bench { args } => {
             let status = std::process::Command::new(env!("CARGO"))
                 .args(["bench", "--package", "loam"])

@@ -146,6 +146,17 @@ impl<const D: usize> Engine<D> {
         self.linear.as_ref()
     }
 
+    /// Use `solver` instead of the settings' choice (as if forced; an iterative one still
+    /// needs a grid).
+    pub fn set_linear_solver(&mut self, solver: Box<dyn LinearSolver>) {
+        self.linear_choice = LinearSolverChoice::Forced(solver.kind());
+        self.matrix = SystemMatrix::new(solver.layout());
+        self.linear = solver;
+        self.linear_resolved = false;
+        // The next connect resolves the new solver and gives it the lattice it may want.
+        self.conn_current = false;
+    }
+
     /// At the first connectivity: the automatic choice turns to multigrid CG on a grid from
     /// `ITERATIVE_FROM_DOFS` where the tangent is symmetric positive definite (BiCGStab is
     /// only taken when asked for); an iterative solver asked for on a body-fitted mesh (which

@@ -11,7 +11,8 @@ use crate::{IterationProfile, StepError, StepReport};
 use loam_kernels::RunError;
 use loam_model::{LoadLevel, Model};
 use loam_solve::{
-    BlockPattern, LinearSolverChoice, LinearSolverKind, LinearSolverTimings, NewtonError, NewtonReport, NewtonSettings,
+    BlockPattern, LinearSolver, LinearSolverChoice, LinearSolverKind, LinearSolverTimings, NewtonError, NewtonReport,
+    NewtonSettings,
 };
 use std::time::Instant;
 
@@ -93,6 +94,13 @@ impl<const D: usize> QuasiStatic<D> {
 
     pub fn is_finished(&self) -> bool {
         self.step >= self.settings.load_steps
+    }
+
+    /// Solve with `solver` instead of the settings' choice: a solver of the caller's (a
+    /// distributed backend, a wrapper that records the systems), behind the same trait.
+    /// Before the first step.
+    pub fn set_linear_solver(&mut self, solver: Box<dyn LinearSolver>) {
+        self.engine.set_linear_solver(solver);
     }
 
     pub fn linear_solver_kind(&self) -> LinearSolverKind {

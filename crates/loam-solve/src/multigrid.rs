@@ -62,6 +62,11 @@ impl NodeLattice {
         self.coords.is_empty()
     }
 
+    /// The coordinates of `node`.
+    pub fn coordinates(&self, node: usize) -> [u32; 3] {
+        self.coords[node]
+    }
+
     /// The coarse lattice — the nodes of this one at even coordinates, halved — and, per
     /// node of this one, its coarse parents with their interpolation weights, and per coarse
     /// node the node of this one it sits on.
