@@ -15,12 +15,12 @@
 
 use anyhow::{Context, Result};
 use loam::analysis::Analysis;
-use loam::implicit::{Kinematics, QuasiStatic, QuasiStaticSettings};
+use loam::implicit::{Kinematics, Model, QuasiStatic, QuasiStaticSettings};
 use loam::solve::{
-    IterativeSolver, LinearSolveError, LinearSolveStats, LinearSolver, LinearSolverKind, LinearSolverTimings,
-    LinearSystem, MatrixLayout,
+    IterativeSolver, LinearSolveError, LinearSolveStats, LinearSolver, LinearSolverChoice, LinearSolverKind,
+    LinearSolverTimings, LinearSystem, MatrixLayout,
 };
-use loam_verification::layered_block;
+use loam_verification::{cut_block, layered_block};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
@@ -153,8 +153,54 @@ impl LinearSolver for Recorder {
     }
 }
 
-/// Export the systems of the elastic 3D blocks, the layered block at a contrast of 10⁶ and
-/// the von Mises footing near its mechanism into `out`.
+/// A block case: its name, how to build its model, and whether the direct solver runs it
+/// too.
+type BlockCase = (String, Box<dyn Fn() -> Model<3>>, bool);
+
+/// The elastic blocks at three sizes, the layered blocks at a contrast of 10⁶ and the cut
+/// block at three cuts with and without the ghost penalty.
+fn block_cases() -> Vec<BlockCase> {
+    let mut cases: Vec<BlockCase> = Vec::new();
+    for n in [16, 24, 32] {
+        let model = move || layered_block(n, Kinematics::FiniteStrain, true, 1.0);
+        cases.push((format!("block{n}"), Box::new(model), false));
+    }
+    for n in [16, 24] {
+        let model = move || layered_block(n, Kinematics::SmallStrain, true, 1e6);
+        cases.push((format!("layered{n}_1e6"), Box::new(model), true));
+    }
+    for overlap in [1e-2, 1e-4, 1e-6] {
+        for ghost in [None, Some(0.1)] {
+            let name = format!("cut16_{overlap:.0e}{}", if ghost.is_some() { "_ghost" } else { "" });
+            cases.push((name, Box::new(move || cut_block(16, overlap, ghost)), true));
+        }
+    }
+    cases
+}
+
+/// One load step of `model` with `recorder` as its solver, and with the direct solver if
+/// `with_direct`: the `steps.csv` row after the name.
+fn one_step(model: &dyn Fn() -> Model<3>, with_direct: bool, recorder: Recorder) -> String {
+    let settings = QuasiStaticSettings { load_steps: 1, ..Default::default() };
+    let mut qs = QuasiStatic::new(model(), settings.clone());
+    qs.set_linear_solver(Box::new(recorder));
+    let iterative = match qs.step() {
+        Ok(r) => format!("{},{},{}", r.iterations, r.linear_iterations, r.direct_fallbacks),
+        Err(e) => format!("failed: {e},,"),
+    };
+    let direct = if with_direct {
+        let settings = QuasiStaticSettings { linear_solver: LinearSolverChoice::Direct, ..settings };
+        QuasiStatic::new(model(), settings).step().map_or_else(|e| format!("failed: {e}"), |r| r.iterations.to_string())
+    } else {
+        String::new()
+    };
+    format!("{iterative},{direct}")
+}
+
+/// Export the systems of the elastic 3D blocks, the layered block at a contrast of 10⁶, the
+/// block with a small cut (with and without the ghost penalty) and the von Mises footing
+/// near its mechanism into `out`; run one step of each block with the iterative solver (and
+/// of the hard cases with the direct one too) into `steps.csv`.
 pub fn run(out: &Path) -> Result<()> {
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let written = Arc::new(Mutex::new(Vec::new()));
@@ -166,21 +212,13 @@ pub fn run(out: &Path) -> Result<()> {
         solves: 0,
         written: written.clone(),
     };
-    let blocks = [
-        (16, Kinematics::FiniteStrain, 1.0),
-        (24, Kinematics::FiniteStrain, 1.0),
-        (32, Kinematics::FiniteStrain, 1.0),
-        (16, Kinematics::SmallStrain, 1e6),
-    ];
-    for (n, kinematics, contrast) in blocks {
-        let name = if contrast == 1.0 { format!("block{n}") } else { format!("layered{n}_{contrast:.0e}") };
-        let settings = QuasiStaticSettings { load_steps: 1, ..Default::default() };
-        let mut qs = QuasiStatic::new(layered_block::<3>(n, kinematics, true, contrast), settings);
-        qs.set_linear_solver(Box::new(recorder(&name, LinearSolverKind::Cg, 0)));
-        // Only the first system is wanted: one Newton iteration's worth of work.
-        let _ = qs.step();
-        println!("{name}: written");
+    let mut steps = String::from("system,iterative: Newton iterations,Krylov,fallbacks,direct: Newton iterations\n");
+    for (name, model, with_direct) in block_cases() {
+        let row = one_step(&model, with_direct, recorder(&name, LinearSolverKind::Cg, 0));
+        println!("{name}: one step, {row}");
+        steps += &format!("{name},{row}\n");
     }
+    std::fs::write(out.join("steps.csv"), &steps)?;
     let path = Path::new("examples/footing_von_mises.ron");
     let scene = loam::io::LoadedScene::parse(path, std::fs::read_to_string(path)?)?;
     let Analysis::QuasiStatic(mut qs) = scene.build::<2>()? else { anyhow::bail!("the footing is quasi-static") };

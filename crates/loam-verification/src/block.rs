@@ -27,21 +27,47 @@ pub fn elastic_block<const D: usize>(n: usize, kinematics: Kinematics, fixed_bas
 /// [`elastic_block`] with its lower half `contrast` times softer (the stiffness-contrast
 /// hard case in a block: docs/verification.md §H); `contrast` 1 is the uniform block.
 pub fn layered_block<const D: usize>(n: usize, kinematics: Kinematics, fixed_base: bool, contrast: f64) -> Model<D> {
+    block_model(n, kinematics, fixed_base, contrast, 0.0)
+}
+
+/// The small-cut hard case in a block (docs/verification.md §H, in 2D or 3D): the uniform
+/// block, small strain, fixed base, lifted by `overlap` of a cell, so that its top face
+/// lies that far into the next layer of cells (GIMP point domains reach those cells by the
+/// overlap), and with the ghost penalty γ = `ghost` if given.
+pub fn cut_block<const D: usize>(n: usize, overlap: f64, ghost: Option<f64>) -> Model<D> {
+    let model = block_model(n, Kinematics::SmallStrain, true, 1.0, overlap);
+    match ghost {
+        Some(gamma) => model.with_ghost_penalty(gamma).expect("valid ghost penalty"),
+        None => model,
+    }
+}
+
+/// The block, its points placed at the sub-cell centres of its own cells, which are the
+/// grid's lifted by `lift` along the last axis.
+fn block_model<const D: usize>(
+    n: usize,
+    kinematics: Kinematics,
+    fixed_base: bool,
+    contrast: f64,
+    lift: f64,
+) -> Model<D> {
     let grid = Grid::new(SVector::zeros(), SVector::repeat(1.0), [n + 2; D]).expect("valid block grid");
-    let mut points = PointStore::new();
     let v = D - 1;
-    let min = SVector::<f64, D>::from_fn(|a, _| if a == v { 0.0 } else { 1.0 });
-    let max = SVector::<f64, D>::from_fn(|a, _| if a == v { n as f64 } else { n as f64 + 1.0 });
+    let offset = SVector::<f64, D>::from_fn(|a, _| if a == v { lift } else { 0.0 });
+    let cells = Grid::new(offset, SVector::repeat(1.0), [n + 2; D]).expect("valid block cells");
+    let mut points = PointStore::new();
+    let min = SVector::<f64, D>::from_fn(|a, _| if a == v { 0.0 } else { 1.0 }) + offset;
+    let max = SVector::<f64, D>::from_fn(|a, _| if a == v { n as f64 } else { n as f64 + 1.0 }) + offset;
     let layered = contrast != 1.0;
     let mut middle = max;
-    middle[v] = (n / 2) as f64;
+    middle[v] = (n / 2) as f64 + lift;
     let mut upper = min;
-    upper[v] = (n / 2) as f64;
+    upper[v] = (n / 2) as f64 + lift;
     if layered {
-        points.fill(&grid, &Shape::Box { min, max: middle }, 2, BLOCK_DENSITY, 1).expect("the layer lies in its grid");
-        points.fill(&grid, &Shape::Box { min: upper, max }, 2, BLOCK_DENSITY, 0).expect("the layer lies in its grid");
+        points.fill(&cells, &Shape::Box { min, max: middle }, 2, BLOCK_DENSITY, 1).expect("the layer lies in its grid");
+        points.fill(&cells, &Shape::Box { min: upper, max }, 2, BLOCK_DENSITY, 0).expect("the layer lies in its grid");
     } else {
-        points.fill(&grid, &Shape::Box { min, max }, 2, BLOCK_DENSITY, 0).expect("the block lies in its grid");
+        points.fill(&cells, &Shape::Box { min, max }, 2, BLOCK_DENSITY, 0).expect("the block lies in its grid");
     }
     let mut base = [fixed_base; 3];
     base[v] = true;

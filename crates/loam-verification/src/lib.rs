@@ -35,7 +35,7 @@ pub mod slope;
 pub mod water;
 
 pub use bar::{BarErrors, VibratingBar};
-pub use block::{elastic_block, layered_block};
+pub use block::{cut_block, elastic_block, layered_block};
 pub use bound::{Bound, BoundKind};
 pub use column::{
     column_errors, column_fem_model, column_model, column_model_with_spare_cells, column_stress_error, lambert_w0,
