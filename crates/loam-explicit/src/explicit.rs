@@ -17,6 +17,11 @@ const EMPTY_NODE_MASS: f64 = 1e-12;
 /// A step within this fraction of the remaining time is stretched to land on the end time
 /// (no sliver step from rounding in the accumulated time).
 const LAND_ON_END: f64 = 1e-9;
+/// A time step shorter than this fraction of the duration stops the run: it would need more
+/// than 10⁹ steps, and a step that short comes from a point moving absurdly fast (a velocity
+/// of 1e300 gave Δt = 1e-300 with time stuck at 0 while frames filled the disk) or a
+/// material whose wave speed is out of all proportion to the grid.
+const MIN_STEP_FRACTION: f64 = 1e-9;
 
 /// What one explicit step did.
 #[derive(Debug, Clone, PartialEq)]
@@ -162,11 +167,19 @@ impl<const D: usize> Explicit<D> {
 
     /// Check what can only be checked against the connectivity: every point's basis lies in
     /// the grid and every constraint holds at least one active node (the rule of
-    /// `QuasiStatic::check`). Scene validation calls this before the first step.
+    /// `QuasiStatic::check`); and that the next time step is long enough for the run to
+    /// reach its end (a fixed step above the critical one is the caller's to judge). Scene
+    /// validation calls this before the first step.
     pub fn check(&mut self) -> Result<(), ExplicitError> {
-        connect(&self.model, &mut self.conn, &mut self.constrained, self.steps + 1)?;
-        self.loads.connect(&self.model, &self.conn, self.steps + 1)?;
-        Ok(check_constraints(&self.model, &self.conn)?)
+        let step = self.steps + 1;
+        connect(&self.model, &mut self.conn, &mut self.constrained, step)?;
+        self.loads.connect(&self.model, &self.conn, step)?;
+        check_constraints(&self.model, &self.conn)?;
+        let dt = match self.time_step(step, self.critical_time_step()) {
+            Err(ExplicitError::AboveCritical { dt, .. }) => dt,
+            dt => dt?,
+        };
+        self.check_time_advances(step, dt)
     }
 
     /// Critical time step of the committed state (docs/theory.md §10):
@@ -199,6 +212,40 @@ impl<const D: usize> Explicit<D> {
         Ok(dt)
     }
 
+    /// Refuse a step too short to bring the run to its end, naming the point that sets the
+    /// critical time step and its speed.
+    fn check_time_advances(&self, step: usize, dt: f64) -> Result<(), ExplicitError> {
+        let floor = MIN_STEP_FRACTION * self.settings.duration;
+        if dt >= floor && self.time + dt > self.time {
+            return Ok(());
+        }
+        let (point, wave_speed, speed) = self.fastest_point();
+        Err(ExplicitError::TimeStepCollapsed { step, time: self.time, dt, floor, point, wave_speed, speed })
+    }
+
+    /// The point of the smallest critical time step (the lowest index among equals), its
+    /// P-wave speed and its speed.
+    fn fastest_point(&self) -> (usize, f64, f64) {
+        let pts = self.model.points();
+        let p_wave = &self.p_wave;
+        let speeds = |p: usize| {
+            let c = (p_wave[pts.material[p] as usize] * pts.volume[p] / pts.mass[p]).sqrt();
+            // By hypot, so that 1e300 is reported as such and not as its overflowed square.
+            (p, c, pts.velocity[p].iter().fold(0.0, |a: f64, &b| a.hypot(b)))
+        };
+        // A NaN speed counts as the fastest: it is the point to name.
+        let key = |t: &(usize, f64, f64)| if (t.1 + t.2).is_nan() { f64::INFINITY } else { t.1 + t.2 };
+        let faster = |a: (usize, f64, f64), b: (usize, f64, f64)| {
+            let (ka, kb) = (key(&a), key(&b));
+            if kb > ka || (kb == ka && b.0 < a.0) {
+                b
+            } else {
+                a
+            }
+        };
+        (0..pts.len()).into_par_iter().map(speeds).reduce(|| (usize::MAX, f64::NEG_INFINITY, 0.0), faster)
+    }
+
     /// Advance one time step (the last one shortened to land on `duration`), stage by
     /// stage as the crate docs number them. On error the committed state is that of the last
     /// successful step.
@@ -212,6 +259,7 @@ impl<const D: usize> Explicit<D> {
         self.loads.connect(&self.model, &self.conn, step)?;
         let critical = self.critical_time_step();
         let dt = self.time_step(step, critical)?;
+        self.check_time_advances(step, dt)?;
         self.size_buffers();
         let m_min = self.map_to_grid();
         if self.settings.scheme == UpdateScheme::Usf {
@@ -674,6 +722,23 @@ mod tests {
         let m = e * (1.0 - nu) / ((1.0 + nu) * (1.0 - 2.0 * nu));
         let expected = 0.5 / ((m / rho).sqrt() + 5.0);
         assert!((ex.critical_time_step() - expected).abs() <= 1e-14 * expected);
+    }
+
+    /// A body velocity of 1e300 makes Δt_crit = h / (c + |v|) ≈ 5e-301: the run stops at
+    /// its first step naming the point, instead of looping with time stuck at 0. All points
+    /// move alike, so the first (lowest index) is named.
+    #[test]
+    fn a_collapsed_time_step_stops_the_run() {
+        let mut ex =
+            Explicit::new(block(Vector2::new(1e300, 0.0), Vector2::zeros()), ExplicitSettings::new(1.0)).unwrap();
+        match ex.step() {
+            Err(ExplicitError::TimeStepCollapsed { step: 1, time, dt, floor, point: 0, speed, .. }) => {
+                assert_eq!((time, floor, speed), (0.0, 1e-9, 1e300));
+                assert!(dt < 1e-299, "dt {dt}");
+            }
+            other => panic!("expected a collapsed time step, got {other:?}"),
+        }
+        assert_eq!((ex.steps_done(), ex.time()), (0, 0.0));
     }
 
     /// Fixed steps that divide the duration up to rounding end exactly on it: no sliver

@@ -6,7 +6,7 @@
 use super::locate::Seg;
 use super::solver::Solver;
 use super::{AnalysisSpec, LoadedScene, MethodSpec, SceneError, StrengthReductionSpec};
-use loam_analysis::Analysis;
+use loam_analysis::{Analysis, AnalysisError};
 use loam_explicit::{Explicit, ExplicitError, ExplicitSettings, TimeStep};
 use loam_implicit::{has_strength, Dynamic, DynamicSettings, QuasiStatic, QuasiStaticSettings, StepError};
 use loam_kernels::{ConnectError, InvalidSetting};
@@ -130,7 +130,10 @@ impl LoadedScene {
                 &[Seg::Key("bodies")],
                 format!("material point {} at {:?}: its basis reaches outside the grid ({}); enlarge the grid or move the body", source.point, source.position, source.source),
             ),
-            _ => self.error(&[], e.to_string()),
+            _ => match &e {
+                AnalysisError::Explicit(ExplicitError::TimeStepCollapsed { .. }) => self.error(&[Seg::Key("bodies")], e.to_string()),
+                _ => self.error(&[], e.to_string()),
+            },
         })?;
         if let Analysis::Explicit(e) = &*analysis {
             if let TimeStep::Fixed { dt, allow_above_critical: false } = e.settings().time_step {
