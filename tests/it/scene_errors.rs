@@ -415,3 +415,35 @@ fn explicit_time_step_that_cannot_reach_the_end() {
     let e = check_text(&src).unwrap_err();
     assert!(e.to_string().contains("1e-12") && e.to_string().contains("below"), "{e}");
 }
+
+/// A file that is not UTF-8 is named as such at its first bad byte, not reported at 0:0.
+#[test]
+fn binary_scene_file_names_the_first_bad_byte() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("scene.ron");
+    std::fs::write(&path, b"(\n  title: \"\xff\xfe\",\n)").unwrap();
+    let e = LoadedScene::read(&path).unwrap_err();
+    assert_eq!((e.line, e.column), (2, 11), "{e}");
+    assert!(e.to_string().contains("not UTF-8"), "{e}");
+}
+
+/// The read is bounded: `/dev/zero` (endless) is refused after 16 MiB instead of being read
+/// until memory runs out.
+#[cfg(unix)]
+#[test]
+fn endless_scene_file_is_refused() {
+    let e = LoadedScene::read(Path::new("/dev/zero")).unwrap_err();
+    assert!(e.to_string().contains("larger than 16 MiB"), "{e}");
+}
+
+/// A UTF-8 byte-order mark (written by some Windows editors) is skipped, and errors keep
+/// their lines.
+#[test]
+fn byte_order_mark_is_skipped() {
+    check(&format!("\u{feff}{GOOD}")).unwrap();
+    refused_source(
+        &format!("\u{feff}{}", GOOD.replacen("young: 1e5", "young: -1e5", 1)),
+        line_of("young"),
+        &["positive"],
+    );
+}

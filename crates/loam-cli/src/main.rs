@@ -34,11 +34,18 @@ enum Command {
         /// iteration.
         #[arg(long, short, action = clap::ArgAction::Count, conflicts_with = "quiet")]
         verbose: u8,
+        /// The most memory the run may take (e.g. 32G, 500M, 2TiB); a scene estimated above
+        /// it is refused before its points are made [default: this machine's memory].
+        #[arg(long, value_parser = parse_size)]
+        max_memory: Option<u64>,
     },
     /// Validate a scene completely (down to points and constraints) without running it.
     Check {
         /// Scene file (RON).
         scene: PathBuf,
+        /// As for `run`.
+        #[arg(long, value_parser = parse_size)]
+        max_memory: Option<u64>,
     },
 }
 
@@ -83,19 +90,19 @@ fn main() -> ExitCode {
 
 fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
-        Command::Check { scene } => check(&scene),
-        Command::Run { scene, out, quiet, verbose } => {
+        Command::Check { scene, max_memory } => check(&scene, max_memory),
+        Command::Run { scene, out, quiet, verbose, max_memory } => {
             let out = out.unwrap_or_else(|| {
                 PathBuf::from("out").join(scene.file_stem().map(|s| s.to_owned()).unwrap_or_default())
             });
-            run_command(&scene, &out, quiet, verbose)
+            run_command(&scene, &out, quiet, verbose, max_memory)
         }
     }
 }
 
 /// `loam check`: build the scene's analysis, every check included, and say what it holds.
-fn check(scene: &Path) -> anyhow::Result<()> {
-    let loaded = LoadedScene::read(scene)?;
+fn check(scene: &Path, max_memory: Option<u64>) -> anyhow::Result<()> {
+    let loaded = LoadedScene { memory_limit: max_memory, ..LoadedScene::read(scene)? };
     let (points, dofs) = match loaded.scene.dimension {
         3 => {
             let a = loaded.build::<3>()?;
@@ -115,8 +122,8 @@ fn check(scene: &Path) -> anyhow::Result<()> {
 }
 
 /// `loam run`: the scene run into `out` under a progress bar, the solver's log above it.
-fn run_command(scene: &Path, out: &Path, quiet: bool, verbose: u8) -> anyhow::Result<()> {
-    let loaded = LoadedScene::read(scene)?;
+fn run_command(scene: &Path, out: &Path, quiet: bool, verbose: u8, max_memory: Option<u64>) -> anyhow::Result<()> {
+    let loaded = LoadedScene { memory_limit: max_memory, ..LoadedScene::read(scene)? };
     if let loam_io::scene::AnalysisSpec::QuasiStatic { strength_reduction: Some(srf), .. } = &loaded.scene.analysis {
         if !quiet {
             println!(
@@ -162,6 +169,35 @@ fn run_command(scene: &Path, out: &Path, quiet: bool, verbose: u8) -> anyhow::Re
     Ok(())
 }
 
+/// A size in bytes: a number with an optional unit K, M, G, T (powers of 1000, also KB ...)
+/// or KiB, MiB, GiB, TiB (powers of 1024).
+fn parse_size(text: &str) -> Result<u64, String> {
+    let t = text.trim();
+    let split = t.find(|c: char| c.is_ascii_alphabetic()).unwrap_or(t.len());
+    let (number, unit) = t.split_at(split);
+    let value: f64 = number
+        .trim()
+        .parse()
+        .map_err(|_| format!("{text:?} is not a size: give a number and a unit, e.g. 32G or 500MiB"))?;
+    let scale = match unit.to_ascii_uppercase().as_str() {
+        "" | "B" => 1.0,
+        "K" | "KB" => 1e3,
+        "M" | "MB" => 1e6,
+        "G" | "GB" => 1e9,
+        "T" | "TB" => 1e12,
+        "KIB" => 1024.0,
+        "MIB" => 1024f64.powi(2),
+        "GIB" => 1024f64.powi(3),
+        "TIB" => 1024f64.powi(4),
+        _ => return Err(format!("{unit:?} is not a unit: use K, M, G, T (powers of 1000) or KiB, MiB, GiB, TiB")),
+    };
+    let bytes = value * scale;
+    if !(bytes.is_finite() && bytes >= 1.0 && bytes < u64::MAX as f64) {
+        return Err(format!("{text:?}: the size must be at least one byte and finite"));
+    }
+    Ok(bytes as u64)
+}
+
 /// The solver's log on stderr above the progress bar: errors only when quiet, warnings by
 /// default, -v information (solver choice, cut-backs), -vv debug (Newton iterations).
 fn install_log(bar: &ProgressBar, quiet: bool, verbose: u8) {
@@ -194,4 +230,19 @@ fn show_progress(bar: &ProgressBar, r: &Progress, end: f64) {
         "step {} t={:.4e}/{:.4e} Δ={:.2e}{newton}{krylov}{cutbacks}",
         r.step, r.time, end, r.increment
     ));
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse_size;
+
+    #[test]
+    fn sizes_take_decimal_and_binary_units() {
+        assert_eq!(parse_size("32G"), Ok(32_000_000_000));
+        assert_eq!(parse_size("500 MiB"), Ok(500 << 20));
+        assert_eq!(parse_size("1.5gb"), Ok(1_500_000_000));
+        assert_eq!(parse_size("4096"), Ok(4096));
+        assert!(parse_size("12 parsecs").unwrap_err().contains("not a unit"));
+        assert!(parse_size("-1G").is_err() && parse_size("G").is_err());
+    }
 }

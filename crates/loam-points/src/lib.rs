@@ -349,6 +349,58 @@ impl<const D: usize> PointStore<D> {
     }
 }
 
+/// The sub-cells of size `sub` (aligned with the grid) that cover `shape`'s bounding box:
+/// the index of the first along each axis and their count along each axis; an error when
+/// there is none.
+fn sub_cell_range<const D: usize>(
+    grid: &Grid<D>,
+    shape: &Shape<D>,
+    sub: &SVector<f64, D>,
+) -> Result<([i64; D], [usize; D]), PointsError> {
+    let (lo, hi) = shape.bounds()?;
+    let origin = grid.origin();
+    // Sub-cell index ranges covering the shape's bounding box (a shape beyond the grid is
+    // caught by testing each centre).
+    let first: [i64; D] = std::array::from_fn(|a| ((lo[a] - origin[a]) / sub[a] - 0.5).ceil() as i64);
+    let last: [i64; D] = std::array::from_fn(|a| ((hi[a] - origin[a]) / sub[a] - 0.5).floor() as i64);
+    if (0..D).any(|a| first[a] > last[a]) {
+        return Err(PointsError::EmptyRegion(format!("bounds {:?} to {:?}", lo.as_slice(), hi.as_slice())));
+    }
+    Ok((first, std::array::from_fn(|a| (last[a] - first[a] + 1) as usize)))
+}
+
+/// How many points [`PointStore::fill`] would add, without allocating them: at most the
+/// sub-cells of the shape's bounding box (`exact` false, no shape test), or exactly (`exact`
+/// true: every centre tested, which takes as long as a fill's loop). For a memory estimate
+/// before a large fill.
+pub fn fill_count<const D: usize>(
+    grid: &Grid<D>,
+    shape: &Shape<D>,
+    points_per_cell: usize,
+    exact: bool,
+) -> Result<u64, PointsError> {
+    let sub = grid.cell_size() / points_per_cell.max(1) as f64;
+    let (first, dims) = sub_cell_range(grid, shape, &sub)?;
+    let bound = dims.iter().fold(1u64, |n, &d| n.saturating_mul(d as u64));
+    if !exact {
+        return Ok(bound);
+    }
+    let inside = (0..bound as usize).filter(|&k| shape.contains(&sub_cell_centre(grid, first, dims, &sub, k)));
+    Ok(inside.count() as u64)
+}
+
+/// The centre of the `k`-th sub-cell (axis 0 fastest) of the range `first`, `dims`.
+fn sub_cell_centre<const D: usize>(
+    grid: &Grid<D>,
+    first: [i64; D],
+    dims: [usize; D],
+    sub: &SVector<f64, D>,
+    k: usize,
+) -> SVector<f64, D> {
+    let ijk = lexicographic_coords(k, dims);
+    SVector::from_fn(|a, _| grid.origin()[a] + ((first[a] + ijk[a] as i64) as f64 + 0.5) * sub[a])
+}
+
 /// The centres of the sub-cells of size `sub` (aligned with the grid) that lie inside
 /// `shape`, axis 0 fastest; an error when there is none or one lies outside the grid.
 fn sub_cell_centres<const D: usize>(
@@ -359,18 +411,10 @@ fn sub_cell_centres<const D: usize>(
     let (lo, hi) = shape.bounds()?;
     let empty = || PointsError::EmptyRegion(format!("bounds {:?} to {:?}", lo.as_slice(), hi.as_slice()));
     let origin = grid.origin();
-    // Sub-cell index ranges covering the shape's bounding box (a shape beyond the grid is
-    // caught by testing each centre).
-    let first: [i64; D] = std::array::from_fn(|a| ((lo[a] - origin[a]) / sub[a] - 0.5).ceil() as i64);
-    let last: [i64; D] = std::array::from_fn(|a| ((hi[a] - origin[a]) / sub[a] - 0.5).floor() as i64);
-    if (0..D).any(|a| first[a] > last[a]) {
-        return Err(empty());
-    }
-    let dims: [usize; D] = std::array::from_fn(|a| (last[a] - first[a] + 1) as usize);
+    let (first, dims) = sub_cell_range(grid, shape, sub)?;
     let mut centres = Vec::new();
     for k in 0..dims.iter().product() {
-        let ijk = lexicographic_coords(k, dims);
-        let x = SVector::<f64, D>::from_fn(|a, _| origin[a] + ((first[a] + ijk[a] as i64) as f64 + 0.5) * sub[a]);
+        let x = sub_cell_centre(grid, first, dims, sub, k);
         if shape.contains(&x) {
             if !grid.contains(&x) {
                 return Err(PointsError::OutsideGrid {
@@ -406,6 +450,19 @@ mod tests {
         assert_relative_eq!(s.total_mass(), 3000.0, epsilon = 1e-9);
         assert_eq!(s.half_length[0], Vector2::new(0.125, 0.0625));
         assert_eq!(s.position[0], Vector2::new(0.125, 0.0625));
+    }
+
+    /// The count without filling: exact equals the fill's; the bound is the bounding box's
+    /// sub-cells (a disc of radius 1 at 4 points per unit cell: 64 in the box, 52 inside).
+    #[test]
+    fn fill_count_bounds_and_counts_the_fill() {
+        let g = Grid::<2>::new(Vector2::zeros(), Vector2::new(0.5, 0.5), [8, 8]).unwrap();
+        let disc = Shape::Ball { centre: Vector2::new(2.0, 2.0), radius: 1.0 };
+        let n = PointStore::<2>::new().fill(&g, &disc, 2, 1.0, 0).unwrap() as u64;
+        assert_eq!(fill_count(&g, &disc, 2, true).unwrap(), n);
+        assert_eq!(fill_count(&g, &disc, 2, false).unwrap(), 64);
+        // Centres (i + ½)/4 from 1 within the unit circle about (2, 2): 52, counted by hand.
+        assert_eq!(n, 52);
     }
 
     /// A prism of a right triangle (legs 8 and 4 in x and z) across y from 1 to 4: its

@@ -10,6 +10,8 @@
 //! - `locate`: the line and column of a value, for [`SceneError`];
 //! - `grid`: the dimension and the background grid;
 //! - `materials`: each material's density and constitutive law;
+//! - `memory`: the memory the scene will take, refused above the limit before any point
+//!   is made;
 //! - `bodies`: the material points (or the FEM reference's mesh) and initial velocities;
 //! - `constraints`: gravity, the plane constraints and prescribed displacements;
 //! - `loads`: forces at points, tractions and pressures on the bodies' boundaries;
@@ -36,18 +38,43 @@ mod grid;
 mod loads;
 mod locate;
 mod materials;
+mod memory;
 mod model;
 mod schema;
 mod solver;
 mod water;
 
 pub use locate::SceneError;
+pub use memory::{default_memory_limit, MemoryEstimate};
 pub use schema::*;
 
 use loam_analysis::Analysis;
 use locate::{locate, Seg};
 use nalgebra::SVector;
+use std::io::Read;
 use std::path::{Path, PathBuf};
+
+/// The largest scene file read, in bytes: the longest example is a few kB.
+pub const MAX_SCENE_BYTES: u64 = 16 << 20;
+
+/// The text of a scene file, or an error at the first byte that is not UTF-8 (a binary
+/// file, or text saved in another encoding).
+fn text_of(path: &Path, bytes: Vec<u8>) -> Result<String, SceneError> {
+    String::from_utf8(bytes).map_err(|e| {
+        let valid = &e.as_bytes()[..e.utf8_error().valid_up_to()];
+        let line = 1 + valid.iter().filter(|&&b| b == b'\n').count();
+        let start = valid.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
+        let column = 1 + String::from_utf8_lossy(&valid[start..]).chars().count();
+        SceneError {
+            file: path.to_owned(),
+            line,
+            column,
+            message:
+                "the file is not UTF-8 text (a binary file, or text saved in another encoding): save the scene as UTF-8"
+                    .to_string(),
+        }
+    })
+}
 
 /// A parsed scene with its source, so that later errors can point into the file.
 #[derive(Debug, Clone)]
@@ -55,29 +82,45 @@ pub struct LoadedScene {
     pub path: PathBuf,
     pub source: String,
     pub scene: Scene,
+    /// The most memory the run may take, in bytes: a scene estimated above it is refused
+    /// before its points are made. `None`: this machine's memory.
+    pub memory_limit: Option<u64>,
 }
 
 impl LoadedScene {
-    /// Read and parse a scene file (syntax, unknown keys, missing fields, wrong types).
+    /// Read and parse a scene file (syntax, unknown keys, missing fields, wrong types). The
+    /// read is bounded by [`MAX_SCENE_BYTES`]: a scene describes its bodies by shapes, so a
+    /// larger file is not a scene (`/dev/zero` is refused, not read until memory runs out).
     pub fn read(path: &Path) -> Result<Self, SceneError> {
-        let source = std::fs::read_to_string(path).map_err(|e| SceneError {
-            file: path.to_owned(),
-            line: 0,
-            column: 0,
-            message: format!("cannot read the scene file: {e}"),
-        })?;
-        Self::parse(path, source)
+        let error = |message: String| SceneError { file: path.to_owned(), line: 0, column: 0, message };
+        let file = std::fs::File::open(path).map_err(|e| error(format!("cannot read the scene file: {e}")))?;
+        let mut bytes = Vec::new();
+        file.take(MAX_SCENE_BYTES + 1)
+            .read_to_end(&mut bytes)
+            .map_err(|e| error(format!("cannot read the scene file: {e}")))?;
+        if bytes.len() as u64 > MAX_SCENE_BYTES {
+            return Err(error(format!(
+                "the file is larger than {} MiB; a scene is a short text that describes its bodies by shapes: is this the scene file?",
+                MAX_SCENE_BYTES >> 20
+            )));
+        }
+        Self::parse(path, text_of(path, bytes)?)
     }
 
-    /// Parse scene text; `path` is only used in error messages.
+    /// Parse scene text; `path` is only used in error messages. A leading byte-order mark
+    /// (which some Windows editors write) is skipped.
     pub fn parse(path: &Path, source: String) -> Result<Self, SceneError> {
+        let source = match source.strip_prefix('\u{feff}') {
+            Some(rest) => rest.to_string(),
+            None => source,
+        };
         let scene: Scene = ron::from_str(&source).map_err(|e| SceneError {
             file: path.to_owned(),
             line: e.span.start.line,
             column: e.span.start.col,
             message: e.code.to_string(),
         })?;
-        Ok(Self { path: path.to_owned(), source, scene })
+        Ok(Self { path: path.to_owned(), source, scene, memory_limit: None })
     }
 
     /// An error at `path` in the file.
@@ -104,6 +147,7 @@ impl LoadedScene {
         self.check_dimension::<D>()?;
         let grid = self.grid::<D>()?;
         let laws = self.materials()?;
+        self.check_memory(&grid)?;
         let bodies = self.bodies(&grid)?;
         let gravity = self.gravity::<D>()?;
         let constraints = self.constraints(&grid)?;

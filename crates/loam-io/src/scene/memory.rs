@@ -1,0 +1,116 @@
+//! The memory a scene will take, estimated before anything large is allocated, and the
+//! refusal of a scene above the limit (`loam run --max-memory`). A 2000 × 2000-cell body
+//! at 8 × 8 points per cell (256 million points) used to take more than 8 GiB within
+//! seconds of `loam check` before anything said so.
+//!
+//! The estimate is per material point and per grid node, from the peaks of measured runs
+//! (docs/scene-format.md, "Memory"). It covers the points, their connectivity, the analysis's
+//! per-point scratch and, for the implicit analyses, the tangent with the iterative solver;
+//! a sparse factorisation in 3D takes more (its fill grows faster than the points).
+
+use super::{AnalysisSpec, LoadedScene, MethodSpec, SceneError, Seg};
+use loam_grid::Grid;
+use loam_points::fill_count;
+
+/// Peak bytes per material point: (dimension, explicit analysis).
+fn bytes_per_point(dimension: usize, explicit: bool) -> u64 {
+    match (dimension, explicit) {
+        // The 48³ elastic block, multigrid CG: 3.62 GB for 884 736 points.
+        (3, false) => 4100,
+        // The 3D slope at 1 m cells, explicit, 2 and 3 points per cell and axis.
+        (3, true) => 1800,
+        // The run-out slope, one quasi-static step, 4 and 8 points per cell and axis.
+        (_, false) => 1800,
+        // The same, explicit.
+        (_, true) => 900,
+    }
+}
+
+/// Bytes per node of the whole background grid, active or not: the connectivity's map
+/// from grid node to active node (`u32`). A 20 000² grid takes 1.6 GB for it.
+const BYTES_PER_GRID_NODE: u64 = 4;
+
+/// The limit when neither the user nor the machine says: 16 GiB.
+const FALLBACK_LIMIT: u64 = 16 << 30;
+
+/// What a scene will take.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MemoryEstimate {
+    /// Material points (at most, when the estimate is a bound).
+    pub points: u64,
+    pub grid_nodes: u64,
+    pub bytes: u64,
+}
+
+/// The default limit: the machine's physical memory where it can be read (Linux), else
+/// 16 GiB; and the words that say which.
+pub fn default_memory_limit() -> (u64, &'static str) {
+    let total = std::fs::read_to_string("/proc/meminfo").ok().and_then(|text| {
+        let line = text.lines().find(|l| l.starts_with("MemTotal:"))?;
+        line.split_whitespace().nth(1)?.parse::<u64>().ok().map(|kib| kib * 1024)
+    });
+    match total {
+        Some(bytes) => (bytes, "this machine's memory"),
+        None => (FALLBACK_LIMIT, "the default, 16 GiB"),
+    }
+}
+
+impl LoadedScene {
+    /// The memory the scene will take on `grid`: with `exact` the points are counted
+    /// (every sub-cell centre tested, as long as a fill's loop but allocation-free), else
+    /// bounded by the bodies' bounding boxes (instant).
+    pub fn memory_estimate<const D: usize>(&self, grid: &Grid<D>, exact: bool) -> Result<MemoryEstimate, SceneError> {
+        let mut points = 0u64;
+        if self.scene.method == MethodSpec::Mpm {
+            for (i, b) in self.scene.bodies.iter().enumerate() {
+                let shape = self.shape::<D>(i, b)?;
+                // A shape that cannot be filled is refused by the fill, with its place.
+                points = points.saturating_add(fill_count(grid, &shape, b.points_per_cell, exact).unwrap_or(0));
+            }
+        }
+        let grid_nodes = grid.num_nodes() as u64;
+        let explicit = matches!(self.scene.analysis, AnalysisSpec::Explicit { .. });
+        let bytes = points
+            .saturating_mul(bytes_per_point(D, explicit))
+            .saturating_add(grid_nodes.saturating_mul(BYTES_PER_GRID_NODE));
+        Ok(MemoryEstimate { points, grid_nodes, bytes })
+    }
+
+    /// Refuse a scene whose estimate exceeds the limit (`memory_limit`, else the machine's
+    /// memory), before its points are made. The bound is tried first; only a scene above
+    /// the limit by its bound has its points counted.
+    pub(super) fn check_memory<const D: usize>(&self, grid: &Grid<D>) -> Result<(), SceneError> {
+        let (limit, which) = match self.memory_limit {
+            Some(limit) => (limit, "the limit given"),
+            None => default_memory_limit(),
+        };
+        if self.memory_estimate(grid, false)?.bytes <= limit {
+            return Ok(());
+        }
+        let estimate = self.memory_estimate(grid, true)?;
+        if estimate.bytes <= limit {
+            return Ok(());
+        }
+        Err(self.error(
+            &[Seg::Key("bodies")],
+            format!(
+                "the scene would take about {} ({} material points, {} grid nodes), above {} ({which}); \
+                 use fewer points per cell, larger cells or a grid that ends closer to the bodies, or raise the \
+                 limit with --max-memory",
+                human(estimate.bytes),
+                estimate.points,
+                estimate.grid_nodes,
+                human(limit)
+            ),
+        ))
+    }
+}
+
+/// Bytes in MB below a GB, else in GB.
+fn human(bytes: u64) -> String {
+    if bytes < 1_000_000_000 {
+        format!("{:.1} MB", bytes as f64 / 1e6)
+    } else {
+        format!("{:.1} GB", bytes as f64 / 1e9)
+    }
+}
