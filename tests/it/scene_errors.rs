@@ -447,3 +447,20 @@ fn byte_order_mark_is_skipped() {
         &["positive"],
     );
 }
+
+/// A quasi-static scene without constraints is refused by `loam check` as unsupported,
+/// naming the free motions, instead of failing in the factorisation with a pivot index;
+/// with only a roller on the base it names the horizontal translation alone.
+#[test]
+fn unsupported_body_names_its_free_motions() {
+    let start = GOOD.find("constraints: [").unwrap();
+    let end = start + GOOD[start..].find("],").unwrap();
+    let free = format!("{}constraints: [{}", &GOOD[..start], &GOOD[end..]);
+    let e = refused_source(&free, line_of("constraints"), &["not supported against rigid motion"]);
+    for s in ["translation along x", "translation along y", "rotation in the x-y plane"] {
+        assert!(e.to_string().contains(s), "{e} should say {s}");
+    }
+    let base_only = format!("{}constraints: [Roller(axis: Y, at: 0.0){}", &GOOD[..start], &GOOD[end..]);
+    let e = check(&base_only).unwrap_err();
+    assert!(e.to_string().contains("its translation along x;"), "{e}");
+}

@@ -82,10 +82,29 @@ fn main() -> ExitCode {
     match run(Cli::parse()) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", error_chain(&e));
             ExitCode::FAILURE
         }
     }
+}
+
+/// The error and its causes in one line, each cause once: an error whose message already
+/// quotes its source (thiserror's `"output: {0}"` with `#[from]`) is not followed by the
+/// source again, as anyhow's `{:#}` would ("X: X").
+fn error_chain(e: &anyhow::Error) -> String {
+    let mut text = String::new();
+    let mut previous = String::new();
+    for cause in e.chain() {
+        let message = cause.to_string();
+        if !previous.contains(&message) {
+            if !text.is_empty() {
+                text.push_str(": ");
+            }
+            text.push_str(&message);
+        }
+        previous = message;
+    }
+    text
 }
 
 fn run(cli: Cli) -> anyhow::Result<()> {
@@ -234,7 +253,31 @@ fn show_progress(bar: &ProgressBar, r: &Progress, end: f64) {
 
 #[cfg(test)]
 mod tests {
-    use super::parse_size;
+    use super::{error_chain, parse_size};
+
+    #[derive(Debug)]
+    struct Quoting(std::io::Error);
+
+    impl std::fmt::Display for Quoting {
+        fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+            write!(f, "output: {}", self.0)
+        }
+    }
+
+    impl std::error::Error for Quoting {
+        fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+            Some(&self.0)
+        }
+    }
+
+    /// A cause its parent already quotes is printed once; a context and a cause that adds
+    /// words are both printed.
+    #[test]
+    fn each_cause_is_printed_once() {
+        let e = anyhow::Error::new(Quoting(std::io::Error::other("disk full"))).context("running scene.ron");
+        assert_eq!(format!("{e:#}"), "running scene.ron: output: disk full: disk full");
+        assert_eq!(error_chain(&e), "running scene.ron: output: disk full");
+    }
 
     #[test]
     fn sizes_take_decimal_and_binary_units() {

@@ -109,18 +109,24 @@ impl<const D: usize> Background<D> {
         }
     }
 
+    /// Where node `node` is for the constraints: a grid node's position, a mesh node's
+    /// starting position.
+    pub fn node_reference_position(&self, node: usize) -> SVector<f64, D> {
+        match &self.mesh {
+            None => self.grid.node_position(node),
+            Some(mesh) => mesh.reference_positions()[node],
+        }
+    }
+
     /// Whether node `node` lies on node plane `plane` of `axis` — a grid node on it, or a
     /// mesh node that started on it (within 1e-9 of a cell) — and, if `within` is given,
     /// inside that box on the other axes (to within 1e-9 of a cell).
     pub fn node_on_plane(&self, node: usize, axis: usize, plane: usize, within: Option<&([f64; 3], [f64; 3])>) -> bool {
         let h = self.grid.cell_size();
-        let (on_plane, x) = match &self.mesh {
-            None => (self.grid.node_coords(node)[axis] == plane, self.grid.node_position(node)),
-            Some(mesh) => {
-                let x = mesh.reference_positions()[node];
-                let at = self.grid.origin()[axis] + plane as f64 * h[axis];
-                ((x[axis] - at).abs() <= 1e-9 * h[axis], x)
-            }
+        let x = self.node_reference_position(node);
+        let on_plane = match &self.mesh {
+            None => self.grid.node_coords(node)[axis] == plane,
+            Some(_) => (x[axis] - (self.grid.origin()[axis] + plane as f64 * h[axis])).abs() <= 1e-9 * h[axis],
         };
         on_plane
             && within.is_none_or(|(lo, hi)| {

@@ -112,9 +112,17 @@ impl<const D: usize> QuasiStatic<D> {
     }
 
     /// Check what can only be checked against the connectivity: every constraint must
-    /// hold at least one active node. Scene validation calls this before the first step.
+    /// hold at least one active node, and together they must hold the body against every
+    /// rigid-body motion (without inertia its tangent would be singular). Scene validation
+    /// calls this before the first step.
     pub fn check(&mut self) -> Result<(), StepError> {
-        self.engine.check(self.step + 1)
+        self.engine.check(self.step + 1)?;
+        let modes = self.engine.free_rigid_modes();
+        if modes.is_empty() {
+            Ok(())
+        } else {
+            Err(StepError::Unsupported { modes })
+        }
     }
 
     /// Advance one load step, cutting back as needed: connect, then attempt the increment;

@@ -67,6 +67,12 @@ pub enum StepError {
     DisplacementInDynamics { index: usize },
     #[error("the analysis is already finished ({0} steps)")]
     Finished(usize),
+    #[error(
+        "the body is not supported against rigid motion: no constraint holds its {}; a quasi-static \
+         analysis needs supports against every one (e.g. Fixed on the base, Roller on the sides)",
+        modes.iter().map(|m| m.to_string()).collect::<Vec<_>>().join(", ")
+    )]
+    Unsupported { modes: Vec<loam_model::RigidMode> },
 }
 
 /// Wall time of the phases of one Newton iteration (see `QuasiStatic::profile_iteration`).

@@ -199,3 +199,22 @@ fn inconsistent_points_and_constraint_values_are_refused() {
         ModelError::ConstraintValue { index: 0, what: "displacement" }
     );
 }
+
+/// The rigid modes no constraint holds on a 4 × 3-cell grid, every node active: all three
+/// with none; x alone with a roller on the base; none with rollers on the base and a side;
+/// the rotation alone when one node is pinned in both components.
+#[test]
+fn free_rigid_modes_are_those_no_constraint_holds() {
+    let nodes = 5 * 4;
+    let active = ActiveNodes { grid_to_active: (0..nodes).collect(), active_to_grid: (0..nodes).collect() };
+    let modes = |constraints| model_with(constraints).unwrap().free_rigid_modes(&active);
+    let base = PlaneConstraint::new(1, 0, [false, true, false]);
+    let side = PlaneConstraint::new(0, 0, [true, false, false]);
+    let pin = PlaneConstraint::new(1, 0, [true, true, false]).within([-0.1, -1.0, 0.0], [0.1, 1.0, 0.0]);
+    use RigidMode::*;
+    assert_eq!(modes(vec![]), vec![Translation(0), Translation(1), Rotation(0, 1)]);
+    assert_eq!(modes(vec![base.clone()]), vec![Translation(0)]);
+    assert_eq!(modes(vec![base, side]), vec![]);
+    assert_eq!(modes(vec![pin]), vec![Rotation(0, 1)]);
+    assert_eq!(Rotation(0, 2).to_string(), "rotation in the x-z plane");
+}

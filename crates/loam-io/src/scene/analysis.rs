@@ -132,6 +132,7 @@ impl LoadedScene {
             ),
             _ => match &e {
                 AnalysisError::Explicit(ExplicitError::TimeStepCollapsed { .. }) => self.error(&[Seg::Key("bodies")], e.to_string()),
+                AnalysisError::Implicit(StepError::Unsupported { .. }) => self.error(&[Seg::Key("constraints")], e.to_string()),
                 _ => self.error(&[], e.to_string()),
             },
         })?;
