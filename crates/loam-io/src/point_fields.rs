@@ -5,7 +5,7 @@
 //! name), and with water the pore pressure and the total stress (the stress the laws see
 //! is the effective one). A field that is off costs nothing.
 
-use crate::output::{write_csv_table, write_vtu, OutputError, PointCloud, PvdWriter};
+use crate::output::{write_csv_table, write_vtu, OutputError, PointCloud, PvdWriter, VtuFormat};
 use crate::scene::FieldSpec;
 use loam_model::{Kinematics, Model};
 use nalgebra::{Matrix3, SVector};
@@ -131,13 +131,14 @@ fn history_fields<const D: usize>(model: &Model<D>) -> Vec<(String, Vec<f64>)> {
         .collect()
 }
 
-/// Write the frame of `step` (`points_<step>.vtu`) with the `chosen` fields (pore
-/// pressures at gravity's factor `body_factor`) and add it to the PVD collection at `time`.
+/// Write the frame of `step` (`points_<step>.vtu`, in `format`, beside the PVD file) with
+/// the `chosen` fields (pore pressures at gravity's factor `body_factor`) and add it to the
+/// PVD collection at `time`.
 pub(crate) fn write_frame<const D: usize>(
     model: &Model<D>,
     chosen: &[FieldSpec],
+    format: VtuFormat,
     body_factor: f64,
-    out_dir: &Path,
     pvd: &mut PvdWriter,
     step: usize,
     time: f64,
@@ -149,7 +150,8 @@ pub(crate) fn write_frame<const D: usize>(
     cloud.vectors = f.vectors.iter().map(|(n, v)| (n.as_str(), v.as_slice())).collect();
     cloud.tensors = f.tensors.iter().map(|(n, v)| (n.as_str(), v.as_slice())).collect();
     let name = format!("points_{step:05}.vtu");
-    write_vtu(&out_dir.join(&name), &cloud)?;
+    let out_dir = pvd.path().parent().unwrap_or(Path::new("."));
+    write_vtu(&out_dir.join(&name), &cloud, format)?;
     pvd.add(time, &name)
 }
 

@@ -168,7 +168,8 @@ impl<'a, const D: usize> Outputs<'a, D> {
         let fields = spec.fields.clone().unwrap_or_else(|| default_fields(model));
         let mut pvd = if spec.vtu_every > 0 { Some(PvdWriter::create(out_dir.join("points.pvd"))?) } else { None };
         if let Some(pvd) = pvd.as_mut() {
-            write_frame(model, &fields, analysis.load_level().body_factor(), out_dir, pvd, 0, 0.0)?;
+            let level = analysis.load_level();
+            write_frame(model, &fields, spec.vtu_format.into(), level.body_factor(), pvd, 0, 0.0)?;
         }
         let mut history = None;
         if spec.history_every > 0 {
@@ -191,7 +192,8 @@ impl<'a, const D: usize> Outputs<'a, D> {
         }
         if let Some(pvd) = self.pvd.as_mut() {
             if r.step.is_multiple_of(self.spec.vtu_every) || last {
-                write_frame(model, &self.fields, r.level.body_factor(), self.out_dir, pvd, r.step, r.time)?;
+                let format = self.spec.vtu_format.into();
+                write_frame(model, &self.fields, format, r.level.body_factor(), pvd, r.step, r.time)?;
             }
         }
         Ok(())

@@ -1,7 +1,9 @@
 //! The fields of a VTU frame read back with an independent XML parser (roxmltree): every
 //! array a plastic run writes is there with one value (or one per component) per point,
 //! the plastic strain agrees with `points_final.csv` and is positive where the soil
-//! yielded, and a scene that names its fields gets those and no others.
+//! yielded, and a scene that names its fields gets those and no others. The frames are
+//! written as ASCII here; the binary writer is checked against the ASCII values bit for bit
+//! in `output::vtu`.
 
 use loam_io::{run_scene, LoadedScene};
 use std::path::Path;
@@ -22,7 +24,7 @@ const BLOCK: &str = r#"Scene(
         Displacement(axis: Y, at: 1.0, displacement: [None, Some(-0.01)]),
     ],
     analysis: QuasiStatic(load_steps: 4),
-    output: (vtu_every: 4, final_csv: true),
+    output: (vtu_every: 4, final_csv: true, vtu_format: Ascii),
 )"#;
 
 /// The PointData arrays of a frame: (name, components, values), and the point count.
@@ -81,7 +83,7 @@ fn a_plastic_frame_carries_its_state_fields() {
 #[test]
 fn a_scene_that_names_its_fields_gets_only_those() {
     let dir = tempfile::tempdir().unwrap();
-    run(&BLOCK.replace("final_csv: true)", "final_csv: true, fields: Some([PlasticStrain, MeanStress]))"), dir.path());
+    run(&BLOCK.replace("final_csv: true,", "final_csv: true, fields: Some([PlasticStrain, MeanStress]),"), dir.path());
     let (_, arrays) = point_data(&dir.path().join("points_00004.vtu"));
     let names: Vec<&str> = arrays.iter().map(|a| a.0.as_str()).collect();
     assert_eq!(names, ["plastic_strain", "p"]);

@@ -1,11 +1,11 @@
 //! Output writers: VTK XML point clouds (`.vtu`), ParaView collections
 //! (`.pvd`) and CSV tables/logs.
 //!
-//! Everything here is plain text output. Whole-file writes (VTU, PVD, whole CSV
-//! tables) go to a temporary file in the destination folder (`tempfile`) which
-//! is then renamed over the destination, so a reader never sees a half-written
-//! file and a failed write leaves the destination untouched. Append-only CSV
-//! logs flush after every row instead.
+//! CSV and PVD files are text; VTU frames are text or compressed binary (`VtuFormat`).
+//! Whole-file writes (VTU, PVD, whole CSV tables) go to a temporary file in the
+//! destination folder (`tempfile`) which is then renamed over the destination, so a
+//! reader never sees a half-written file and a failed write leaves the destination
+//! untouched. Append-only CSV logs flush after every row instead.
 
 mod csv;
 mod pvd;
@@ -13,7 +13,7 @@ mod vtu;
 
 pub use csv::{write_csv_table, CsvCell, CsvWriter};
 pub use pvd::PvdWriter;
-pub use vtu::write_vtu;
+pub use vtu::{write_vtu, VtuFormat};
 
 use std::ffi::{OsStr, OsString};
 use std::io::{self, BufWriter, Write};

@@ -3,7 +3,10 @@
 //! changing what a scene file means. None of these can fail; the values inside them are
 //! checked by the domain constructors, whose refusals the builder parts locate.
 
-use super::schema::{AntiLockingSpec, BasisSpec, KinematicsSpec, LinearSpec, MassSpec, SchemeSpec, TimeStepSpec};
+use super::schema::{
+    AntiLockingSpec, BasisSpec, KinematicsSpec, LinearSpec, MassSpec, SchemeSpec, TimeStepSpec, VtuFormatSpec,
+};
+use crate::output::VtuFormat;
 use loam_explicit::{TimeStep, UpdateScheme};
 use loam_grid::BasisKind;
 use loam_implicit::MassMatrix;
@@ -16,6 +19,16 @@ impl From<BasisSpec> for BasisKind {
             BasisSpec::Linear => BasisKind::Linear,
             BasisSpec::Gimp => BasisKind::Gimp,
             BasisSpec::QuadraticBSpline => BasisKind::QuadraticBSpline,
+        }
+    }
+}
+
+impl From<VtuFormatSpec> for VtuFormat {
+    fn from(spec: VtuFormatSpec) -> Self {
+        match spec {
+            VtuFormatSpec::Binary => VtuFormat::Binary,
+            VtuFormatSpec::BinaryDouble => VtuFormat::BinaryDouble,
+            VtuFormatSpec::Ascii => VtuFormat::Ascii,
         }
     }
 }

@@ -547,11 +547,23 @@ pub struct OutputSpec {
     /// The per-point fields of the VTU frames (and the extra columns of
     /// `points_final.csv`); `None`: every field the model has.
     pub fields: Option<Vec<FieldSpec>>,
+    /// How the VTU frames store their arrays: `Binary` (default: zlib-compressed, appended,
+    /// Float32), `BinaryDouble` (the same, Float64) or `Ascii`.
+    pub vtu_format: VtuFormatSpec,
+}
+
+/// How the VTU frames store their arrays (mirrors `output::VtuFormat`).
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+pub enum VtuFormatSpec {
+    #[default]
+    Binary,
+    BinaryDouble,
+    Ascii,
 }
 
 impl Default for OutputSpec {
     fn default() -> Self {
-        Self { vtu_every: 1, final_csv: true, history_every: 1, fields: None }
+        Self { vtu_every: 1, final_csv: true, history_every: 1, fields: None, vtu_format: VtuFormatSpec::Binary }
     }
 }
 
