@@ -23,7 +23,7 @@ enum Command {
     Run {
         /// Scene file (RON), see docs/scene-format.md.
         scene: PathBuf,
-        /// Output folder [default: out/<scene name>].
+        /// Output folder [default: out/SCENE, SCENE the scene file's name without extension].
         #[arg(long)]
         out: Option<PathBuf>,
         /// No progress bar, and only errors in the log.
