@@ -38,6 +38,11 @@ enum Command {
         /// it is refused before its points are made [default: this machine's memory].
         #[arg(long, value_parser = parse_size)]
         max_memory: Option<u64>,
+        /// Remove the outputs of another run from the output folder first (only the files
+        /// loam writes); without it such a folder is refused. A re-run of the same scene
+        /// replaces its own outputs either way.
+        #[arg(long)]
+        overwrite: bool,
     },
     /// Validate a scene completely (down to points and constraints) without running it.
     Check {
@@ -110,10 +115,13 @@ fn error_chain(e: &anyhow::Error) -> String {
 fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Check { scene, max_memory } => check(&scene, max_memory),
-        Command::Run { scene, out, quiet, verbose, max_memory } => {
+        Command::Run { scene, out, quiet, verbose, max_memory, overwrite } => {
             let out = out.unwrap_or_else(|| {
                 PathBuf::from("out").join(scene.file_stem().map(|s| s.to_owned()).unwrap_or_default())
             });
+            if overwrite {
+                loam_io::clear_output_dir(&out)?;
+            }
             run_command(&scene, &out, quiet, verbose, max_memory)
         }
     }

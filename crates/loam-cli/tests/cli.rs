@@ -105,3 +105,27 @@ fn a_scene_beyond_the_memory_limit_is_refused_first() {
     let o = loam(&["check".as_ref(), scene.as_os_str(), "--max-memory".as_ref(), "lots".as_ref()]);
     assert!(String::from_utf8_lossy(&o.stderr).contains("is not a size"));
 }
+
+/// A second scene run into the first one's folder is refused (its frames would sit beside
+/// the first's as if one run), and goes ahead with --overwrite; the same scene run again
+/// replaces its own outputs without being asked.
+#[test]
+fn another_scenes_output_folder_is_refused_unless_overwritten() {
+    let out = tempfile::tempdir().unwrap();
+    let run = |scene: &str, extra: &[&str]| {
+        let path = example(scene);
+        let mut args: Vec<&std::ffi::OsStr> =
+            vec!["run".as_ref(), path.as_os_str(), "--out".as_ref(), out.path().as_os_str(), "-q".as_ref()];
+        args.extend(extra.iter().map(std::ffi::OsStr::new));
+        loam(&args)
+    };
+    assert!(run("column.ron", &[]).status.success());
+    assert!(run("column.ron", &[]).status.success());
+    let o = run("vibrating_bar.ron", &[]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && stderr.contains("column.ron") && stderr.contains("--overwrite"), "{stderr}");
+    let o = run("vibrating_bar.ron", &["--overwrite"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let marker = std::fs::read_to_string(out.path().join("loam_run.txt")).unwrap();
+    assert!(marker.contains("vibrating_bar.ron"), "{marker}");
+}

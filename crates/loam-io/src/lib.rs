@@ -4,11 +4,13 @@
 //! interface (`loam_analysis`).
 
 pub mod output;
+pub mod output_dir;
 mod point_fields;
 pub mod runner;
 pub mod scene;
 
 pub use loam_analysis::{Analysis, AnalysisError, Progress};
+pub use output_dir::{clear_output_dir, prepare_output_dir, OutputDirError};
 pub use point_fields::write_points_csv;
 pub use runner::{run_scene, RunFailure, RunSummary};
 pub use scene::{LoadedScene, Scene, SceneError};

@@ -4,6 +4,7 @@
 //! keeps every file written so far; the error says which step failed and why.
 
 use crate::output::{CsvCell, CsvWriter, OutputError, PvdWriter};
+use crate::output_dir::{prepare_output_dir, OutputDirError};
 use crate::point_fields::{default_fields, write_frame, write_points_csv};
 use crate::scene::FieldSpec;
 use crate::scene::{AnalysisSpec, LoadedScene, OutputSpec, SceneError};
@@ -22,8 +23,8 @@ pub enum RunFailure {
     Analysis(#[from] AnalysisError),
     #[error("output: {0}")]
     Output(#[from] OutputError),
-    #[error("cannot create the output folder {}: {source}", path.display())]
-    OutputDir { path: PathBuf, source: std::io::Error },
+    #[error(transparent)]
+    OutputDir(#[from] OutputDirError),
     #[error("strength reduction: {0}")]
     StrengthReduction(#[from] StrengthReductionError),
 }
@@ -101,7 +102,7 @@ fn run_dim<const D: usize>(
 ) -> Result<RunSummary, RunFailure> {
     let start = Instant::now();
     let mut analysis: Analysis<D> = scene.build::<D>()?;
-    std::fs::create_dir_all(out_dir).map_err(|source| RunFailure::OutputDir { path: out_dir.to_owned(), source })?;
+    prepare_output_dir(out_dir, &scene.path)?;
     let factor_of_safety = strength_reduction_first(scene, &mut analysis, out_dir)?;
     let mut outputs = Outputs::create(&scene.scene.output, &analysis, out_dir)?;
     let end_time = analysis.end_time();
