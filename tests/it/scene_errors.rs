@@ -464,3 +464,36 @@ fn unsupported_body_names_its_free_motions() {
     let e = check(&base_only).unwrap_err();
     assert!(e.to_string().contains("its translation along x;"), "{e}");
 }
+
+/// Two identical bodies would double the mass: the second is refused at its shape, unless
+/// it says it may overlap.
+#[test]
+fn overlapping_bodies_are_refused_unless_allowed() {
+    let start = GOOD.find("bodies: [").unwrap() + "bodies: [".len();
+    let end = start + GOOD[start..].find("\n    ],").unwrap();
+    let body = GOOD[start..end].trim().trim_end_matches(',');
+    let twice = format!("{}{body}, {body}{}", &GOOD[..start], &GOOD[end..]);
+    let e = check(&twice).unwrap_err();
+    assert!(e.to_string().contains("body 1 overlaps body 0") && e.to_string().contains("may_overlap"), "{e}");
+    let allowed = body.replacen("shape:", "may_overlap: true, shape:", 1);
+    check(&format!("{}{body}, {allowed}{}", &GOOD[..start], &GOOD[end..])).unwrap();
+}
+
+/// A material no body uses is a warning at its name, not an error.
+#[test]
+fn an_unused_material_is_a_warning() {
+    let scene = LoadedScene::parse(Path::new("bad.ron"), GOOD.to_string()).unwrap();
+    assert!(scene.warnings().is_empty());
+    let start = GOOD.find("materials: [").unwrap() + "materials: [".len();
+    let extra = format!(
+        "{}\n        (name: \"sandd\", density: 1.0, law: Elastic(young: 1.0, poisson: 0.0)),{}",
+        &GOOD[..start],
+        &GOOD[start..]
+    );
+    let scene = LoadedScene::parse(Path::new("bad.ron"), extra.clone()).unwrap();
+    scene.build::<2>().unwrap();
+    let warnings = scene.warnings();
+    assert_eq!(warnings.len(), 1);
+    assert!(warnings[0].to_string().contains("\"sandd\" is used by no body"), "{}", warnings[0]);
+    assert_eq!(warnings[0].line, extra.lines().position(|l| l.contains("sandd")).unwrap() + 1);
+}

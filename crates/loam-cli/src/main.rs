@@ -130,6 +130,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
 /// `loam check`: build the scene's analysis, every check included, and say what it holds.
 fn check(scene: &Path, max_memory: Option<u64>) -> anyhow::Result<()> {
     let loaded = LoadedScene { memory_limit: max_memory, ..LoadedScene::read(scene)? };
+    print_warnings(&loaded);
     let (points, dofs) = match loaded.scene.dimension {
         3 => {
             let a = loaded.build::<3>()?;
@@ -148,9 +149,17 @@ fn check(scene: &Path, max_memory: Option<u64>) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// The scene's warnings on stderr, one per line.
+fn print_warnings(scene: &LoadedScene) {
+    for w in scene.warnings() {
+        eprintln!("warning: {w}");
+    }
+}
+
 /// `loam run`: the scene run into `out` under a progress bar, the solver's log above it.
 fn run_command(scene: &Path, out: &Path, quiet: bool, verbose: u8, max_memory: Option<u64>) -> anyhow::Result<()> {
     let loaded = LoadedScene { memory_limit: max_memory, ..LoadedScene::read(scene)? };
+    print_warnings(&loaded);
     if let loam_io::scene::AnalysisSpec::QuasiStatic { strength_reduction: Some(srf), .. } = &loaded.scene.analysis {
         if !quiet {
             println!(

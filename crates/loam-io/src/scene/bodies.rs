@@ -34,6 +34,7 @@ impl LoadedScene {
     /// Material points filling each body, with the body's initial velocity.
     fn material_points<const D: usize>(&self, grid: &Grid<D>) -> Result<Bodies<D>, SceneError> {
         let mut points = PointStore::<D>::new();
+        let mut shapes = Vec::new();
         for (i, b) in self.scene.bodies.iter().enumerate() {
             let material = self.body_material(i, b)?;
             let shape = self.shape::<D>(i, b)?;
@@ -41,15 +42,42 @@ impl LoadedScene {
             let added = points
                 .fill(grid, &shape, b.points_per_cell, density, material as u32)
                 .map_err(|e| self.error(&body_key(i, "shape"), format!("body {i}: {e}")))?;
+            let first = points.len() - added;
+            if !b.may_overlap {
+                self.check_overlap(i, &points.position[first..], &shapes)?;
+            }
             if let Some(v) = &b.velocity {
-                let first = points.len() - added;
                 let field = self.velocity_field::<D>(v, i)?;
                 for p in first..points.len() {
                     points.velocity[p] = field(&points.position[p]);
                 }
             }
+            shapes.push(shape);
         }
         Ok(Bodies::Points(points))
+    }
+
+    /// Refuse body `i` if one of its points lies inside an earlier body's shape: the points
+    /// of both would fill the overlap (two identical bodies double the mass without a word).
+    fn check_overlap<const D: usize>(
+        &self,
+        i: usize,
+        positions: &[SVector<f64, D>],
+        earlier: &[Shape<D>],
+    ) -> Result<(), SceneError> {
+        for x in positions {
+            if let Some(j) = earlier.iter().position(|s| s.contains(x)) {
+                return Err(self.error(
+                    &body_key(i, "shape"),
+                    format!(
+                        "body {i} overlaps body {j} (at {:?}): the points of both would fill the overlap and \
+                         its mass would count twice; move one, or set may_overlap: true on body {i} if that is meant",
+                        x.as_slice()
+                    ),
+                ));
+            }
+        }
+        Ok(())
     }
 
     /// One mesh block per body, of elements about one grid cell in size. The initial

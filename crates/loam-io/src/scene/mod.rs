@@ -123,6 +123,19 @@ impl LoadedScene {
         Ok(Self { path: path.to_owned(), source, scene, memory_limit: None })
     }
 
+    /// What is valid but probably not meant, each at its place: a material no body uses.
+    /// `loam check` and `loam run` print them before anything else.
+    pub fn warnings(&self) -> Vec<SceneError> {
+        let used = |name: &str| self.scene.bodies.iter().any(|b| b.material == name);
+        (self.scene.materials.iter().enumerate())
+            .filter(|(_, m)| !used(&m.name))
+            .map(|(i, m)| {
+                let at = [Seg::Key("materials"), Seg::Index(i), Seg::Key("name")];
+                self.error(&at, format!("material \"{}\" is used by no body (a typo in a body's material?)", m.name))
+            })
+            .collect()
+    }
+
     /// An error at `path` in the file.
     fn error(&self, path: &[Seg], message: impl Into<String>) -> SceneError {
         let (line, column) = locate(&self.source, path);

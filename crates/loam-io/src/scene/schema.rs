@@ -183,6 +183,10 @@ pub struct BodySpec {
     /// Initial velocity of the body's points (dynamic analyses); default at rest.
     #[serde(default)]
     pub velocity: Option<VelocitySpec>,
+    /// This body may overlap the bodies before it: the points of both fill the overlap, so
+    /// its mass and stiffness count twice there. Default false: an overlap is refused.
+    #[serde(default)]
+    pub may_overlap: bool,
 }
 
 /// An initial velocity field.
