@@ -1,5 +1,5 @@
 //! Build and run the V1c self-weight column in Rust, without a scene file, and compare
-//! the result with the closed-form Hencky solution.
+//! the result with the closed-form Hencky solution. Units: SI (m, kg, s; Pa, kg/m3, 10 m/s2).
 //!
 //! cargo run --release --example column_in_code
 

@@ -32,8 +32,9 @@ fn refused_source(source: &str, line: usize, says: &[&str]) -> SceneError {
     e
 }
 
+/// The 1-based line of the example's first non-comment line that contains `pat`.
 fn line_of(pat: &str) -> usize {
-    GOOD.lines().position(|l| l.contains(pat)).expect("pattern in example") + 1
+    GOOD.lines().position(|l| !l.trim_start().starts_with("//") && l.contains(pat)).expect("pattern in example") + 1
 }
 
 #[test]
