@@ -498,3 +498,24 @@ fn an_unused_material_is_a_warning() {
     assert!(warnings[0].to_string().contains("\"sandd\" is used by no body"), "{}", warnings[0]);
     assert_eq!(warnings[0].line, extra.lines().position(|l| l.contains("sandd")).unwrap() + 1);
 }
+
+/// A modulus or a weight whose products overflow the solver's arithmetic is refused at the
+/// material, pointing to the units, instead of failing in the factorisation.
+#[test]
+fn parameters_that_overflow_are_refused() {
+    refused("young: 1e5", "young: 1e308", line_of("young"), &["stiffness per cell", "1.0e308", "units"]);
+    refused("density: 2000.0", "density: 1e300", line_of("density"), &["weight over the grid's height", "units"]);
+}
+
+/// A value where a field name belongs gets a message about named fields, not the parser's
+/// "invalid std identifier, try the raw identifier".
+#[test]
+fn positional_fields_are_explained() {
+    let e = refused(
+        "Roller(axis: Y, at: 0.0)",
+        "Fixed(-0.001)",
+        line_of("Roller(axis: Y"),
+        &["expected a field name here"],
+    );
+    assert!(e.to_string().contains("Fixed(axis: Y, at: 0.0)") && !e.to_string().contains("raw identifier"), "{e}");
+}

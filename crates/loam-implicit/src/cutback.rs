@@ -10,6 +10,10 @@ use crate::{StepError, StepReport};
 use loam_solve::NewtonReport;
 use std::time::Instant;
 
+/// An increment below this fraction of the load (or of the time step) is one whose failure
+/// may be round-off rather than mechanics.
+const TINY_INCREMENT: f64 = 1e-7;
+
 /// The sub-step control of one step, from the committed position (load factor or time) to
 /// its target. The caller asks [`next`](Self::next) for the size of its next attempt and
 /// reports each attempt's outcome.
@@ -101,12 +105,29 @@ impl CutBack {
                 step,
                 load_factor,
                 cutbacks: self.done.cutbacks - 1,
-                reason,
+                reason: reason + &self.tiny_increment_hint(increment),
                 residuals: residuals.to_vec(),
             });
         }
         self.depth += 1;
         Ok(())
+    }
+
+    /// Why an increment far below the scale may not converge: the strain of an increment
+    /// 1e-8 of the load is resolved to about machine epsilon over it (1e-8 relative in a
+    /// 1 % strain), above the residual tolerance. The V1c column converges with 10⁶ load
+    /// steps and stalls at a relative residual of 1e-5 with 10⁸.
+    fn tiny_increment_hint(&self, increment: f64) -> String {
+        if increment >= TINY_INCREMENT * self.scale {
+            return String::new();
+        }
+        let of = if self.scale == 1.0 { "the full load" } else { "the time step" };
+        format!(
+            "; the last increment tried was {:.1e} of {of}: with increments that small, round-off in \
+             the strain increment can hold the residual above the tolerance, so use fewer, larger \
+             steps (or a looser residual_tolerance)",
+            increment / self.scale
+        )
     }
 
     /// The report of step `step`, which reached `load_factor` and `time` with `reactions`,
@@ -216,6 +237,25 @@ mod tests {
             }
             other => panic!("{other:?}"),
         }
+    }
+
+    /// A step that fails at an increment below 1e-7 of the load says that round-off may
+    /// be the cause and what to do; one that fails at a normal size does not.
+    #[test]
+    fn a_failure_at_a_tiny_increment_names_round_off() {
+        let fail = |target: f64| {
+            let mut control = CutBack::new(0.0, target, 1.0, 1);
+            let report = NewtonReport { residuals: vec![1.0, 1e-5], ..Default::default() };
+            control.failed(1, 0.0, target, "no convergence".into(), &report).unwrap();
+            match control.failed(1, 0.0, target / 2.0, "no convergence".into(), &report) {
+                Err(StepError::NotConverged { reason, .. }) => reason,
+                other => panic!("{other:?}"),
+            }
+        };
+        let tiny = fail(1e-8);
+        assert!(tiny.starts_with("no convergence; the last increment tried was 5.0e-9 of the full load"), "{tiny}");
+        assert!(tiny.contains("fewer, larger steps"), "{tiny}");
+        assert_eq!(fail(0.1), "no convergence");
     }
 
     /// The target is reached within round-off of the scale, without a sliver sub-step.

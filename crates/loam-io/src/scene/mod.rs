@@ -57,6 +57,18 @@ use std::path::{Path, PathBuf};
 /// The largest scene file read, in bytes: the longest example is a few kB.
 pub const MAX_SCENE_BYTES: u64 = 16 << 20;
 
+/// The parser's message, or what it means where the parser's words mislead: a value where
+/// a field name belongs (`Fixed(-0.001)`) is reported by RON as an invalid identifier.
+fn parse_message(code: &ron::Error) -> String {
+    match code {
+        ron::Error::SuggestRawIdentifier(found) | ron::Error::InvalidIdentifier(found) => format!(
+            "expected a field name here, found {found:?}: every field is named, as in \
+             Fixed(axis: Y, at: 0.0) or Elastic(young: 1e5, poisson: 0.3) (docs/scene-format.md)"
+        ),
+        other => other.to_string(),
+    }
+}
+
 /// The text of a scene file, or an error at the first byte that is not UTF-8 (a binary
 /// file, or text saved in another encoding).
 fn text_of(path: &Path, bytes: Vec<u8>) -> Result<String, SceneError> {
@@ -118,7 +130,7 @@ impl LoadedScene {
             file: path.to_owned(),
             line: e.span.start.line,
             column: e.span.start.col,
-            message: e.code.to_string(),
+            message: parse_message(&e.code),
         })?;
         Ok(Self { path: path.to_owned(), source, scene, memory_limit: None })
     }
@@ -163,6 +175,7 @@ impl LoadedScene {
         self.check_memory(&grid)?;
         let bodies = self.bodies(&grid)?;
         let gravity = self.gravity::<D>()?;
+        self.check_scales(&grid, &laws, &gravity)?;
         let constraints = self.constraints(&grid)?;
         let loads = self.loads(&grid)?;
         let solver = self.solver()?;

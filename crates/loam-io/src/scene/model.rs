@@ -11,7 +11,48 @@ use loam_model::{Load, Model, ModelError, PlaneConstraint};
 use nalgebra::SVector;
 use std::sync::Arc;
 
+/// The largest stiffness or force scale a scene may have: residual norms are sums of
+/// squares of nodal forces, which overflow double precision (1.8e308) beyond 1e154.
+const LARGEST_SCALE: f64 = 1e150;
+
 impl LoadedScene {
+    /// Refuse a material whose stiffness per cell (P-wave modulus × cell volume / smallest
+    /// cell size², the size of a tangent entry) or whose weight over the grid's height (ρ |g|
+    /// × cell volume × cells along gravity, the size of a nodal force) would overflow the
+    /// arithmetic of the tangent and the residual norms: `young: 1e308` used to pass the
+    /// check and fail in Cholesky with a pivot index.
+    pub(super) fn check_scales<const D: usize>(
+        &self,
+        grid: &Grid<D>,
+        laws: &[Arc<dyn ConstitutiveLaw>],
+        gravity: &SVector<f64, D>,
+    ) -> Result<(), SceneError> {
+        let h = grid.cell_size();
+        let volume = grid.cell_volume();
+        let height = (0..D).map(|a| grid.cells()[a] as f64).fold(0.0, f64::max);
+        for (i, (m, law)) in self.scene.materials.iter().zip(laws).enumerate() {
+            let at = |key| [Seg::Key("materials"), Seg::Index(i), Seg::Key(key)];
+            let stiffness = law.p_wave_modulus() * volume / (h.min() * h.min());
+            let weight = m.density * gravity.norm() * volume * height;
+            let (scale, what, key) = if stiffness > LARGEST_SCALE {
+                (stiffness, "stiffness per cell (P-wave modulus × cell volume / cell size²)", "law")
+            } else if weight > LARGEST_SCALE {
+                (weight, "weight over the grid's height (density × gravity × cell volume × cells)", "density")
+            } else {
+                continue;
+            };
+            return Err(self.error(
+                &at(key),
+                format!(
+                    "material \"{}\": its {what} is {scale:.1e}, beyond {LARGEST_SCALE:.0e}, where the tangent and \
+                     the residual norms overflow double precision; check the units (docs/scene-format.md, Units)",
+                    m.name
+                ),
+            ));
+        }
+        Ok(())
+    }
+
     /// The model of material points, or of the FEM reference's mesh with its initial
     /// velocities, with the scene's options.
     pub(super) fn model<const D: usize>(
