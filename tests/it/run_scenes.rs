@@ -1,7 +1,7 @@
 //! The example scenes run end to end through the runner, and their outputs hold what the
 //! docs promise.
 
-use loam::io::{run_scene, LoadedScene};
+use loam::io::{run_scene, LoadedScene, RunEvent};
 use std::path::Path;
 
 fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
@@ -18,7 +18,7 @@ fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
 fn vibrating_bar_history() {
     let dir = tempfile::tempdir().unwrap();
     let scene = LoadedScene::read(Path::new("examples/vibrating_bar.ron")).unwrap();
-    let summary = run_scene(&scene, dir.path(), &mut |_, _| {}).unwrap();
+    let summary = run_scene(&scene, dir.path(), &mut |_| {}).unwrap();
     assert_eq!(summary.steps, 60);
     let (header, rows) = read_csv(&dir.path().join("history.csv"));
     assert_eq!(
@@ -48,7 +48,7 @@ fn vibrating_bar_history() {
 fn column_history_balances_work_and_energy() {
     let dir = tempfile::tempdir().unwrap();
     let scene = LoadedScene::read(Path::new("examples/column.ron")).unwrap();
-    run_scene(&scene, dir.path(), &mut |_, _| {}).unwrap();
+    run_scene(&scene, dir.path(), &mut |_| {}).unwrap();
     let (_, rows) = read_csv(&dir.path().join("history.csv"));
     let last = rows.last().unwrap();
     let (strain, work) = (last[2], last[3]);
@@ -74,7 +74,7 @@ fn the_scene_can_force_the_linear_solver() {
         (LoadedScene::parse(path, forced).unwrap(), "sparse LU"),
     ] {
         let dir = tempfile::tempdir().unwrap();
-        let summary = run_scene(&scene, dir.path(), &mut |_, _| {}).unwrap();
+        let summary = run_scene(&scene, dir.path(), &mut |_| {}).unwrap();
         assert_eq!(summary.solver, solver);
         let (header, rows) = read_csv(&dir.path().join("points_final.csv"));
         let y = header.iter().position(|h| h == "y").unwrap();
@@ -99,7 +99,7 @@ fn column_fem_scene_runs() {
     let col = Column::V1C;
     let e = column_errors(analysis.model().points(), &col, 1, |y| col.hencky_displacement(y));
     assert!(e.top_displacement < 1e-3, "top displacement error {}", e.top_displacement);
-    let summary = run_scene(&scene, dir.path(), &mut |_, _| {}).unwrap();
+    let summary = run_scene(&scene, dir.path(), &mut |_| {}).unwrap();
     assert_eq!(summary.steps, 10);
     assert!(dir.path().join("run_log.csv").exists());
 }
@@ -116,7 +116,7 @@ fn footing_scene_writes_the_load_settlement_curve() {
     LoadedScene::read(Path::new("examples/footing_von_mises.ron")).unwrap().build::<2>().unwrap();
     let dir = tempfile::tempdir().unwrap();
     let scene = LoadedScene::read(Path::new("examples/footing_mohr_coulomb.ron")).unwrap();
-    run_scene(&scene, dir.path(), &mut |_, _| {}).unwrap();
+    run_scene(&scene, dir.path(), &mut |_| {}).unwrap();
     let (header, rows) = read_csv(&dir.path().join("run_log.csv"));
     let col = |name: &str| header.iter().position(|h| h == name).unwrap_or_else(|| panic!("{name} in {header:?}"));
     let (u, r) = (col("constraint0_displacement_y"), col("constraint0_reaction_y"));
@@ -144,8 +144,18 @@ fn footing_scene_writes_the_load_settlement_curve() {
 fn slope_scene_finds_the_factor_of_safety() {
     let dir = tempfile::tempdir().unwrap();
     let scene = LoadedScene::read(Path::new("examples/slope_undrained.ron")).unwrap();
-    let summary = run_scene(&scene, dir.path(), &mut |_, _| {}).unwrap();
+    // Progress: every trial as it finishes, all before the first step.
+    let (mut trials, mut steps) = (Vec::new(), 0);
+    let summary = run_scene(&scene, dir.path(), &mut |event| match event {
+        RunEvent::Trial(t) => {
+            assert_eq!(steps, 0, "a trial after a step");
+            trials.push(t.factor);
+        }
+        RunEvent::Step { .. } => steps += 1,
+    })
+    .unwrap();
     let fos = summary.factor_of_safety.expect("a factor of safety");
+    assert_eq!(trials, fos.trials.iter().map(|t| t.factor).collect::<Vec<_>>());
     assert!(fos.failed - fos.stable <= 0.005 && fos.stable < fos.failed);
     let n = 4.0 * fos.value();
     assert!((n / 5.5 - 1.0).abs() <= 0.10, "γH/c_u at collapse {n}");
@@ -181,7 +191,7 @@ fn slope_examples_are_valid_scenes() {
 fn load_examples_run() {
     let dir = tempfile::tempdir().unwrap();
     let cavity = LoadedScene::read(Path::new("examples/cavity_pressure.ron")).unwrap();
-    run_scene(&cavity, dir.path(), &mut |_, _| {}).unwrap();
+    run_scene(&cavity, dir.path(), &mut |_| {}).unwrap();
     let log = std::fs::read_to_string(dir.path().join("run_log.csv")).unwrap();
     let header: Vec<&str> = log.lines().next().unwrap().split(',').collect();
     let last: Vec<f64> = log.lines().last().unwrap().split(',').map(|v| v.parse().unwrap()).collect();
@@ -190,7 +200,7 @@ fn load_examples_run() {
 
     let footing = LoadedScene::read(Path::new("examples/footing_load_control.ron")).unwrap();
     let out = dir.path().join("footing");
-    let e = run_scene(&footing, &out, &mut |_, _| {}).unwrap_err();
+    let e = run_scene(&footing, &out, &mut |_| {}).unwrap_err();
     assert!(e.to_string().contains("did not converge"), "{e}");
     let log = std::fs::read_to_string(out.join("run_log.csv")).unwrap();
     let last: Vec<f64> = log.lines().last().unwrap().split(',').map(|v| v.parse().unwrap()).collect();

@@ -3,7 +3,8 @@
 use anyhow::Context;
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
-use loam_io::{run_scene, LoadedScene, Progress};
+use loam_implicit::StrengthTrial;
+use loam_io::{run_scene, LoadedScene, Progress, RunEvent};
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -176,8 +177,15 @@ fn run_command(scene: &Path, out: &Path, quiet: bool, verbose: u8, max_memory: O
         ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:40} {msg}").expect("valid template"),
     );
     install_log(&bar, quiet, verbose);
-    let summary = run_scene(&loaded, out, &mut |r, end| show_progress(&bar, r, end))
-        .with_context(|| format!("running {}", scene.display()))?;
+    let mut trials = 0;
+    let summary = run_scene(&loaded, out, &mut |event| match event {
+        RunEvent::Step { report, end } => show_progress(&bar, report, end),
+        RunEvent::Trial(t) => {
+            trials += 1;
+            show_trial(&bar, trials, t, quiet);
+        }
+    })
+    .with_context(|| format!("running {}", scene.display()))?;
     bar.finish_and_clear();
     if let Some(fos) = &summary.factor_of_safety {
         println!(
@@ -250,6 +258,27 @@ fn install_log(bar: &ProgressBar, quiet: bool, verbose: u8) {
         .with_ansi(std::io::stderr().is_terminal())
         .with_writer(move || LogLine { bar: log_bar.clone(), text: Vec::new() })
         .init();
+}
+
+/// A finished strength-reduction trial, one line above the progress bar (unless quiet),
+/// and the bar's message.
+fn show_trial(bar: &ProgressBar, k: usize, t: &StrengthTrial, quiet: bool) {
+    let outcome = if t.stable { "holds".to_string() } else { format!("fails at load factor {:.3}", t.load_factor) };
+    let line = format!(
+        "trial {k}: F = {:.4} {outcome} ({} Newton iterations, {} cut-backs, {:.1} s)",
+        t.factor,
+        t.iterations,
+        t.cutbacks,
+        t.wall_time.as_secs_f64()
+    );
+    if quiet {
+    } else if bar.is_hidden() {
+        // Not a terminal (a pipe, a log file): the bar draws nothing, so print the line.
+        println!("{line}");
+    } else {
+        bar.println(&line);
+    }
+    bar.set_message(format!("strength reduction: {line}"));
 }
 
 /// The progress bar after step `r` of a run that ends at `end`.

@@ -9,7 +9,9 @@ use crate::point_fields::{default_fields, write_frame, write_points_csv};
 use crate::scene::FieldSpec;
 use crate::scene::{AnalysisSpec, LoadedScene, OutputSpec, SceneError};
 use loam_analysis::{Analysis, AnalysisError, Progress};
-use loam_implicit::{reduced_strength, FactorOfSafety, QuasiStatic, StrengthReduction, StrengthReductionError};
+use loam_implicit::{
+    reduced_strength, FactorOfSafety, QuasiStatic, StrengthReduction, StrengthReductionError, StrengthTrial,
+};
 use loam_model::{ExternalWork, LoadLevel, Model};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -45,12 +47,21 @@ pub struct RunSummary {
     pub factor_of_safety: Option<FactorOfSafety>,
 }
 
-/// Run a scene, writing its outputs into `out_dir`; `progress` is called after each step
-/// with the step's report and the end time (quasi-static: load factor 1).
+/// What a run reports as it goes, to show progress.
+#[derive(Debug, Clone, Copy)]
+pub enum RunEvent<'a> {
+    /// A strength-reduction trial finished (they come before the run's steps).
+    Trial(&'a StrengthTrial),
+    /// A step finished; `end` is the run's end time (quasi-static: load factor 1).
+    Step { report: &'a Progress, end: f64 },
+}
+
+/// Run a scene, writing its outputs into `out_dir`; `progress` is told of each
+/// strength-reduction trial and each step as they finish.
 pub fn run_scene(
     scene: &LoadedScene,
     out_dir: &Path,
-    progress: &mut dyn FnMut(&Progress, f64),
+    progress: &mut dyn FnMut(RunEvent),
 ) -> Result<RunSummary, RunFailure> {
     match scene.scene.dimension {
         3 => run_dim::<3>(scene, out_dir, progress),
@@ -98,12 +109,12 @@ impl<const D: usize> History<D> {
 fn run_dim<const D: usize>(
     scene: &LoadedScene,
     out_dir: &Path,
-    progress: &mut dyn FnMut(&Progress, f64),
+    progress: &mut dyn FnMut(RunEvent),
 ) -> Result<RunSummary, RunFailure> {
     let start = Instant::now();
     let mut analysis: Analysis<D> = scene.build::<D>()?;
     prepare_output_dir(out_dir, &scene.path)?;
-    let factor_of_safety = strength_reduction_first(scene, &mut analysis, out_dir)?;
+    let factor_of_safety = strength_reduction_first(scene, &mut analysis, out_dir, progress)?;
     let mut outputs = Outputs::create(&scene.scene.output, &analysis, out_dir)?;
     let end_time = analysis.end_time();
     let (mut iterations, mut max_its, mut cutbacks) = (0, 0, 0);
@@ -113,7 +124,7 @@ fn run_dim<const D: usize>(
         max_its = max_its.max(r.iterations);
         cutbacks += r.cutbacks;
         outputs.record(&r, analysis.model(), analysis.is_finished())?;
-        progress(&r, end_time);
+        progress(RunEvent::Step { report: &r, end: end_time });
     }
     outputs.finish(analysis.model(), analysis.load_level())?;
     Ok(RunSummary {
@@ -137,13 +148,14 @@ fn strength_reduction_first<const D: usize>(
     scene: &LoadedScene,
     analysis: &mut Analysis<D>,
     out_dir: &Path,
+    progress: &mut dyn FnMut(RunEvent),
 ) -> Result<Option<FactorOfSafety>, RunFailure> {
     let (AnalysisSpec::QuasiStatic { strength_reduction: Some(spec), .. }, Analysis::QuasiStatic(qs)) =
         (&scene.scene.analysis, &*analysis)
     else {
         return Ok(None);
     };
-    let fos = factor_of_safety(qs, spec.bracket, spec.tolerance, out_dir)?;
+    let fos = factor_of_safety(qs, spec.bracket, spec.tolerance, out_dir, progress)?;
     let reduced = reduced_strength(qs.model(), fos.stable)?;
     *analysis = Analysis::QuasiStatic(QuasiStatic::new(reduced, qs.settings().clone()));
     Ok(Some(fos))
@@ -297,12 +309,14 @@ fn factor_of_safety<const D: usize>(
     bracket: (f64, f64),
     tolerance: f64,
     out_dir: &Path,
+    progress: &mut dyn FnMut(RunEvent),
 ) -> Result<FactorOfSafety, RunFailure> {
     let header = ["factor", "stable", "load_factor", "iterations", "cutbacks", "max_displacement", "wall_time_s"];
     let mut csv = CsvWriter::create(out_dir.join("strength_reduction.csv"), &header)?;
     let srf = StrengthReduction { trial: qs.settings().clone(), bracket, tolerance };
     let mut written = Ok(());
     let fos = srf.factor_of_safety(qs.model(), |t| {
+        progress(RunEvent::Trial(t));
         if written.is_ok() {
             written = csv.row_mixed(&[
                 CsvCell::Float(t.factor),

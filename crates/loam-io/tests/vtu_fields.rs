@@ -48,7 +48,7 @@ fn point_data(path: &Path) -> (usize, Vec<(String, usize, Vec<f64>)>) {
 
 fn run(source: &str, out: &Path) {
     let scene = LoadedScene::parse(Path::new("block.ron"), source.to_string()).unwrap();
-    run_scene(&scene, out, &mut |_, _| {}).unwrap();
+    run_scene(&scene, out, &mut |_| {}).unwrap();
 }
 
 #[test]
