@@ -519,3 +519,11 @@ fn positional_fields_are_explained() {
     );
     assert!(e.to_string().contains("Fixed(axis: Y, at: 0.0)") && !e.to_string().contains("raw identifier"), "{e}");
 }
+
+/// A mistyped cell size of 1e-308 under a 10 m body: refused as reaching outside the grid
+/// (the fill walks the grid's sub-cells, not the body's 1e309 of them, which hung `loam
+/// check`; found by the scene fuzz test).
+#[test]
+fn a_body_of_astronomically_many_cells_is_refused_at_once() {
+    refused("cell_size: [0.3125, 0.3125]", "cell_size: [0.3125, 1e-308]", line_of("shape: Box"), &["outside the grid"]);
+}

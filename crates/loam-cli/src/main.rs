@@ -4,7 +4,7 @@ use anyhow::Context;
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use loam_implicit::StrengthTrial;
-use loam_io::{run_scene, LoadedScene, Progress, RunEvent};
+use loam_io::{run_scene_until, LoadedScene, Progress, RunEvent};
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -39,6 +39,10 @@ enum Command {
         /// it is refused before its points are made [default: this machine's memory].
         #[arg(long, value_parser = parse_size)]
         max_memory: Option<u64>,
+        /// Stop after this many steps, as if the run ended there (a look at the first steps
+        /// of a long run).
+        #[arg(long)]
+        steps: Option<usize>,
         /// Remove the outputs of another run from the output folder first (only the files
         /// loam writes); without it such a folder is refused. A re-run of the same scene
         /// replaces its own outputs either way.
@@ -116,14 +120,15 @@ fn error_chain(e: &anyhow::Error) -> String {
 fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Check { scene, max_memory } => check(&scene, max_memory),
-        Command::Run { scene, out, quiet, verbose, max_memory, overwrite } => {
+        Command::Run { scene, out, quiet, verbose, max_memory, overwrite, steps } => {
             let out = out.unwrap_or_else(|| {
                 PathBuf::from("out").join(scene.file_stem().map(|s| s.to_owned()).unwrap_or_default())
             });
             if overwrite {
                 loam_io::clear_output_dir(&out)?;
             }
-            run_command(&scene, &out, quiet, verbose, max_memory)
+            let options = RunOptions { quiet, verbose, max_memory, steps };
+            run_command(&scene, &out, &options)
         }
     }
 }
@@ -158,7 +163,16 @@ fn print_warnings(scene: &LoadedScene) {
 }
 
 /// `loam run`: the scene run into `out` under a progress bar, the solver's log above it.
-fn run_command(scene: &Path, out: &Path, quiet: bool, verbose: u8, max_memory: Option<u64>) -> anyhow::Result<()> {
+/// The flags of `loam run` that shape a run.
+struct RunOptions {
+    quiet: bool,
+    verbose: u8,
+    max_memory: Option<u64>,
+    steps: Option<usize>,
+}
+
+fn run_command(scene: &Path, out: &Path, options: &RunOptions) -> anyhow::Result<()> {
+    let &RunOptions { quiet, verbose, max_memory, steps } = options;
     let loaded = LoadedScene { memory_limit: max_memory, ..LoadedScene::read(scene)? };
     print_warnings(&loaded);
     if let loam_io::scene::AnalysisSpec::QuasiStatic { strength_reduction: Some(srf), .. } = &loaded.scene.analysis {
@@ -178,7 +192,7 @@ fn run_command(scene: &Path, out: &Path, quiet: bool, verbose: u8, max_memory: O
     );
     install_log(&bar, quiet, verbose);
     let mut trials = 0;
-    let summary = run_scene(&loaded, out, &mut |event| match event {
+    let summary = run_scene_until(&loaded, out, steps, &mut |event| match event {
         RunEvent::Step { report, end } => show_progress(&bar, report, end),
         RunEvent::Trial(t) => {
             trials += 1;

@@ -24,6 +24,8 @@ pub enum MeshError {
     GaussOrder(usize),
     #[error("blocks with Gauss order {first} and {second} cannot share one mesh")]
     MixedGaussOrder { first: usize, second: usize },
+    #[error("mesh block of {elements:?} elements has more nodes than the supported {max}")]
+    TooLarge { elements: Vec<usize>, max: usize },
 }
 
 /// Why a Gauss point's shape functions could not be evaluated.
@@ -67,8 +69,11 @@ impl<const D: usize> FeMesh<D> {
         if let Some(axis) = (0..D).find(|&a| !(min[a].is_finite() && max[a].is_finite() && min[a] < max[a])) {
             return Err(MeshError::Bounds { axis, min: min[axis], max: max[axis] });
         }
-        let nodes_per_axis: [usize; D] = std::array::from_fn(|a| elements[a] + 1);
-        let num_nodes: usize = nodes_per_axis.iter().product();
+        let nodes_per_axis: [usize; D] = std::array::from_fn(|a| elements[a].saturating_add(1));
+        let num_nodes = nodes_per_axis.iter().try_fold(1usize, |n, &k| n.checked_mul(k));
+        let Some(num_nodes) = num_nodes.filter(|&n| n < u32::MAX as usize) else {
+            return Err(MeshError::TooLarge { elements: elements.to_vec(), max: u32::MAX as usize - 1 });
+        };
         let reference: Vec<SVector<f64, D>> = (0..num_nodes)
             .map(|n| {
                 let ijk = lexicographic_coords(n, nodes_per_axis);

@@ -63,9 +63,21 @@ pub fn run_scene(
     out_dir: &Path,
     progress: &mut dyn FnMut(RunEvent),
 ) -> Result<RunSummary, RunFailure> {
+    run_scene_until(scene, out_dir, None, progress)
+}
+
+/// [`run_scene`], stopped after `max_steps` steps if given (`loam run --steps`): the
+/// outputs are those of a run that ends there (its last frame, history row and
+/// `points_final.csv` at that step).
+pub fn run_scene_until(
+    scene: &LoadedScene,
+    out_dir: &Path,
+    max_steps: Option<usize>,
+    progress: &mut dyn FnMut(RunEvent),
+) -> Result<RunSummary, RunFailure> {
     match scene.scene.dimension {
-        3 => run_dim::<3>(scene, out_dir, progress),
-        _ => run_dim::<2>(scene, out_dir, progress),
+        3 => run_dim::<3>(scene, out_dir, max_steps, progress),
+        _ => run_dim::<2>(scene, out_dir, max_steps, progress),
     }
 }
 
@@ -109,6 +121,7 @@ impl<const D: usize> History<D> {
 fn run_dim<const D: usize>(
     scene: &LoadedScene,
     out_dir: &Path,
+    max_steps: Option<usize>,
     progress: &mut dyn FnMut(RunEvent),
 ) -> Result<RunSummary, RunFailure> {
     let start = Instant::now();
@@ -118,12 +131,13 @@ fn run_dim<const D: usize>(
     let mut outputs = Outputs::create(&scene.scene.output, &analysis, out_dir)?;
     let end_time = analysis.end_time();
     let (mut iterations, mut max_its, mut cutbacks) = (0, 0, 0);
-    while !analysis.is_finished() {
+    let stop = |a: &Analysis<D>| a.is_finished() || max_steps.is_some_and(|m| a.steps_done() >= m);
+    while !stop(&analysis) {
         let r = analysis.step()?;
         iterations += r.iterations;
         max_its = max_its.max(r.iterations);
         cutbacks += r.cutbacks;
-        outputs.record(&r, analysis.model(), analysis.is_finished())?;
+        outputs.record(&r, analysis.model(), stop(&analysis))?;
         progress(RunEvent::Step { report: &r, end: end_time });
     }
     outputs.finish(analysis.model(), analysis.load_level())?;

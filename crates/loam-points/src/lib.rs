@@ -50,6 +50,8 @@ pub enum PointsError {
     CutPlane,
     #[error("surfaces (for loads) are not available on a {0} yet: give the loaded part its own Box body")]
     NoSurface(&'static str),
+    #[error("the boundary would need about {facets:.1e} facets of at most {spacing} (more than 1e7): is a vertex or size mistyped?")]
+    TooManyFacets { facets: f64, spacing: f64 },
     #[error("box min {min:?} is not below max {max:?} on every axis")]
     BoxOrder { min: Vec<f64>, max: Vec<f64> },
     #[error("the store holds {points} points but {found} values of `{field}`; every field needs one per point")]
@@ -359,10 +361,13 @@ fn sub_cell_range<const D: usize>(
 ) -> Result<([i64; D], [usize; D]), PointsError> {
     let (lo, hi) = shape.bounds()?;
     let origin = grid.origin();
-    // Sub-cell index ranges covering the shape's bounding box (a shape beyond the grid is
-    // caught by testing each centre).
-    let first: [i64; D] = std::array::from_fn(|a| ((lo[a] - origin[a]) / sub[a] - 0.5).ceil() as i64);
-    let last: [i64; D] = std::array::from_fn(|a| ((hi[a] - origin[a]) / sub[a] - 0.5).floor() as i64);
+    // Sub-cell index ranges covering the shape's bounding box, clipped to the grid's
+    // sub-cells and one layer around them: a shape that reaches beyond the grid puts a
+    // centre in that layer, which the fill refuses, and a bounding box of 1e300 cells is
+    // never walked (it used to be, by `loam check` on a mistyped cell size).
+    let inside = |a: usize| ((grid.extent_max()[a] - origin[a]) / sub[a]).round() as i64;
+    let first: [i64; D] = std::array::from_fn(|a| (((lo[a] - origin[a]) / sub[a] - 0.5).ceil() as i64).max(-1));
+    let last: [i64; D] = std::array::from_fn(|a| (((hi[a] - origin[a]) / sub[a] - 0.5).floor() as i64).min(inside(a)));
     if (0..D).any(|a| first[a] > last[a]) {
         return Err(PointsError::EmptyRegion(format!("bounds {:?} to {:?}", lo.as_slice(), hi.as_slice())));
     }

@@ -119,6 +119,10 @@ impl<const D: usize> Shape<D> {
         if !(spacing.is_finite() && spacing > 0.0) {
             return Err(PointsError::Spacing(spacing));
         }
+        let facets = self.facet_estimate(&lo, &hi, spacing);
+        if facets.is_nan() || facets > MAX_FACETS {
+            return Err(PointsError::TooManyFacets { facets, spacing });
+        }
         let mut s = Surface::default();
         match (self, D) {
             (Shape::Box { .. }, 2) => {
@@ -161,6 +165,26 @@ impl<const D: usize> Shape<D> {
     }
 }
 
+impl<const D: usize> Shape<D> {
+    /// About how many facets of at most `spacing` the boundary takes, for a shape with the
+    /// bounds `lo`, `hi` (before any is made: a mistyped vertex at 1e9 used to make
+    /// `loam check` cut a billion-long edge into pieces).
+    fn facet_estimate(&self, lo: &SVector<f64, D>, hi: &SVector<f64, D>, spacing: f64) -> f64 {
+        let e = hi - lo;
+        match (self, D) {
+            (Shape::Box { .. }, 2) => 2.0 * (e[0] + e[1]) / spacing,
+            (Shape::Box { .. }, _) => 4.0 * (e[0] * e[1] + e[1] * e[2] + e[2] * e[0]) / (spacing * spacing),
+            (Shape::Polygon(v), _) => (0..v.len()).map(|i| (v[(i + 1) % v.len()] - v[i]).norm()).sum::<f64>() / spacing,
+            (Shape::Ball { radius, .. }, 2) => 2.0 * std::f64::consts::PI * radius / spacing,
+            (Shape::Ball { radius, .. }, _) => 12.0 * (std::f64::consts::FRAC_PI_2 * radius / spacing).powi(2),
+            (Shape::Prism { .. } | Shape::CutBox { .. }, _) => 0.0,
+        }
+    }
+}
+
+/// The most facets a boundary may have (about 0.6 GB of them).
+const MAX_FACETS: f64 = 1e7;
+
 /// Twice the signed area of a polygon (positive counter-clockwise).
 fn signed_area(v: &[Vector2<f64>]) -> f64 {
     (0..v.len()).map(|i| v[i].perp(&v[(i + 1) % v.len()])).sum()
@@ -202,6 +226,20 @@ mod tests {
             volume += area_vector(&x).dot(&centroid) / D as f64;
         }
         (s.total_area_vector().norm(), volume)
+    }
+
+    /// A polygon with a vertex mistyped to 1e9 is refused before any facet is made; the
+    /// estimate of a 2D box is its perimeter over the spacing.
+    #[test]
+    fn a_boundary_of_too_many_facets_is_refused() {
+        let spike = Shape::<2>::Polygon(vec![Vector2::new(0.0, 0.0), Vector2::new(1e9, 0.5), Vector2::new(0.0, 1.0)]);
+        match spike.boundary(0.0625) {
+            Err(PointsError::TooManyFacets { facets, .. }) => assert_relative_eq!(facets, 3.2e10, max_relative = 1e-6),
+            other => panic!("{other:?}"),
+        }
+        let b = Shape::<2>::Box { min: Vector2::zeros(), max: Vector2::new(2.0, 1.0) };
+        assert_eq!(b.facet_estimate(&Vector2::zeros(), &Vector2::new(2.0, 1.0), 0.5), 12.0);
+        assert_eq!(b.boundary(0.5).unwrap().facets.len(), 12);
     }
 
     #[test]

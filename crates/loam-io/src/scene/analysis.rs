@@ -17,11 +17,15 @@ fn analysis_key(key: &str) -> [Seg<'_>; 2] {
     [Seg::Key("analysis"), Seg::Key(key)]
 }
 
+/// The most halvings of a step.
+const MAX_CUTBACKS: usize = 40;
+
 impl LoadedScene {
     /// The scene's analysis of `model`; each setting the analysis refuses is reported at
     /// its key.
     pub(super) fn analysis<const D: usize>(&self, model: Model<D>, solver: Solver) -> Result<Analysis<D>, SceneError> {
         let Solver { newton, linear_solver, extrapolate } = solver;
+        self.check_cutbacks()?;
         Ok(match self.scene.analysis {
             AnalysisSpec::QuasiStatic { load_steps, max_cutbacks, strength_reduction } => {
                 if load_steps == 0 {
@@ -54,6 +58,23 @@ impl LoadedScene {
                 self.explicit(model, settings)?
             }
         })
+    }
+
+    /// At most `MAX_CUTBACKS` halvings of a step: 2⁻⁴⁰ of a load step is below what
+    /// round-off resolves, and each halving that fails costs a Newton solve, so a larger
+    /// limit only makes a failing run look hung.
+    fn check_cutbacks(&self) -> Result<(), SceneError> {
+        let max_cutbacks = match self.scene.analysis {
+            AnalysisSpec::QuasiStatic { max_cutbacks, .. } | AnalysisSpec::ImplicitDynamic { max_cutbacks, .. } => {
+                max_cutbacks
+            }
+            AnalysisSpec::Explicit { .. } => return Ok(()),
+        };
+        if max_cutbacks > MAX_CUTBACKS {
+            let message = format!("max_cutbacks is {max_cutbacks}; it must be at most {MAX_CUTBACKS} (2^-{MAX_CUTBACKS} of a step is below round-off)");
+            return Err(self.error(&analysis_key("max_cutbacks"), message));
+        }
+        Ok(())
     }
 
     /// A bracket (holds, fails) with 0 < holds < fails, a tolerance below its width, and a

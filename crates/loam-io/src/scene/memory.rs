@@ -10,7 +10,7 @@
 
 use super::{AnalysisSpec, LoadedScene, MethodSpec, SceneError, Seg};
 use loam_grid::Grid;
-use loam_points::fill_count;
+use loam_points::{fill_count, Shape};
 
 /// Peak bytes per material point: (dimension, explicit analysis).
 fn bytes_per_point(dimension: usize, explicit: bool) -> u64 {
@@ -61,12 +61,21 @@ impl LoadedScene {
     /// bounded by the bodies' bounding boxes (instant).
     pub fn memory_estimate<const D: usize>(&self, grid: &Grid<D>, exact: bool) -> Result<MemoryEstimate, SceneError> {
         let mut points = 0u64;
-        if self.scene.method == MethodSpec::Mpm {
-            for (i, b) in self.scene.bodies.iter().enumerate() {
-                let shape = self.shape::<D>(i, b)?;
-                // A shape that cannot be filled is refused by the fill, with its place.
-                points = points.saturating_add(fill_count(grid, &shape, b.points_per_cell, exact).unwrap_or(0));
-            }
+        for (i, b) in self.scene.bodies.iter().enumerate() {
+            let shape = self.shape::<D>(i, b)?;
+            // A shape that cannot be filled or meshed is refused by the fill or the mesher,
+            // with its place.
+            let count = match (self.scene.method, &shape) {
+                (MethodSpec::Mpm, _) => fill_count(grid, &shape, b.points_per_cell, exact).unwrap_or(0),
+                // The FEM reference's Gauss points: elements of about a cell, gauss^D each.
+                (MethodSpec::UpdatedLagrangianFem, Shape::Box { min, max }) => (0..D)
+                    .map(|a| ((max[a] - min[a]) / grid.cell_size()[a]).round().max(1.0))
+                    .fold(b.points_per_cell.pow(D as u32) as f64, |n, e| n * e)
+                    .min(u64::MAX as f64)
+                    as u64,
+                (MethodSpec::UpdatedLagrangianFem, _) => 0,
+            };
+            points = points.saturating_add(count);
         }
         let grid_nodes = grid.num_nodes() as u64;
         let explicit = matches!(self.scene.analysis, AnalysisSpec::Explicit { .. });

@@ -12,6 +12,10 @@ pub(super) struct Solver {
     pub extrapolate: bool,
 }
 
+/// The most Newton iterations an attempt may take: beyond this a run that cannot converge
+/// would look hung.
+const MAX_NEWTON_ITERATIONS: usize = 1000;
+
 impl LoadedScene {
     /// Both tolerances in (0, 1), at least one iteration.
     pub(super) fn solver(&self) -> Result<Solver, SceneError> {
@@ -29,8 +33,15 @@ impl LoadedScene {
                 format!("increment_tolerance is {}; it must lie in (0, 1)", sv.increment_tolerance),
             ));
         }
-        if sv.max_iterations == 0 {
-            return Err(self.error(&at("max_iterations"), "max_iterations is 0; it must be at least 1"));
+        if sv.max_iterations == 0 || sv.max_iterations > MAX_NEWTON_ITERATIONS {
+            return Err(self.error(
+                &at("max_iterations"),
+                format!(
+                    "max_iterations is {}; it must be 1 to {MAX_NEWTON_ITERATIONS} (Newton converges in a few \
+                     iterations or not at all; a failed attempt is cut back)",
+                    sv.max_iterations
+                ),
+            ));
         }
         let newton = NewtonSettings {
             residual_tolerance: sv.residual_tolerance,
