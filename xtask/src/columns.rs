@@ -6,10 +6,10 @@
 //! `convergence.svg`.
 
 use crate::report::{Report, Row};
-use crate::svg;
 use anyhow::Result;
 use loam::grid::BasisKind;
 use loam::implicit::{Kinematics, QuasiStatic, QuasiStaticSettings};
+use loam::io::output::plot::{Plot, Series};
 use loam::model::Model;
 use loam_verification::column::bounds::{GIMP_E_SIGMA_64, GIMP_RATE, V1C_NEWTON_ITERATIONS};
 use loam_verification::{column_errors, column_fem_model, column_model, Column, ColumnErrors};
@@ -225,11 +225,11 @@ pub(crate) fn verify(quick: bool, report: &mut Report) -> Result<()> {
         if quick { "quick (CI subset)" } else { "full" }
     )?;
     writeln!(report.md, "e_σ = Σ|σ_yy − σ_yy(Y)|V⁰ / (ΣV⁰ (q + ρ₀gH₀)), q the surcharge (zero but in V1a+q and V1c+q); e_u = relative error of the highest point's displacement; rate = least-squares slope of ln e_σ against ln h over the finest three meshes.\n")?;
-    let mut plot = svg::Plot {
+    let mut plot = Plot {
         log_x: true,
         log_y: true,
         reference_slopes: vec![(-2.0, "rate 2".into()), (-1.5, "rate 1.5".into())],
-        ..svg::Plot::new("V1 self-weight column: stress error against mesh", "cells over the column height", "e_σ")
+        ..Plot::new("V1 self-weight column: stress error against mesh", "cells over the column height", "e_σ")
     };
     let mut residual_doc = String::new();
     let cases = cases();
@@ -254,7 +254,7 @@ pub(crate) fn verify(quick: bool, report: &mut Report) -> Result<()> {
                 )?;
             }
             let name = format!("{} {}", case.id, method.name());
-            let series = svg::Series::new(name, runs.iter().map(|r| (r.cells as f64, r.e_sigma)).collect());
+            let series = Series::new(name, runs.iter().map(|r| (r.cells as f64, r.e_sigma)).collect());
             plot.series.push(if method == GIMP { series } else { series.dashed() });
         }
     }

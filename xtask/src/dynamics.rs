@@ -8,6 +8,7 @@ use anyhow::Result;
 use loam::explicit::{Explicit, ExplicitSettings, LeapfrogEnergy, TimeStep};
 use loam::grid::BasisKind;
 use loam::implicit::{Dynamic, DynamicSettings, Kinematics};
+use loam::io::output::plot::{Plot, Series};
 use loam::io::Analysis;
 use loam::model::Model;
 use loam_verification::bar::bounds as bar_bounds;
@@ -287,15 +288,15 @@ fn disks_section(report: &mut Report) -> Result<()> {
         ("explicit MUSL, Cfl 0.5 (leapfrog energy)", &explicit, leapfrog_energy),
         ("implicit trapezoidal, Δt = 0.005", &implicit, implicit_energy),
     ];
-    let mut plot = crate::svg::Plot::new("V5 colliding disks: energy histories", "time", "energy");
+    let mut plot = Plot::new("V5 colliding disks: energy histories", "time", "energy");
     for (name, run, energy) in &runs {
         eprintln!("verify: V5 {name}");
         disks_row(report, name, run, energy)?;
         let r = &run.record;
         let kinetic = r.time.iter().copied().zip(r.kinetic.iter().copied()).collect();
-        plot.series.push(crate::svg::Series::new(format!("{name}: kinetic"), kinetic).dashed());
+        plot.series.push(Series::new(format!("{name}: kinetic"), kinetic).dashed());
         let total = r.time.iter().copied().zip(energy.iter().copied()).collect();
-        plot.series.push(crate::svg::Series::new(format!("{name}: total"), total));
+        plot.series.push(Series::new(format!("{name}: total"), total));
     }
     plot.write(&report.out.join("disks_energy.svg"))?;
     writeln!(report.md, "\n![V5 energies](disks_energy.svg)\n")?;

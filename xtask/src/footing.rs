@@ -7,10 +7,10 @@
 
 use crate::report::{Report, Row};
 use crate::soil::{self, COHESION, POISSON, YOUNG};
-use crate::svg::{Plot, Series};
 use anyhow::Result;
 use loam::constitutive::{ConstitutiveLaw, Elastic, MohrCoulomb};
 use loam::implicit::{AntiLocking, QuasiStatic, QuasiStaticSettings, StepReport};
+use loam::io::output::plot::{Plot, Series};
 use loam::io::output::{CsvCell, CsvWriter};
 use loam_verification::footing::bounds::{LARGEST_DROP, NEWTON_CORRECTIONS, Q_U, RUNS_STOPPED};
 use loam_verification::{footing_model, prandtl_nc};

@@ -14,7 +14,6 @@ mod scale;
 mod slope;
 mod soil;
 mod steps;
-mod svg;
 mod tangents;
 mod water;
 

@@ -12,11 +12,11 @@
 //! Writes `steps.md`, `steps.csv` and SVG plots into the output folder.
 
 use crate::dynamics::{bar_explicit, bar_fem_implicit, bar_implicit, explicit, run_analysis, DynRun};
-use crate::svg::{Plot, Series};
 use anyhow::{Context, Result};
 use loam::explicit::{ExplicitSettings, TimeStep};
 use loam::grid::BasisKind;
 use loam::implicit::{Kinematics, QuasiStatic, QuasiStaticSettings};
+use loam::io::output::plot::{Plot, Series};
 use loam::io::output::{CsvCell, CsvWriter};
 use loam::model::Model;
 use loam::points::PointStore;

@@ -49,6 +49,13 @@ enum Command {
         #[arg(long)]
         overwrite: bool,
     },
+    /// Draw the plots of a run from the CSV files in its output folder (loam run draws
+    /// them at its end too): run_log.svg, load_displacement.svg, energies.svg,
+    /// strength_reduction.svg.
+    Plot {
+        /// The run's output folder.
+        dir: PathBuf,
+    },
     /// Validate a scene completely (down to points and constraints) without running it.
     Check {
         /// Scene file (RON).
@@ -120,6 +127,12 @@ fn error_chain(e: &anyhow::Error) -> String {
 fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Check { scene, max_memory } => check(&scene, max_memory),
+        Command::Plot { dir } => {
+            for path in loam_io::plot_run(&dir).with_context(|| format!("plotting the run in {}", dir.display()))? {
+                println!("{}", path.display());
+            }
+            Ok(())
+        }
         Command::Run { scene, out, quiet, verbose, max_memory, overwrite, steps } => {
             let out = out.unwrap_or_else(|| {
                 PathBuf::from("out").join(scene.file_stem().map(|s| s.to_owned()).unwrap_or_default())
@@ -192,15 +205,22 @@ fn run_command(scene: &Path, out: &Path, options: &RunOptions) -> anyhow::Result
     );
     install_log(&bar, quiet, verbose);
     let mut trials = 0;
-    let summary = run_scene_until(&loaded, out, steps, &mut |event| match event {
+    let result = run_scene_until(&loaded, out, steps, &mut |event| match event {
         RunEvent::Step { report, end } => show_progress(&bar, report, end),
         RunEvent::Trial(t) => {
             trials += 1;
             show_trial(&bar, trials, t, quiet);
         }
-    })
-    .with_context(|| format!("running {}", scene.display()))?;
+    });
     bar.finish_and_clear();
+    // The plots of what was written, also when the run stopped early: a failed run's
+    // curves show where it went wrong.
+    if out.join("run_log.csv").exists() {
+        if let Err(e) = loam_io::plot_run(out) {
+            eprintln!("warning: the plots of {} could not be drawn: {e}", out.display());
+        }
+    }
+    let summary = result.with_context(|| format!("running {}", scene.display()))?;
     if let Some(fos) = &summary.factor_of_safety {
         println!(
             "factor of safety F = {:.4}: holds at {:.4}, fails at {:.4} ({} trials); the run below is at F = {:.4}",

@@ -6,11 +6,13 @@
 pub mod output;
 pub mod output_dir;
 mod point_fields;
+pub mod run_plots;
 pub mod runner;
 pub mod scene;
 
 pub use loam_analysis::{Analysis, AnalysisError, Progress};
 pub use output_dir::{clear_output_dir, prepare_output_dir, OutputDirError};
 pub use point_fields::write_points_csv;
+pub use run_plots::plot_run;
 pub use runner::{run_scene, run_scene_until, RunEvent, RunFailure, RunSummary};
 pub use scene::{LoadedScene, Scene, SceneError};

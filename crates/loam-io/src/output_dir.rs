@@ -39,6 +39,7 @@ fn is_loam_output(name: &str) -> bool {
             name,
             "points.pvd" | "run_log.csv" | "history.csv" | "points_final.csv" | "strength_reduction.csv" | MARKER
         )
+        || crate::run_plots::PLOT_FILES.contains(&name)
 }
 
 /// The names of loam's files in `dir` (none if it does not exist), sorted.

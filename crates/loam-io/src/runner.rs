@@ -114,6 +114,11 @@ impl<const D: usize> History<D> {
             CsvCell::Float(kinetic + strain - work),
         ];
         cells.extend(model.points().momentum().iter().map(|&m| CsvCell::Float(m)));
+        // A row is never written with an overflowed energy or momentum: the run stops.
+        let header = ["kinetic_energy", "strain_energy", "external_work", "total_energy", "momentum"];
+        if let Some(k) = cells[1..].iter().position(|c| matches!(c, CsvCell::Float(v) if !v.is_finite())) {
+            return Err(OutputError::Unstable { what: header[k.min(4)].to_string(), time });
+        }
         self.writer.row_mixed(&cells)
     }
 }
@@ -345,4 +350,28 @@ fn factor_of_safety<const D: usize>(
     });
     written?;
     Ok(fos?)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A point whose kinetic energy overflows stops the history with `Unstable` instead of
+    /// an `inf` row; the header and the rows before stay.
+    #[test]
+    fn an_overflowed_energy_is_not_written() {
+        let text = include_str!("../../../examples/column.ron");
+        let scene = LoadedScene::parse(Path::new("column.ron"), text.to_string()).unwrap();
+        let mut model = scene.build::<2>().unwrap().into_model();
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("history.csv");
+        let mut history = History::create(&path, &model, LoadLevel::Factor(0.0)).unwrap();
+        history.row(&model, 0.0).unwrap();
+        model.velocities_mut()[3] = nalgebra::Vector2::new(0.0, 1e200);
+        match history.row(&model, 0.5) {
+            Err(OutputError::Unstable { what, time }) => assert_eq!((what.as_str(), time), ("kinetic_energy", 0.5)),
+            other => panic!("{other:?}"),
+        }
+        assert_eq!(std::fs::read_to_string(&path).unwrap().lines().count(), 2);
+    }
 }

@@ -8,6 +8,7 @@
 //! untouched. Append-only CSV logs flush after every row instead.
 
 mod csv;
+pub mod plot;
 mod pvd;
 mod vtu;
 
@@ -148,6 +149,15 @@ pub enum OutputError {
         field: String,
         /// Index of the offending point (or entry, e.g. PVD data set).
         point: usize,
+    },
+    /// A quantity of the run (an energy, a momentum) overflowed: the run has gone unstable
+    /// and stops, the rows before kept.
+    #[error("{what} is not finite at t = {time:e}: the run has gone unstable (a velocity or an energy overflowed) and stops here; the outputs so far are kept")]
+    Unstable {
+        /// The quantity, as its column is named.
+        what: String,
+        /// The time (or load factor) of the row.
+        time: f64,
     },
     /// `PointCloud::dim` is neither 2 nor 3.
     #[error("point cloud dimension must be 2 or 3, found {found}")]

@@ -50,6 +50,16 @@ impl LoadedScene {
                 let field = self.velocity_field::<D>(v, i)?;
                 for p in first..points.len() {
                     points.velocity[p] = field(&points.position[p]);
+                    if !(points.mass[p] * points.velocity[p].norm_squared()).is_finite() {
+                        return Err(self.error(
+                            &body_key(i, "velocity"),
+                            format!(
+                                "body {i}: the velocity {:?} at {:?} makes the kinetic energy overflow; is a component mistyped?",
+                                points.velocity[p].as_slice(),
+                                points.position[p].as_slice()
+                            ),
+                        ));
+                    }
                 }
             }
             shapes.push(shape);

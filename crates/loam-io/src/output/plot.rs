@@ -1,4 +1,5 @@
-//! Line plots for the verification and convergence figures, drawn with plotters' SVG backend.
+//! Line plots, drawn with plotters' SVG backend: the verification and convergence figures
+//! of `cargo xtask`, and the plots of a run's logs (`loam plot`).
 //!
 //! Linear or logarithmic axes (labelled decades, like `1e-3`, on log axes), a title, axis
 //! labels, a legend beside the plot, a distinct colour and marker per series, optional dashed
