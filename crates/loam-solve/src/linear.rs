@@ -16,6 +16,8 @@
 use crate::{BlockPattern, MatrixLayout, NodeLattice, SystemMatrix};
 use faer::linalg::solvers::Solve;
 use faer::sparse::linalg::solvers::{Llt, Lu, SymbolicLlt, SymbolicLu};
+use faer::sparse::linalg::{LltError, LuError};
+use faer::sparse::FaerError;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{MatMut, Side};
 use std::time::{Duration, Instant};
@@ -237,12 +239,12 @@ impl SparseDirectSolver {
                 LinearSolverKind::Cholesky => {
                     self.symbolic_llt = Some(
                         SymbolicLlt::try_new(symbolic, Side::Lower)
-                            .map_err(|e| LinearSolveError::Symbolic(format!("{e:?}")))?,
+                            .map_err(|e| LinearSolveError::Symbolic(generic_words(e)))?,
                     )
                 }
                 _ => {
                     self.symbolic_lu =
-                        Some(SymbolicLu::try_new(symbolic).map_err(|e| LinearSolveError::Symbolic(format!("{e:?}")))?)
+                        Some(SymbolicLu::try_new(symbolic).map_err(|e| LinearSolveError::Symbolic(generic_words(e)))?)
                 }
             }
             self.generation = Some(pattern.generation());
@@ -257,14 +259,13 @@ impl SparseDirectSolver {
                 let sym = self.symbolic_llt.clone().expect("symbolic factorisation present");
                 self.llt = Some(
                     Llt::try_new_with_symbolic(sym, mat, Side::Lower)
-                        .map_err(|e| LinearSolveError::NotPositiveDefinite(format!("{e:?}")))?,
+                        .map_err(|e| LinearSolveError::NotPositiveDefinite(llt_words(e, n)))?,
                 );
             }
             _ => {
                 let sym = self.symbolic_lu.clone().expect("symbolic factorisation present");
-                self.lu = Some(
-                    Lu::try_new_with_symbolic(sym, mat).map_err(|e| LinearSolveError::Singular(format!("{e:?}")))?,
-                );
+                self.lu =
+                    Some(Lu::try_new_with_symbolic(sym, mat).map_err(|e| LinearSolveError::Singular(lu_words(e, n)))?);
             }
         }
         self.timings.numeric += t.elapsed();
@@ -317,6 +318,40 @@ impl LinearSolver for SparseDirectSolver {
     }
 }
 
+/// What a failed Cholesky factorisation of an `n`-dof tangent means, in words (faer's
+/// errors print as Rust debug text).
+fn llt_words(e: LltError, n: usize) -> String {
+    match e {
+        LltError::Numeric(faer::linalg::cholesky::llt::factor::LltError::NonPositivePivot { index }) => format!(
+            "pivot {index} of {n} (in the fill-reducing order) is not positive: the tangent is singular or \
+             indefinite, because a part of the body is free to move or the material has lost its stiffness"
+        ),
+        LltError::Generic(e) => generic_words(e),
+    }
+}
+
+/// What a failed LU factorisation of an `n`-dof tangent means, in words.
+fn lu_words(e: LuError, n: usize) -> String {
+    match e {
+        LuError::SymbolicSingular { index } => format!(
+            "no pivot at step {index} of {n}: the tangent is singular, because a part of the body is free \
+             to move or the material has lost its stiffness"
+        ),
+        LuError::Generic(e) => generic_words(e),
+    }
+}
+
+/// faer's errors that are not about the numbers.
+fn generic_words(e: impl Into<FaerError>) -> String {
+    match e.into() {
+        FaerError::OutOfMemory => {
+            "out of memory: the factor does not fit in this machine; the iterative solver needs far less".into()
+        }
+        FaerError::IndexOverflow => "the factor has more entries than its index type can count".into(),
+        other => format!("{other:?}"),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -354,5 +389,18 @@ mod tests {
             s.solve_in_place(&mut x)
         });
         assert!(res.is_err());
+        if let Err(e @ LinearSolveError::NotPositiveDefinite(_)) = res {
+            assert!(e.to_string().contains("free to move") && !e.to_string().contains("Numeric("), "{e}");
+        }
+    }
+
+    /// faer's factorisation errors read as what they mean, not as Rust debug text.
+    #[test]
+    fn factorisation_failures_are_said_in_words() {
+        use faer::linalg::cholesky::llt::factor::LltError as Pivot;
+        let words = llt_words(LltError::Numeric(Pivot::NonPositivePivot { index: 4 }), 10);
+        assert!(words.starts_with("pivot 4 of 10") && words.contains("free to move"), "{words}");
+        assert!(lu_words(LuError::SymbolicSingular { index: 2 }, 9).starts_with("no pivot at step 2 of 9"));
+        assert!(generic_words(FaerError::OutOfMemory).contains("iterative solver"));
     }
 }
