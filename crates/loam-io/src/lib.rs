@@ -1,8 +1,11 @@
 //! Everything that knows a file format: the RON scene schema and its validation
-//! (`scene`), the output writers (`output`: VTU, PVD, CSV) and the runner that ties a scene
-//! to an analysis and its outputs (`runner`), over the three analyses behind one stepping
-//! interface (`loam_analysis`).
+//! (`scene`), the output writers (`output`: VTU, PVD, CSV, SVG plots), the output folder's
+//! bookkeeping (`output_dir`), the plots of a run (`run_plots`), the checkpoint file format
+//! (`checkpoint`; not yet written by runs) and the runner that ties a scene to an analysis
+//! and its outputs (`runner`), over the three analyses behind one stepping interface
+//! (`loam_analysis`).
 
+pub mod checkpoint;
 pub mod output;
 pub mod output_dir;
 mod point_fields;
