@@ -4,7 +4,7 @@ use anyhow::Context;
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use loam_implicit::StrengthTrial;
-use loam_io::{run_scene_until, LoadedScene, Progress, RunEvent};
+use loam_io::{run_scene_with, LoadedScene, Progress, RunEvent, RunOptions};
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -137,10 +137,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             let out = out.unwrap_or_else(|| {
                 PathBuf::from("out").join(scene.file_stem().map(|s| s.to_owned()).unwrap_or_default())
             });
-            if overwrite {
-                loam_io::clear_output_dir(&out)?;
-            }
-            let options = RunOptions { quiet, verbose, max_memory, steps };
+            let options = CliRunOptions { quiet, verbose, max_memory, steps, overwrite };
             run_command(&scene, &out, &options)
         }
     }
@@ -175,17 +172,18 @@ fn print_warnings(scene: &LoadedScene) {
     }
 }
 
-/// `loam run`: the scene run into `out` under a progress bar, the solver's log above it.
-/// The flags of `loam run` that shape a run.
-struct RunOptions {
+/// The flags of `loam run`.
+struct CliRunOptions {
     quiet: bool,
     verbose: u8,
     max_memory: Option<u64>,
     steps: Option<usize>,
+    overwrite: bool,
 }
 
-fn run_command(scene: &Path, out: &Path, options: &RunOptions) -> anyhow::Result<()> {
-    let &RunOptions { quiet, verbose, max_memory, steps } = options;
+/// `loam run`: the scene run into `out` under a progress bar, the solver's log above it.
+fn run_command(scene: &Path, out: &Path, options: &CliRunOptions) -> anyhow::Result<()> {
+    let &CliRunOptions { quiet, verbose, max_memory, steps, overwrite } = options;
     let loaded = LoadedScene { memory_limit: max_memory, ..LoadedScene::read(scene)? };
     print_warnings(&loaded);
     if let loam_io::scene::AnalysisSpec::QuasiStatic { strength_reduction: Some(srf), .. } = &loaded.scene.analysis {
@@ -205,7 +203,8 @@ fn run_command(scene: &Path, out: &Path, options: &RunOptions) -> anyhow::Result
     );
     install_log(&bar, quiet, verbose);
     let mut trials = 0;
-    let result = run_scene_until(&loaded, out, steps, &mut |event| match event {
+    let run_options = RunOptions { max_steps: steps, overwrite };
+    let result = run_scene_with(&loaded, out, &run_options, &mut |event| match event {
         RunEvent::Step { report, end } => show_progress(&bar, report, end),
         RunEvent::Trial(t) => {
             trials += 1;
@@ -213,14 +212,10 @@ fn run_command(scene: &Path, out: &Path, options: &RunOptions) -> anyhow::Result
         }
     });
     bar.finish_and_clear();
-    // The plots of what was written, also when the run stopped early: a failed run's
-    // curves show where it went wrong.
-    if out.join("run_log.csv").exists() {
-        if let Err(e) = loam_io::plot_run(out) {
-            eprintln!("warning: the plots of {} could not be drawn: {e}", out.display());
-        }
-    }
     let summary = result.with_context(|| format!("running {}", scene.display()))?;
+    if let Err(e) = &summary.plots {
+        eprintln!("warning: the plots of {} could not be drawn: {e}", out.display());
+    }
     if let Some(fos) = &summary.factor_of_safety {
         println!(
             "factor of safety F = {:.4}: holds at {:.4}, fails at {:.4} ({} trials); the run below is at F = {:.4}",

@@ -124,8 +124,16 @@ fn another_scenes_output_folder_is_refused_unless_overwritten() {
     let o = run("vibrating_bar.ron", &[]);
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && stderr.contains("column.ron") && stderr.contains("--overwrite"), "{stderr}");
+    // --overwrite removes nothing before the scene has been checked: a broken scene leaves
+    // the earlier outputs as they were.
+    let broken = out.path().join("broken.ron");
+    std::fs::write(&broken, "Scene(dimension: 2,").unwrap();
+    let args = ["run".as_ref(), broken.as_os_str(), "--out".as_ref(), out.path().as_os_str(), "--overwrite".as_ref()];
+    assert!(!loam(&args).status.success());
+    assert!(out.path().join("run_log.csv").exists() && out.path().join("points.pvd").exists());
     let o = run("vibrating_bar.ron", &["--overwrite"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(out.path().join("broken.ron").exists(), "a file that is not loam's was removed");
     let marker = std::fs::read_to_string(out.path().join("loam_run.txt")).unwrap();
     assert!(marker.contains("vibrating_bar.ron"), "{marker}");
 }

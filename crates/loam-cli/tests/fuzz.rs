@@ -166,19 +166,20 @@ fn mutate(source: &str, rng: &mut Rng, numbers_only: bool) -> String {
 }
 
 /// What a child process did within its limit: exit code, stderr, or `None` on timeout.
-fn run_limited(args: &[&std::ffi::OsStr], limit: Duration) -> Option<(Option<i32>, String)> {
+/// Its stderr goes to a file beside the case, so that a long message cannot fill a pipe
+/// and stall the child into a false hang.
+fn run_limited(args: &[&std::ffi::OsStr], limit: Duration, log: &Path) -> Option<(Option<i32>, String)> {
+    let stderr = std::fs::File::create(log).expect("a log file in the temporary folder");
     let mut child = Command::new(env!("CARGO_BIN_EXE_loam"))
         .args(args)
         .stdout(Stdio::null())
-        .stderr(Stdio::piped())
+        .stderr(stderr)
         .spawn()
         .expect("the loam binary runs");
     let start = Instant::now();
     loop {
         if let Some(status) = child.try_wait().expect("waiting on loam") {
-            let mut stderr = String::new();
-            std::io::Read::read_to_string(child.stderr.as_mut().unwrap(), &mut stderr).unwrap();
-            return Some((status.code(), stderr));
+            return Some((status.code(), std::fs::read_to_string(log).unwrap_or_default()));
         }
         if start.elapsed() > limit {
             let _ = child.kill();
@@ -236,7 +237,7 @@ fn mutated_scenes_are_checked_without_panic_or_hang() {
         let scene: PathBuf = dir.path().join("case.ron");
         std::fs::write(&scene, &text).unwrap();
         let args = ["check".as_ref(), scene.as_os_str(), "--max-memory".as_ref(), MAX_MEMORY.as_ref()];
-        let Some((code, stderr)) = run_limited(&args, CHECK_LIMIT) else {
+        let Some((code, stderr)) = run_limited(&args, CHECK_LIMIT, &dir.path().join("stderr.txt")) else {
             panic!("{}", failure(case, seed, &scene, "loam check did not finish"));
         };
         match code {
@@ -286,7 +287,7 @@ fn mutated_scenes_run_without_panic_hang_or_nan() {
             "--max-memory".as_ref(),
             MAX_MEMORY.as_ref(),
         ];
-        let Some((code, stderr)) = run_limited(&args, RUN_LIMIT) else {
+        let Some((code, stderr)) = run_limited(&args, RUN_LIMIT, &dir.path().join("stderr.txt")) else {
             panic!("{}", failure(case, seed, &scene, "loam run did not finish its first steps"));
         };
         match code {

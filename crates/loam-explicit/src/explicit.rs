@@ -190,26 +190,26 @@ impl<const D: usize> Explicit<D> {
         let p_wave = &self.p_wave;
         (0..pts.len())
             .into_par_iter()
-            .map(|p| {
-                let rho = pts.mass[p] / pts.volume[p];
-                let c = (p_wave[pts.material[p] as usize] / rho).sqrt();
-                h / (c + pts.velocity[p].norm())
-            })
+            .map(|p| h / (wave_speed(pts, p_wave, p) + pts.velocity[p].norm()))
             .reduce(|| f64::INFINITY, f64::min)
     }
 
     /// The time step of step `step` given the critical one, shortened to land on the end.
     fn time_step(&self, step: usize, critical: f64) -> Result<f64, ExplicitError> {
         let remaining = self.settings.duration - self.time;
-        let (dt, check) = match self.settings.time_step {
+        let (nominal, check) = match self.settings.time_step {
             TimeStep::Cfl { safety } => (safety * critical, false),
             TimeStep::Fixed { dt, allow_above_critical } => (dt, !allow_above_critical),
         };
-        let dt = if dt >= remaining * (1.0 - LAND_ON_END) { remaining } else { dt };
-        if check && dt > critical {
-            return Err(ExplicitError::AboveCritical { step, dt, critical });
+        if check && nominal.min(remaining) > critical {
+            return Err(ExplicitError::AboveCritical { step, dt: nominal, critical });
         }
-        Ok(dt)
+        // Land on the end with a step within round-off of the remaining time, or with one
+        // that would leave less than the shortest step allowed: rounding in the summed time
+        // must not leave a sliver that the floor then refuses.
+        let floor = MIN_STEP_FRACTION * self.settings.duration;
+        let lands = nominal >= remaining * (1.0 - LAND_ON_END) || remaining - nominal < floor;
+        Ok(if lands { remaining } else { nominal })
     }
 
     /// Refuse a step too short to bring the run to its end, naming the point that sets the
@@ -229,9 +229,8 @@ impl<const D: usize> Explicit<D> {
         let pts = self.model.points();
         let p_wave = &self.p_wave;
         let speeds = |p: usize| {
-            let c = (p_wave[pts.material[p] as usize] * pts.volume[p] / pts.mass[p]).sqrt();
             // By hypot, so that 1e300 is reported as such and not as its overflowed square.
-            (p, c, pts.velocity[p].iter().fold(0.0, |a: f64, &b| a.hypot(b)))
+            (p, wave_speed(pts, p_wave, p), pts.velocity[p].iter().fold(0.0, |a: f64, &b| a.hypot(b)))
         };
         // A NaN speed counts as the fastest: it is the point to name.
         let key = |t: &(usize, f64, f64)| if (t.1 + t.2).is_nan() { f64::INFINITY } else { t.1 + t.2 };
@@ -444,6 +443,11 @@ fn outside_error<const D: usize>(model: &Model<D>, point: usize, x: &SVector<f64
 
 /// Sign with sign(0) = 0 (`f64::signum` gives ±1 at zero).
 #[inline]
+/// The P-wave speed c_p = √(M / ρ_p) of point `p`, ρ_p = m_p / v_p (docs/theory.md §10).
+fn wave_speed<const D: usize>(pts: &loam_points::PointStore<D>, p_wave: &[f64], p: usize) -> f64 {
+    (p_wave[pts.material[p] as usize] / (pts.mass[p] / pts.volume[p])).sqrt()
+}
+
 fn sign(x: f64) -> f64 {
     if x > 0.0 {
         1.0
@@ -722,6 +726,22 @@ mod tests {
         let m = e * (1.0 - nu) / ((1.0 + nu) * (1.0 - 2.0 * nu));
         let expected = 0.5 / ((m / rho).sqrt() + 5.0);
         assert!((ex.critical_time_step() - expected).abs() <= 1e-14 * expected);
+    }
+
+    /// A step that would leave less than the shortest step allowed is stretched to the end:
+    /// 1e-12 short of a whole number of fixed steps, the run still lands exactly on its
+    /// duration instead of refusing a 1e-12 sliver as a collapsed step.
+    #[test]
+    fn a_sliver_before_the_end_is_taken_with_the_last_step() {
+        let settings = ExplicitSettings {
+            time_step: TimeStep::Fixed { dt: 1e-4, allow_above_critical: false },
+            ..ExplicitSettings::new(1e-2)
+        };
+        let mut ex = Explicit::new(block(Vector2::new(0.1, 0.0), Vector2::zeros()), settings).unwrap();
+        ex.time = 1e-2 - 1e-4 - 1e-12;
+        let report = ex.step().unwrap();
+        assert_eq!((report.dt, ex.time()), (1e-2 - (1e-2 - 1e-4 - 1e-12), 1e-2));
+        assert!(ex.is_finished());
     }
 
     /// A body velocity of 1e300 makes Δt_crit = h / (c + |v|) ≈ 5e-301: the run stops at

@@ -22,8 +22,9 @@ pub(crate) struct CutBack {
     /// The step's whole increment.
     full: f64,
     target: f64,
-    /// Round-off allowance on reaching the target (1 for load factors, Δt for time).
-    scale: f64,
+    /// What the step advances, and its scale: the round-off allowance on reaching the
+    /// target.
+    scale: StepScale,
     max_cutbacks: usize,
     /// Halvings of the current sub-step, and converged sub-steps since the last change.
     depth: usize,
@@ -47,15 +48,31 @@ struct Tally {
     active_nodes: usize,
 }
 
+/// What a step advances: the load factor (scale 1), or the time by steps of Δt.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum StepScale {
+    LoadFactor,
+    Time(f64),
+}
+
+impl StepScale {
+    fn value(self) -> f64 {
+        match self {
+            StepScale::LoadFactor => 1.0,
+            StepScale::Time(dt) => dt,
+        }
+    }
+}
+
 impl CutBack {
     /// Control a step from `position` to `target`.
-    pub fn new(position: f64, target: f64, scale: f64, max_cutbacks: usize) -> Self {
+    pub fn new(position: f64, target: f64, scale: StepScale, max_cutbacks: usize) -> Self {
         Self { full: target - position, target, scale, max_cutbacks, depth: 0, streak: 0, done: Tally::default() }
     }
 
     /// The size of the next attempt from `position`, or `None` once the target is reached.
     pub fn next(&self, position: f64) -> Option<f64> {
-        let reached = position >= self.target - 1e-12 * self.target.abs().max(self.scale);
+        let reached = position >= self.target - 1e-12 * self.target.abs().max(self.scale.value());
         (!reached).then(|| self.full * 0.5f64.powi(self.depth as i32))
     }
 
@@ -118,15 +135,19 @@ impl CutBack {
     /// 1 % strain), above the residual tolerance. The V1c column converges with 10⁶ load
     /// steps and stalls at a relative residual of 1e-5 with 10⁸.
     fn tiny_increment_hint(&self, increment: f64) -> String {
-        if increment >= TINY_INCREMENT * self.scale {
+        let scale = self.scale.value();
+        if increment >= TINY_INCREMENT * scale {
             return String::new();
         }
-        let of = if self.scale == 1.0 { "the full load" } else { "the time step" };
+        let of = match self.scale {
+            StepScale::LoadFactor => "the full load",
+            StepScale::Time(_) => "the time step",
+        };
         format!(
             "; the last increment tried was {:.1e} of {of}: with increments that small, round-off in \
              the strain increment can hold the residual above the tolerance, so use fewer, larger \
              steps (or a looser residual_tolerance)",
-            increment / self.scale
+            increment / scale
         )
     }
 
@@ -183,7 +204,7 @@ mod tests {
     /// Drive the control over a step from 0 to 1 whose attempts succeed when `holds(size)`:
     /// the sizes tried, in order, and the outcome.
     fn drive(holds: impl Fn(f64) -> bool, max_cutbacks: usize) -> (Vec<f64>, Result<StepReport, StepError>) {
-        let mut control = CutBack::new(0.0, 1.0, 1.0, max_cutbacks);
+        let mut control = CutBack::new(0.0, 1.0, StepScale::LoadFactor, max_cutbacks);
         let (mut position, mut tried) = (0.0, Vec::new());
         while let Some(size) = control.next(position) {
             tried.push(size);
@@ -244,7 +265,7 @@ mod tests {
     #[test]
     fn a_failure_at_a_tiny_increment_names_round_off() {
         let fail = |target: f64| {
-            let mut control = CutBack::new(0.0, target, 1.0, 1);
+            let mut control = CutBack::new(0.0, target, StepScale::LoadFactor, 1);
             let report = NewtonReport { residuals: vec![1.0, 1e-5], ..Default::default() };
             control.failed(1, 0.0, target, "no convergence".into(), &report).unwrap();
             match control.failed(1, 0.0, target / 2.0, "no convergence".into(), &report) {
@@ -261,10 +282,10 @@ mod tests {
     /// The target is reached within round-off of the scale, without a sliver sub-step.
     #[test]
     fn the_target_is_reached_within_round_off() {
-        let control = CutBack::new(0.0, 1.0, 1.0, 8);
+        let control = CutBack::new(0.0, 1.0, StepScale::LoadFactor, 8);
         assert_eq!(control.next(1.0 - 1e-13), None);
         assert_eq!(control.next(1.0 - 1e-11), Some(1.0));
-        let time = CutBack::new(0.0, 1e-3, 1e-3, 8);
+        let time = CutBack::new(0.0, 1e-3, StepScale::Time(1e-3), 8);
         assert_eq!(time.next(1e-3 - 1e-16), None);
     }
 }

@@ -18,7 +18,7 @@
 //! γ = ½ − α_B): second order, damps the highest frequencies.
 
 use crate::cell_average::CellAverage;
-use crate::cutback::CutBack;
+use crate::cutback::{CutBack, StepScale};
 use crate::engine::Engine;
 use crate::inertia::Inertia;
 use crate::points::PointUpdateError;
@@ -196,7 +196,7 @@ impl<const D: usize> Dynamic<D> {
             self.initial_acceleration();
             self.started = true;
         }
-        let mut control = CutBack::new(self.time, target, dt, self.settings.max_cutbacks);
+        let mut control = CutBack::new(self.time, target, StepScale::Time(dt), self.settings.max_cutbacks);
         while let Some(size) = control.next(self.time) {
             self.engine.connect(step)?;
             let h = size.min(target - self.time);

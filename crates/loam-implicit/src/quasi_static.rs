@@ -4,7 +4,7 @@
 //! [`QuasiStatic::step`] advances one load step through the cut-back control;
 //! [`QuasiStatic::attempt`] is one attempt at a sub-step, the algorithm stage by stage.
 
-use crate::cutback::CutBack;
+use crate::cutback::{CutBack, StepScale};
 use crate::engine::Engine;
 use crate::points::PointUpdateError;
 use crate::{IterationProfile, StepError, StepReport};
@@ -134,7 +134,7 @@ impl<const D: usize> QuasiStatic<D> {
         let start = Instant::now();
         let step = self.step + 1;
         let target = step as f64 / self.settings.load_steps as f64;
-        let mut control = CutBack::new(self.load_factor, target, 1.0, self.settings.max_cutbacks);
+        let mut control = CutBack::new(self.load_factor, target, StepScale::LoadFactor, self.settings.max_cutbacks);
         while let Some(size) = control.next(self.load_factor) {
             self.engine.connect(step)?;
             let lambda = (self.load_factor + size).min(target);

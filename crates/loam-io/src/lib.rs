@@ -17,5 +17,5 @@ pub use loam_analysis::{Analysis, AnalysisError, Progress};
 pub use output_dir::{clear_output_dir, prepare_output_dir, OutputDirError};
 pub use point_fields::write_points_csv;
 pub use run_plots::plot_run;
-pub use runner::{run_scene, run_scene_until, RunEvent, RunFailure, RunSummary};
+pub use runner::{run_scene, run_scene_with, RunEvent, RunFailure, RunOptions, RunSummary};
 pub use scene::{LoadedScene, Scene, SceneError};

@@ -4,8 +4,9 @@
 //! keeps every file written so far; the error says which step failed and why.
 
 use crate::output::{CsvCell, CsvWriter, OutputError, PvdWriter};
-use crate::output_dir::{prepare_output_dir, OutputDirError};
+use crate::output_dir::{clear_output_dir, prepare_output_dir, OutputDirError};
 use crate::point_fields::{default_fields, write_frame, write_points_csv};
+use crate::run_plots::plot_run;
 use crate::scene::FieldSpec;
 use crate::scene::{AnalysisSpec, LoadedScene, OutputSpec, SceneError};
 use loam_analysis::{Analysis, AnalysisError, Progress};
@@ -45,6 +46,20 @@ pub struct RunSummary {
     pub output_dir: PathBuf,
     /// The bracketed factor of safety, when the scene asked for strength reduction.
     pub factor_of_safety: Option<FactorOfSafety>,
+    /// The plots drawn from the run's CSV files, or why they could not be (a run is not
+    /// failed for its plots).
+    pub plots: Result<Vec<PathBuf>, String>,
+}
+
+/// What a run is asked beyond its scene (`loam run`'s flags).
+#[derive(Debug, Clone, Default)]
+pub struct RunOptions {
+    /// Stop after this many steps, as if the run ended there: its last frame, history row
+    /// and `points_final.csv` are at that step.
+    pub max_steps: Option<usize>,
+    /// Remove another run's outputs from the output folder, once the scene has been
+    /// checked (only the files loam writes; `output_dir`).
+    pub overwrite: bool,
 }
 
 /// What a run reports as it goes, to show progress.
@@ -63,23 +78,26 @@ pub fn run_scene(
     out_dir: &Path,
     progress: &mut dyn FnMut(RunEvent),
 ) -> Result<RunSummary, RunFailure> {
-    run_scene_until(scene, out_dir, None, progress)
+    run_scene_with(scene, out_dir, &RunOptions::default(), progress)
 }
 
-/// [`run_scene`], stopped after `max_steps` steps if given (`loam run --steps`): the
-/// outputs are those of a run that ends there (its last frame, history row and
-/// `points_final.csv` at that step).
-pub fn run_scene_until(
+/// [`run_scene`] with `options`. Nothing in `out_dir` is touched before the scene has been
+/// checked; once the folder is prepared, the run's plots are drawn at its end whether it
+/// finished or not (a failed run's curves show where it went wrong).
+pub fn run_scene_with(
     scene: &LoadedScene,
     out_dir: &Path,
-    max_steps: Option<usize>,
+    options: &RunOptions,
     progress: &mut dyn FnMut(RunEvent),
 ) -> Result<RunSummary, RunFailure> {
     match scene.scene.dimension {
-        3 => run_dim::<3>(scene, out_dir, max_steps, progress),
-        _ => run_dim::<2>(scene, out_dir, max_steps, progress),
+        3 => run_dim::<3>(scene, out_dir, options, progress),
+        _ => run_dim::<2>(scene, out_dir, options, progress),
     }
 }
+
+/// The columns of `history.csv` before the momentum's.
+const HISTORY_COLUMNS: [&str; 5] = ["time", "kinetic_energy", "strain_energy", "external_work", "total_energy"];
 
 /// `history.csv`: one row per recorded step with time, energies and momentum. The external
 /// work is accumulated every step, whether or not a row is written.
@@ -90,7 +108,7 @@ struct History<const D: usize> {
 
 impl<const D: usize> History<D> {
     fn create(path: &Path, model: &Model<D>, level: LoadLevel) -> Result<Self, OutputError> {
-        let mut header = vec!["time", "kinetic_energy", "strain_energy", "external_work", "total_energy"];
+        let mut header = HISTORY_COLUMNS.to_vec();
         header.extend(["momentum_x", "momentum_y", "momentum_z"].iter().take(D));
         let writer = CsvWriter::create(path, &header)?;
         Ok(Self { writer, work: ExternalWork::new(model, level) })
@@ -115,9 +133,9 @@ impl<const D: usize> History<D> {
         ];
         cells.extend(model.points().momentum().iter().map(|&m| CsvCell::Float(m)));
         // A row is never written with an overflowed energy or momentum: the run stops.
-        let header = ["kinetic_energy", "strain_energy", "external_work", "total_energy", "momentum"];
         if let Some(k) = cells[1..].iter().position(|c| matches!(c, CsvCell::Float(v) if !v.is_finite())) {
-            return Err(OutputError::Unstable { what: header[k.min(4)].to_string(), time });
+            let what = HISTORY_COLUMNS.get(k + 1).unwrap_or(&"momentum");
+            return Err(OutputError::Unstable { what: what.to_string(), time });
         }
         self.writer.row_mixed(&cells)
     }
@@ -126,12 +144,30 @@ impl<const D: usize> History<D> {
 fn run_dim<const D: usize>(
     scene: &LoadedScene,
     out_dir: &Path,
-    max_steps: Option<usize>,
+    options: &RunOptions,
     progress: &mut dyn FnMut(RunEvent),
 ) -> Result<RunSummary, RunFailure> {
     let start = Instant::now();
-    let mut analysis: Analysis<D> = scene.build::<D>()?;
+    let analysis: Analysis<D> = scene.build::<D>()?;
+    if options.overwrite {
+        clear_output_dir(out_dir)?;
+    }
     prepare_output_dir(out_dir, &scene.path)?;
+    let result = run_prepared(scene, analysis, out_dir, options.max_steps, progress, start);
+    let plots = plot_run(out_dir).map_err(|e| e.to_string());
+    Ok(RunSummary { plots, ..result? })
+}
+
+/// The run into a prepared folder: strength reduction if asked, then the steps with their
+/// outputs.
+fn run_prepared<const D: usize>(
+    scene: &LoadedScene,
+    mut analysis: Analysis<D>,
+    out_dir: &Path,
+    max_steps: Option<usize>,
+    progress: &mut dyn FnMut(RunEvent),
+    start: Instant,
+) -> Result<RunSummary, RunFailure> {
     let factor_of_safety = strength_reduction_first(scene, &mut analysis, out_dir, progress)?;
     let mut outputs = Outputs::create(&scene.scene.output, &analysis, out_dir)?;
     let end_time = analysis.end_time();
@@ -157,6 +193,7 @@ fn run_dim<const D: usize>(
         solver: analysis.solver(),
         output_dir: out_dir.to_owned(),
         factor_of_safety,
+        plots: Ok(Vec::new()),
     })
 }
 

@@ -616,9 +616,12 @@ impl<const D: usize> Model<D> {
     }
 
     /// The rigid-body motions of the whole model that no constraint on the active nodes
-    /// resists: a translation along an axis no constraint holds, a rotation in the plane of
-    /// axes (a, b) where the nodes holding a share one b coordinate and those holding b one a
-    /// coordinate (a pin, or nothing). A quasi-static tangent with one is singular.
+    /// resists, of the kinds plane constraints leave: a translation along an axis no
+    /// constraint holds, a rotation in the plane of axes (a, b) where the nodes holding a
+    /// share one b coordinate and those holding b one a coordinate (a pin, or nothing). A
+    /// quasi-static tangent with one is singular. Not detected: rotations about an axis
+    /// that is not a coordinate axis (two pinned nodes on a diagonal), and a body that is
+    /// free while another one is held; the factorisation still fails there, in words.
     pub fn free_rigid_modes(&self, active: &ActiveNodes) -> Vec<RigidMode> {
         // Per held component a, the range of every coordinate over the nodes holding it.
         let mut lo = [[f64::INFINITY; 3]; 3];

@@ -36,6 +36,8 @@ pub enum PointsError {
     EmptyRegion(String),
     #[error("the shape reaches outside the grid: a point would sit at {position:?}, grid spans {min:?} to {max:?}")]
     OutsideGrid { position: Vec<f64>, min: Vec<f64>, max: Vec<f64> },
+    #[error("the shape reaches outside the grid: its bounds are {lo:?} to {hi:?}, the grid spans {min:?} to {max:?}")]
+    BeyondGrid { lo: Vec<f64>, hi: Vec<f64>, min: Vec<f64>, max: Vec<f64> },
     #[error("a polygon needs at least 3 vertices, got {0}")]
     Polygon(usize),
     #[error("a ball's radius is {0}; it must be a positive number")]
@@ -361,13 +363,22 @@ fn sub_cell_range<const D: usize>(
 ) -> Result<([i64; D], [usize; D]), PointsError> {
     let (lo, hi) = shape.bounds()?;
     let origin = grid.origin();
-    // Sub-cell index ranges covering the shape's bounding box, clipped to the grid's
-    // sub-cells and one layer around them: a shape that reaches beyond the grid puts a
-    // centre in that layer, which the fill refuses, and a bounding box of 1e300 cells is
-    // never walked (it used to be, by `loam check` on a mistyped cell size).
-    let inside = |a: usize| ((grid.extent_max()[a] - origin[a]) / sub[a]).round() as i64;
-    let first: [i64; D] = std::array::from_fn(|a| (((lo[a] - origin[a]) / sub[a] - 0.5).ceil() as i64).max(-1));
-    let last: [i64; D] = std::array::from_fn(|a| (((hi[a] - origin[a]) / sub[a] - 0.5).floor() as i64).min(inside(a)));
+    // Sub-cell index ranges covering the shape's bounding box. A box that reaches more than
+    // one sub-cell beyond the grid is refused at once (the fill refuses any centre in the
+    // layer just outside): a bounding box of 1e300 cells is never walked (it used to be, by
+    // `loam check` on a mistyped cell size), and a shape that reaches out between centres
+    // is not cut to the grid silently.
+    let sub_cells = |a: usize| ((grid.extent_max()[a] - origin[a]) / sub[a]).round() as i64;
+    let first: [i64; D] = std::array::from_fn(|a| ((lo[a] - origin[a]) / sub[a] - 0.5).ceil() as i64);
+    let last: [i64; D] = std::array::from_fn(|a| ((hi[a] - origin[a]) / sub[a] - 0.5).floor() as i64);
+    if (0..D).any(|a| first[a] < -1 || last[a] > sub_cells(a)) {
+        return Err(PointsError::BeyondGrid {
+            lo: lo.iter().copied().collect(),
+            hi: hi.iter().copied().collect(),
+            min: origin.iter().copied().collect(),
+            max: grid.extent_max().iter().copied().collect(),
+        });
+    }
     if (0..D).any(|a| first[a] > last[a]) {
         return Err(PointsError::EmptyRegion(format!("bounds {:?} to {:?}", lo.as_slice(), hi.as_slice())));
     }
@@ -375,23 +386,24 @@ fn sub_cell_range<const D: usize>(
 }
 
 /// How many points [`PointStore::fill`] would add, without allocating them: at most the
-/// sub-cells of the shape's bounding box (`exact` false, no shape test), or exactly (`exact`
-/// true: every centre tested, which takes as long as a fill's loop). For a memory estimate
-/// before a large fill.
+/// sub-cells of the shape's bounding box (`exact_up_to` `None`, no shape test), or exactly,
+/// every centre tested but the count stopped at `exact_up_to` (a memory estimate only needs
+/// to know that a limit is passed). Refuses what the fill refuses about `points_per_cell`.
 pub fn fill_count<const D: usize>(
     grid: &Grid<D>,
     shape: &Shape<D>,
     points_per_cell: usize,
-    exact: bool,
+    exact_up_to: Option<u64>,
 ) -> Result<u64, PointsError> {
-    let sub = grid.cell_size() / points_per_cell.max(1) as f64;
+    if points_per_cell == 0 || points_per_cell > 8 {
+        return Err(PointsError::PointsPerCell(points_per_cell));
+    }
+    let sub = grid.cell_size() / points_per_cell as f64;
     let (first, dims) = sub_cell_range(grid, shape, &sub)?;
     let bound = dims.iter().fold(1u64, |n, &d| n.saturating_mul(d as u64));
-    if !exact {
-        return Ok(bound);
-    }
+    let Some(cap) = exact_up_to else { return Ok(bound) };
     let inside = (0..bound as usize).filter(|&k| shape.contains(&sub_cell_centre(grid, first, dims, &sub, k)));
-    Ok(inside.count() as u64)
+    Ok(inside.take(cap.min(usize::MAX as u64) as usize).count() as u64)
 }
 
 /// The centre of the `k`-th sub-cell (axis 0 fastest) of the range `first`, `dims`.
@@ -464,8 +476,10 @@ mod tests {
         let g = Grid::<2>::new(Vector2::zeros(), Vector2::new(0.5, 0.5), [8, 8]).unwrap();
         let disc = Shape::Ball { centre: Vector2::new(2.0, 2.0), radius: 1.0 };
         let n = PointStore::<2>::new().fill(&g, &disc, 2, 1.0, 0).unwrap() as u64;
-        assert_eq!(fill_count(&g, &disc, 2, true).unwrap(), n);
-        assert_eq!(fill_count(&g, &disc, 2, false).unwrap(), 64);
+        assert_eq!(fill_count(&g, &disc, 2, Some(u64::MAX)).unwrap(), n);
+        assert_eq!(fill_count(&g, &disc, 2, Some(10)).unwrap(), 10);
+        assert_eq!(fill_count(&g, &disc, 2, None).unwrap(), 64);
+        assert!(matches!(fill_count(&g, &disc, 9, None), Err(PointsError::PointsPerCell(9))));
         // Centres (i + ½)/4 from 1 within the unit circle about (2, 2): 52, counted by hand.
         assert_eq!(n, 52);
     }
@@ -526,8 +540,12 @@ mod tests {
     fn bad_fills_are_refused() {
         let g = Grid::<2>::new(Vector2::zeros(), Vector2::new(1.0, 1.0), [2, 2]).unwrap();
         let mut s = PointStore::<2>::new();
-        let b = Shape::Box { min: Vector2::new(0.0, 0.0), max: Vector2::new(3.0, 1.0) };
+        // Half a sub-cell out: the centre at x = 2.25 is in the shape and outside the grid.
+        let b = Shape::Box { min: Vector2::new(0.0, 0.0), max: Vector2::new(2.3, 1.0) };
         assert!(matches!(s.fill(&g, &b, 2, 1.0, 0), Err(PointsError::OutsideGrid { .. })));
+        // A cell out: refused by its bounds, before any centre is walked.
+        let b = Shape::Box { min: Vector2::new(0.0, 0.0), max: Vector2::new(3.0, 1.0) };
+        assert!(matches!(s.fill(&g, &b, 2, 1.0, 0), Err(PointsError::BeyondGrid { .. })));
         let thin = Shape::Box { min: Vector2::new(0.1, 0.1), max: Vector2::new(0.2, 0.2) };
         assert!(matches!(s.fill(&g, &thin, 2, 1.0, 0), Err(PointsError::EmptyRegion(_))));
         let ok = Shape::Box { min: Vector2::new(0.0, 0.0), max: Vector2::new(1.0, 1.0) };

@@ -58,6 +58,15 @@ enum ArrayData<'a> {
 }
 
 impl ArrayData<'_> {
+    /// Whether every value has a finite single-precision form (beyond 3.4e38 a Float32
+    /// would be infinite, so such an array is written in double precision).
+    fn fits_single(&self) -> bool {
+        match self {
+            ArrayData::Float { values, .. } => values.iter().all(|v| v.abs() <= f32::MAX as f64),
+            _ => true,
+        }
+    }
+
     /// The VTK type of the values, floats in `single` precision or double.
     fn vtk_type(&self, single: bool) -> &'static str {
         match self {
@@ -91,10 +100,11 @@ impl ArrayData<'_> {
 trait ArrayWriter {
     /// The `VTKFile` attribute naming the compressor, if any.
     fn compressor(&self) -> &'static str;
-    /// Whether floats are written in single precision.
+    /// Whether floats are written in single precision where they fit.
     fn single(&self) -> bool;
-    /// The attributes that close a `DataArray` start tag and, inline, its values and end tag.
-    fn array(&mut self, w: &mut dyn Write, data: &ArrayData) -> io::Result<()>;
+    /// The attributes that close a `DataArray` start tag and, inline, its values and end
+    /// tag, floats in `single` precision or double.
+    fn array(&mut self, w: &mut dyn Write, data: &ArrayData, single: bool) -> io::Result<()>;
     /// What follows the XML tree, to the end of the file.
     fn finish(&mut self, w: &mut dyn Write) -> io::Result<()>;
 }
@@ -114,7 +124,7 @@ impl ArrayWriter for AsciiArrays {
         writeln!(w, "</VTKFile>")
     }
 
-    fn array(&mut self, w: &mut dyn Write, data: &ArrayData) -> io::Result<()> {
+    fn array(&mut self, w: &mut dyn Write, data: &ArrayData, _single: bool) -> io::Result<()> {
         writeln!(w, r#" format="ascii">"#)?;
         match *data {
             ArrayData::Float { values, stride, pad_to } => {
@@ -149,9 +159,9 @@ impl ArrayWriter for AppendedArrays {
         self.single
     }
 
-    fn array(&mut self, w: &mut dyn Write, data: &ArrayData) -> io::Result<()> {
+    fn array(&mut self, w: &mut dyn Write, data: &ArrayData, single: bool) -> io::Result<()> {
         writeln!(w, r#" format="appended" offset="{}"/>"#, self.data.len())?;
-        compress_blocks(&data.bytes(self.single), &mut self.data)
+        compress_blocks(&data.bytes(single), &mut self.data)
     }
 
     /// The appended section after the XML tree, and the file's end.
@@ -238,14 +248,15 @@ fn data_array(
     names: &[&str],
     data: &ArrayData,
 ) -> io::Result<()> {
-    write!(w, r#"        <DataArray type="{}" Name="{}""#, data.vtk_type(arrays.single()), xml_escape(name))?;
+    let single = arrays.single() && data.fits_single();
+    write!(w, r#"        <DataArray type="{}" Name="{}""#, data.vtk_type(single), xml_escape(name))?;
     if comps > 1 {
         write!(w, r#" NumberOfComponents="{comps}""#)?;
     }
     for (k, component) in names.iter().enumerate() {
         write!(w, r#" ComponentName{k}="{component}""#)?;
     }
-    arrays.array(w, data)
+    arrays.array(w, data, single)
 }
 
 /// Writes integers, up to 16 per line.
@@ -375,6 +386,13 @@ mod tests {
         assert_eq!(arrays[1].1, "Float32");
         assert_eq!(singles(&arrays[1].3), stress.iter().map(|&v| v as f32).collect::<Vec<_>>());
         assert_eq!(ints(&arrays[4].3), (1..=n as i64).collect::<Vec<_>>());
+        // A value beyond f32's range keeps its array in double precision, not infinite.
+        let huge = [1e39, 1.0];
+        write_vtu(&path, &PointCloud::new(2, &[0.0, 0.0, 1.0, 1.0]).with_scalar("q", &huge), VtuFormat::Binary)
+            .unwrap();
+        let arrays = read_binary(&fs::read(&path).unwrap());
+        assert_eq!((arrays[0].1.as_str(), floats(&arrays[0].3)), ("Float64", huge.to_vec()));
+        assert_eq!(arrays[1].1, "Float32");
         // An empty cloud is a valid file too: every array zero blocks.
         write_vtu(&path, &PointCloud::new(3, &[]), VtuFormat::Binary).unwrap();
         assert!(read_binary(&fs::read(&path).unwrap()).iter().all(|a| a.3.is_empty()));

@@ -56,21 +56,26 @@ pub fn default_memory_limit() -> (u64, &'static str) {
 }
 
 impl LoadedScene {
-    /// The memory the scene will take on `grid`: with `exact` the points are counted
-    /// (every sub-cell centre tested, as long as a fill's loop but allocation-free), else
-    /// bounded by the bodies' bounding boxes (instant).
-    pub fn memory_estimate<const D: usize>(&self, grid: &Grid<D>, exact: bool) -> Result<MemoryEstimate, SceneError> {
+    /// The memory the scene will take on `grid`: with `exact_up_to` the points of each body
+    /// are counted up to that many (every sub-cell centre tested, as long as a fill's loop
+    /// but allocation-free), else bounded by the bodies' bounding boxes (instant). A body
+    /// the fill or the mesher would refuse (its points per cell, its shape) counts none
+    /// here: they say why, with its place.
+    pub fn memory_estimate<const D: usize>(
+        &self,
+        grid: &Grid<D>,
+        exact_up_to: Option<u64>,
+    ) -> Result<MemoryEstimate, SceneError> {
         let mut points = 0u64;
         for (i, b) in self.scene.bodies.iter().enumerate() {
             let shape = self.shape::<D>(i, b)?;
-            // A shape that cannot be filled or meshed is refused by the fill or the mesher,
-            // with its place.
+            let ppc = b.points_per_cell;
             let count = match (self.scene.method, &shape) {
-                (MethodSpec::Mpm, _) => fill_count(grid, &shape, b.points_per_cell, exact).unwrap_or(0),
-                // The FEM reference's Gauss points: elements of about a cell, gauss^D each.
-                (MethodSpec::UpdatedLagrangianFem, Shape::Box { min, max }) => (0..D)
+                (MethodSpec::Mpm, _) => fill_count(grid, &shape, ppc, exact_up_to).unwrap_or(0),
+                // The FEM reference's Gauss points: elements of about a cell, ppc^D each.
+                (MethodSpec::UpdatedLagrangianFem, Shape::Box { min, max }) if (1..=3).contains(&ppc) => (0..D)
                     .map(|a| ((max[a] - min[a]) / grid.cell_size()[a]).round().max(1.0))
-                    .fold(b.points_per_cell.pow(D as u32) as f64, |n, e| n * e)
+                    .fold((ppc as f64).powi(D as i32), |n, e| n * e)
                     .min(u64::MAX as f64)
                     as u64,
                 (MethodSpec::UpdatedLagrangianFem, _) => 0,
@@ -93,10 +98,12 @@ impl LoadedScene {
             Some(limit) => (limit, "the limit given"),
             None => default_memory_limit(),
         };
-        if self.memory_estimate(grid, false)?.bytes <= limit {
+        if self.memory_estimate(grid, None)?.bytes <= limit {
             return Ok(());
         }
-        let estimate = self.memory_estimate(grid, true)?;
+        // Counting stops once the points alone pass the limit.
+        let explicit = matches!(self.scene.analysis, AnalysisSpec::Explicit { .. });
+        let estimate = self.memory_estimate(grid, Some(limit / bytes_per_point(D, explicit) + 1))?;
         if estimate.bytes <= limit {
             return Ok(());
         }

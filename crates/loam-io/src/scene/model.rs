@@ -18,7 +18,8 @@ const LARGEST_SCALE: f64 = 1e150;
 impl LoadedScene {
     /// Refuse a material whose stiffness per cell (P-wave modulus × cell volume / smallest
     /// cell size², the size of a tangent entry) or whose weight over the grid's height (ρ |g|
-    /// × cell volume × cells along gravity, the size of a nodal force) would overflow the
+    /// × cell volume × the grid's most cells along an axis, a bound on the column of cells
+    /// along gravity: the size of a nodal force) would overflow the
     /// arithmetic of the tangent and the residual norms: `young: 1e308` used to pass the
     /// check and fail in Cholesky with a pivot index.
     pub(super) fn check_scales<const D: usize>(
@@ -29,6 +30,7 @@ impl LoadedScene {
     ) -> Result<(), SceneError> {
         let h = grid.cell_size();
         let volume = grid.cell_volume();
+        // The most cells along any axis bounds the number along gravity, whichever it is.
         let height = (0..D).map(|a| grid.cells()[a] as f64).fold(0.0, f64::max);
         for (i, (m, law)) in self.scene.materials.iter().zip(laws).enumerate() {
             let at = |key| [Seg::Key("materials"), Seg::Index(i), Seg::Key(key)];
