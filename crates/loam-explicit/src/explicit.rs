@@ -709,6 +709,15 @@ mod tests {
             .unwrap()
     }
 
+    /// The block moving at 0.1 along x, run for `duration` in fixed steps of `dt`.
+    fn fixed_steps(dt: f64, duration: f64) -> Explicit<2> {
+        let settings = ExplicitSettings {
+            time_step: TimeStep::Fixed { dt, allow_above_critical: false },
+            ..ExplicitSettings::new(duration)
+        };
+        Explicit::new(block(Vector2::new(0.1, 0.0), Vector2::zeros()), settings).unwrap()
+    }
+
     #[test]
     fn sign_is_zero_at_zero() {
         assert_eq!(sign(0.0), 0.0);
@@ -733,11 +742,7 @@ mod tests {
     /// duration instead of refusing a 1e-12 sliver as a collapsed step.
     #[test]
     fn a_sliver_before_the_end_is_taken_with_the_last_step() {
-        let settings = ExplicitSettings {
-            time_step: TimeStep::Fixed { dt: 1e-4, allow_above_critical: false },
-            ..ExplicitSettings::new(1e-2)
-        };
-        let mut ex = Explicit::new(block(Vector2::new(0.1, 0.0), Vector2::zeros()), settings).unwrap();
+        let mut ex = fixed_steps(1e-4, 1e-2);
         ex.time = 1e-2 - 1e-4 - 1e-12;
         let report = ex.step().unwrap();
         assert_eq!((report.dt, ex.time()), (1e-2 - (1e-2 - 1e-4 - 1e-12), 1e-2));
@@ -765,11 +770,7 @@ mod tests {
     /// step, and a step after the end is refused.
     #[test]
     fn the_last_step_lands_on_the_duration() {
-        let settings = ExplicitSettings {
-            time_step: TimeStep::Fixed { dt: 1e-4, allow_above_critical: false },
-            ..ExplicitSettings::new(1e-3)
-        };
-        let mut ex = Explicit::new(block(Vector2::new(0.1, 0.0), Vector2::zeros()), settings).unwrap();
+        let mut ex = fixed_steps(1e-4, 1e-3);
         let mut reports = Vec::new();
         ex.run(|r, _| {
             reports.push(r.clone());
@@ -782,11 +783,7 @@ mod tests {
         assert!(matches!(ex.step(), Err(ExplicitError::Finished(10))));
 
         // A step that does not divide the duration: the last one is shortened.
-        let settings = ExplicitSettings {
-            time_step: TimeStep::Fixed { dt: 3e-4, allow_above_critical: false },
-            ..ExplicitSettings::new(1e-3)
-        };
-        let mut ex = Explicit::new(block(Vector2::new(0.1, 0.0), Vector2::zeros()), settings).unwrap();
+        let mut ex = fixed_steps(3e-4, 1e-3);
         let mut dts = Vec::new();
         while !ex.is_finished() {
             dts.push(ex.step().unwrap().dt);
