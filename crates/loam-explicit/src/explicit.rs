@@ -441,13 +441,13 @@ fn outside_error<const D: usize>(model: &Model<D>, point: usize, x: &SVector<f64
     }
 }
 
-/// Sign with sign(0) = 0 (`f64::signum` gives ±1 at zero).
-#[inline]
 /// The P-wave speed c_p = √(M / ρ_p) of point `p`, ρ_p = m_p / v_p (docs/theory.md §10).
 fn wave_speed<const D: usize>(pts: &loam_points::PointStore<D>, p_wave: &[f64], p: usize) -> f64 {
     (p_wave[pts.material[p] as usize] / (pts.mass[p] / pts.volume[p])).sqrt()
 }
 
+/// Sign with sign(0) = 0 (`f64::signum` gives ±1 at zero).
+#[inline]
 fn sign(x: f64) -> f64 {
     if x > 0.0 {
         1.0
