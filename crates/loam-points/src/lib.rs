@@ -336,9 +336,7 @@ impl<const D: usize> PointStore<D> {
         density: f64,
         material: u32,
     ) -> Result<usize, PointsError> {
-        if points_per_cell == 0 || points_per_cell > 8 {
-            return Err(PointsError::PointsPerCell(points_per_cell));
-        }
+        check_points_per_cell(points_per_cell)?;
         if !(density.is_finite() && density > 0.0) {
             return Err(PointsError::Density(density));
         }
@@ -395,27 +393,37 @@ pub fn fill_count<const D: usize>(
     points_per_cell: usize,
     exact_up_to: Option<u64>,
 ) -> Result<u64, PointsError> {
+    check_points_per_cell(points_per_cell)?;
+    let sub = grid.cell_size() / points_per_cell as f64;
+    let (first, dims) = sub_cell_range(grid, shape, &sub)?;
+    let Some(cap) = exact_up_to else { return Ok(dims.iter().fold(1u64, |n, &d| n.saturating_mul(d as u64))) };
+    Ok(centres_in(grid, shape, first, dims, sub).take(cap.min(usize::MAX as u64) as usize).count() as u64)
+}
+
+/// Points per cell and axis, 1 to 8.
+fn check_points_per_cell(points_per_cell: usize) -> Result<(), PointsError> {
     if points_per_cell == 0 || points_per_cell > 8 {
         return Err(PointsError::PointsPerCell(points_per_cell));
     }
-    let sub = grid.cell_size() / points_per_cell as f64;
-    let (first, dims) = sub_cell_range(grid, shape, &sub)?;
-    let bound = dims.iter().fold(1u64, |n, &d| n.saturating_mul(d as u64));
-    let Some(cap) = exact_up_to else { return Ok(bound) };
-    let inside = (0..bound as usize).filter(|&k| shape.contains(&sub_cell_centre(grid, first, dims, &sub, k)));
-    Ok(inside.take(cap.min(usize::MAX as u64) as usize).count() as u64)
+    Ok(())
 }
 
-/// The centre of the `k`-th sub-cell (axis 0 fastest) of the range `first`, `dims`.
-fn sub_cell_centre<const D: usize>(
-    grid: &Grid<D>,
+/// The centres of the sub-cells of the range `first`, `dims` (size `sub`, axis 0 fastest)
+/// that lie inside `shape`.
+fn centres_in<'a, const D: usize>(
+    grid: &'a Grid<D>,
+    shape: &'a Shape<D>,
     first: [i64; D],
     dims: [usize; D],
-    sub: &SVector<f64, D>,
-    k: usize,
-) -> SVector<f64, D> {
-    let ijk = lexicographic_coords(k, dims);
-    SVector::from_fn(|a, _| grid.origin()[a] + ((first[a] + ijk[a] as i64) as f64 + 0.5) * sub[a])
+    sub: SVector<f64, D>,
+) -> impl Iterator<Item = SVector<f64, D>> + 'a {
+    let origin = grid.origin();
+    (0..dims.iter().product())
+        .map(move |k| {
+            let ijk = lexicographic_coords(k, dims);
+            SVector::from_fn(|a, _| origin[a] + ((first[a] + ijk[a] as i64) as f64 + 0.5) * sub[a])
+        })
+        .filter(|x| shape.contains(x))
 }
 
 /// The centres of the sub-cells of size `sub` (aligned with the grid) that lie inside
@@ -430,18 +438,15 @@ fn sub_cell_centres<const D: usize>(
     let origin = grid.origin();
     let (first, dims) = sub_cell_range(grid, shape, sub)?;
     let mut centres = Vec::new();
-    for k in 0..dims.iter().product() {
-        let x = sub_cell_centre(grid, first, dims, sub, k);
-        if shape.contains(&x) {
-            if !grid.contains(&x) {
-                return Err(PointsError::OutsideGrid {
-                    position: x.iter().copied().collect(),
-                    min: origin.iter().copied().collect(),
-                    max: grid.extent_max().iter().copied().collect(),
-                });
-            }
-            centres.push(x);
+    for x in centres_in(grid, shape, first, dims, *sub) {
+        if !grid.contains(&x) {
+            return Err(PointsError::OutsideGrid {
+                position: x.iter().copied().collect(),
+                min: origin.iter().copied().collect(),
+                max: grid.extent_max().iter().copied().collect(),
+            });
         }
+        centres.push(x);
     }
     if centres.is_empty() {
         return Err(empty());
