@@ -126,8 +126,7 @@ impl LoadedScene {
                 format!("body {i}: the updated Lagrangian FEM meshes Box bodies only; use a Box or method: Mpm"),
             ));
         };
-        let h = grid.cell_size();
-        let elements = std::array::from_fn(|a| (((max[a] - min[a]) / h[a]).round() as usize).max(1));
+        let elements = fem_elements(&min, &max, grid).map(|n| n as usize);
         FeMesh::block(min, max, elements, b.points_per_cell).map_err(|e| {
             let key = if matches!(e, MeshError::GaussOrder(_)) { "points_per_cell" } else { "shape" };
             self.error(
@@ -258,6 +257,13 @@ impl LoadedScene {
 }
 
 /// The path of body `i`'s `key`.
+/// The elements along each axis of the FEM reference's block from `min` to `max`: about
+/// one grid cell each, at least one (as `f64`, so that a count too large for any mesh is
+/// still a number).
+pub(super) fn fem_elements<const D: usize>(min: &SVector<f64, D>, max: &SVector<f64, D>, grid: &Grid<D>) -> [f64; D] {
+    std::array::from_fn(|a| ((max[a] - min[a]) / grid.cell_size()[a]).round().max(1.0))
+}
+
 fn body_key(i: usize, key: &'static str) -> [Seg<'static>; 3] {
     [Seg::Key("bodies"), Seg::Index(i), Seg::Key(key)]
 }

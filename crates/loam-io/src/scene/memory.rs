@@ -8,6 +8,7 @@
 //! per-point scratch and, for the implicit analyses, the tangent with the iterative solver;
 //! a sparse factorisation in 3D takes more (its fill grows faster than the points).
 
+use super::bodies::fem_elements;
 use super::{AnalysisSpec, LoadedScene, MethodSpec, SceneError, Seg};
 use loam_grid::Grid;
 use loam_points::{fill_count, Shape};
@@ -56,6 +57,11 @@ pub fn default_memory_limit() -> (u64, &'static str) {
 }
 
 impl LoadedScene {
+    /// Peak bytes per material point of this scene's analysis in `D` dimensions.
+    fn bytes_per_point<const D: usize>(&self) -> u64 {
+        bytes_per_point(D, matches!(self.scene.analysis, AnalysisSpec::Explicit { .. }))
+    }
+
     /// The memory the scene will take on `grid`: with `exact_up_to` the points of each body
     /// are counted up to that many (every sub-cell centre tested, as long as a fill's loop
     /// but allocation-free), else bounded by the bodies' bounding boxes (instant). A body
@@ -73,19 +79,17 @@ impl LoadedScene {
             let count = match (self.scene.method, &shape) {
                 (MethodSpec::Mpm, _) => fill_count(grid, &shape, ppc, exact_up_to).unwrap_or(0),
                 // The FEM reference's Gauss points: elements of about a cell, ppc^D each.
-                (MethodSpec::UpdatedLagrangianFem, Shape::Box { min, max }) if (1..=3).contains(&ppc) => (0..D)
-                    .map(|a| ((max[a] - min[a]) / grid.cell_size()[a]).round().max(1.0))
-                    .fold((ppc as f64).powi(D as i32), |n, e| n * e)
-                    .min(u64::MAX as f64)
-                    as u64,
+                (MethodSpec::UpdatedLagrangianFem, Shape::Box { min, max }) if (1..=3).contains(&ppc) => {
+                    let elements = fem_elements(min, max, grid).iter().product::<f64>();
+                    (elements * (ppc as f64).powi(D as i32)).min(u64::MAX as f64) as u64
+                }
                 (MethodSpec::UpdatedLagrangianFem, _) => 0,
             };
             points = points.saturating_add(count);
         }
         let grid_nodes = grid.num_nodes() as u64;
-        let explicit = matches!(self.scene.analysis, AnalysisSpec::Explicit { .. });
         let bytes = points
-            .saturating_mul(bytes_per_point(D, explicit))
+            .saturating_mul(self.bytes_per_point::<D>())
             .saturating_add(grid_nodes.saturating_mul(BYTES_PER_GRID_NODE));
         Ok(MemoryEstimate { points, grid_nodes, bytes })
     }
@@ -102,8 +106,7 @@ impl LoadedScene {
             return Ok(());
         }
         // Counting stops once the points alone pass the limit.
-        let explicit = matches!(self.scene.analysis, AnalysisSpec::Explicit { .. });
-        let estimate = self.memory_estimate(grid, Some(limit / bytes_per_point(D, explicit) + 1))?;
+        let estimate = self.memory_estimate(grid, Some(limit / self.bytes_per_point::<D>() + 1))?;
         if estimate.bytes <= limit {
             return Ok(());
         }

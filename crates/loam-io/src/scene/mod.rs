@@ -105,11 +105,10 @@ impl LoadedScene {
     /// larger file is not a scene (`/dev/zero` is refused, not read until memory runs out).
     pub fn read(path: &Path) -> Result<Self, SceneError> {
         let error = |message: String| SceneError { file: path.to_owned(), line: 0, column: 0, message };
-        let file = std::fs::File::open(path).map_err(|e| error(format!("cannot read the scene file: {e}")))?;
+        let unreadable = |e: std::io::Error| error(format!("cannot read the scene file: {e}"));
+        let file = std::fs::File::open(path).map_err(unreadable)?;
         let mut bytes = Vec::new();
-        file.take(MAX_SCENE_BYTES + 1)
-            .read_to_end(&mut bytes)
-            .map_err(|e| error(format!("cannot read the scene file: {e}")))?;
+        file.take(MAX_SCENE_BYTES + 1).read_to_end(&mut bytes).map_err(unreadable)?;
         if bytes.len() as u64 > MAX_SCENE_BYTES {
             return Err(error(format!(
                 "the file is larger than {} MiB; a scene is a short text that describes its bodies by shapes: is this the scene file?",
