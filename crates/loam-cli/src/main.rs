@@ -145,8 +145,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
 
 /// `loam check`: build the scene's analysis, every check included, and say what it holds.
 fn check(scene: &Path, max_memory: Option<u64>) -> anyhow::Result<()> {
-    let loaded = LoadedScene { memory_limit: max_memory, ..LoadedScene::read(scene)? };
-    print_warnings(&loaded);
+    let loaded = load(scene, max_memory)?;
     let (points, dofs) = match loaded.scene.dimension {
         3 => {
             let a = loaded.build::<3>()?;
@@ -165,11 +164,13 @@ fn check(scene: &Path, max_memory: Option<u64>) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The scene's warnings on stderr, one per line.
-fn print_warnings(scene: &LoadedScene) {
-    for w in scene.warnings() {
+/// The scene file read with the memory limit given, its warnings on stderr, one per line.
+fn load(scene: &Path, max_memory: Option<u64>) -> anyhow::Result<LoadedScene> {
+    let loaded = LoadedScene { memory_limit: max_memory, ..LoadedScene::read(scene)? };
+    for w in loaded.warnings() {
         eprintln!("warning: {w}");
     }
+    Ok(loaded)
 }
 
 /// The flags of `loam run`.
@@ -184,8 +185,7 @@ struct CliRunOptions {
 /// `loam run`: the scene run into `out` under a progress bar, the solver's log above it.
 fn run_command(scene: &Path, out: &Path, options: &CliRunOptions) -> anyhow::Result<()> {
     let &CliRunOptions { quiet, verbose, max_memory, steps, overwrite } = options;
-    let loaded = LoadedScene { memory_limit: max_memory, ..LoadedScene::read(scene)? };
-    print_warnings(&loaded);
+    let loaded = load(scene, max_memory)?;
     if let loam_io::scene::AnalysisSpec::QuasiStatic { strength_reduction: Some(srf), .. } = &loaded.scene.analysis {
         if !quiet {
             println!(
@@ -300,11 +300,10 @@ fn show_trial(bar: &ProgressBar, k: usize, t: &StrengthTrial, quiet: bool) {
         t.cutbacks,
         t.wall_time.as_secs_f64()
     );
-    if quiet {
-    } else if bar.is_hidden() {
+    if !quiet && bar.is_hidden() {
         // Not a terminal (a pipe, a log file): the bar draws nothing, so print the line.
         println!("{line}");
-    } else {
+    } else if !quiet {
         bar.println(&line);
     }
     bar.set_message(format!("strength reduction: {line}"));

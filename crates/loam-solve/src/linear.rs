@@ -318,13 +318,16 @@ impl LinearSolver for SparseDirectSolver {
     }
 }
 
+/// Why a tangent that was positive definite or regular before stops being so.
+const SINGULAR_CAUSE: &str = "a part of the body is free to move or the material has lost its stiffness";
+
 /// What a failed Cholesky factorisation of an `n`-dof tangent means, in words (faer's
 /// errors print as Rust debug text).
 fn llt_words(e: LltError, n: usize) -> String {
     match e {
         LltError::Numeric(faer::linalg::cholesky::llt::factor::LltError::NonPositivePivot { index }) => format!(
             "pivot {index} of {n} (in the fill-reducing order) is not positive: the tangent is singular or \
-             indefinite, because a part of the body is free to move or the material has lost its stiffness"
+             indefinite, because {SINGULAR_CAUSE}"
         ),
         LltError::Generic(e) => generic_words(e),
     }
@@ -333,10 +336,9 @@ fn llt_words(e: LltError, n: usize) -> String {
 /// What a failed LU factorisation of an `n`-dof tangent means, in words.
 fn lu_words(e: LuError, n: usize) -> String {
     match e {
-        LuError::SymbolicSingular { index } => format!(
-            "no pivot at step {index} of {n}: the tangent is singular, because a part of the body is free \
-             to move or the material has lost its stiffness"
-        ),
+        LuError::SymbolicSingular { index } => {
+            format!("no pivot at step {index} of {n}: the tangent is singular, because {SINGULAR_CAUSE}")
+        }
         LuError::Generic(e) => generic_words(e),
     }
 }
