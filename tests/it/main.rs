@@ -11,6 +11,7 @@ mod implicit_dynamics;
 mod implicit_mpm;
 mod loads;
 mod prescribed_displacement;
+mod restart;
 mod run_scenes;
 mod scene_errors;
 mod slope;

@@ -152,6 +152,7 @@ fn slope_scene_finds_the_factor_of_safety() {
             trials.push(t.factor);
         }
         RunEvent::Step { .. } => steps += 1,
+        RunEvent::Checkpoint(_) | RunEvent::Resumed { .. } => panic!("no checkpoint was asked for"),
     })
     .unwrap();
     let fos = summary.factor_of_safety.expect("a factor of safety");

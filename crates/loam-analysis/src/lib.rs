@@ -2,10 +2,10 @@
 //! Newmark dynamics and explicit MPM — for a program that runs whichever a problem asks
 //! for (the scene runner, the CLI) without knowing a file format.
 
-use loam_explicit::{Explicit, ExplicitError};
-use loam_implicit::{Dynamic, QuasiStatic, StepError, StepReport};
+use loam_explicit::{Explicit, ExplicitError, ExplicitState};
+use loam_implicit::{Dynamic, DynamicState, QuasiStatic, QuasiStaticState, StepError, StepReport};
 use loam_kernels::ConnectError;
-use loam_model::{LoadLevel, Model};
+use loam_model::{LoadLevel, Model, ModelError, ModelState};
 use std::time::Duration;
 
 /// One of the three analyses.
@@ -14,6 +14,14 @@ pub enum Analysis<const D: usize> {
     QuasiStatic(QuasiStatic<D>),
     Dynamic(Dynamic<D>),
     Explicit(Explicit<D>),
+}
+
+/// What an analysis carries from step to step beside its model (a checkpoint's).
+#[derive(Debug, Clone, PartialEq)]
+pub enum AnalysisState {
+    QuasiStatic(QuasiStaticState),
+    Dynamic(DynamicState),
+    Explicit(ExplicitState),
 }
 
 /// Why a step failed.
@@ -178,6 +186,27 @@ impl<const D: usize> Analysis<D> {
             Analysis::QuasiStatic(a) => a.linear_solver_kind().to_string(),
             Analysis::Dynamic(a) => a.linear_solver_kind().to_string(),
             Analysis::Explicit(_) => "no linear solver (explicit)".to_string(),
+        }
+    }
+
+    /// The state [`Analysis::resume`] takes back, with the model's ([`Model::state`]).
+    pub fn state(&self) -> AnalysisState {
+        match self {
+            Analysis::QuasiStatic(a) => AnalysisState::QuasiStatic(a.state()),
+            Analysis::Dynamic(a) => AnalysisState::Dynamic(a.state()),
+            Analysis::Explicit(a) => AnalysisState::Explicit(a.state()),
+        }
+    }
+
+    /// Go on from a state saved by an analysis of the same scene: the next step is the one
+    /// the saving run would have taken next, with the same numbers. A state of another
+    /// analysis, or one that does not fit, is refused and nothing changes.
+    pub fn resume(&mut self, state: AnalysisState, model: ModelState<D>) -> Result<(), ModelError> {
+        match (self, state) {
+            (Analysis::QuasiStatic(a), AnalysisState::QuasiStatic(s)) => a.resume(s, model),
+            (Analysis::Dynamic(a), AnalysisState::Dynamic(s)) => a.resume(s, model),
+            (Analysis::Explicit(a), AnalysisState::Explicit(s)) => a.resume(s, model),
+            (a, _) => Err(ModelError::Restore(format!("the state is not of a {} analysis", a.name()))),
         }
     }
 

@@ -4,7 +4,11 @@ use anyhow::Context;
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use loam_implicit::StrengthTrial;
-use loam_io::{run_scene_with, LoadedScene, Progress, RunEvent, RunOptions};
+use loam_io::checkpoint::Checkpoint;
+use loam_io::{
+    checkpoint_interval, checkpoint_scene, resume_scene, run_scene_with, CheckpointEvery, CheckpointWritten,
+    LoadedScene, Progress, RunEvent, RunOptions, CHECKPOINT_FILE,
+};
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -48,6 +52,36 @@ enum Command {
         /// replaces its own outputs either way.
         #[arg(long)]
         overwrite: bool,
+        /// Write a checkpoint (checkpoint.loam in the output folder, replaced each time)
+        /// every N steps, or at a wall-time interval (90s, 10m, 2h); `loam resume` goes on
+        /// from it. A strength-reduction search is saved after each trial.
+        #[arg(long, value_name = "N|TIME")]
+        checkpoint_every: Option<CheckpointEvery>,
+    },
+    /// Go on with an interrupted run from the checkpoint in its output folder: its outputs
+    /// end as those of a run that never stopped.
+    Resume {
+        /// The run's output folder (holding checkpoint.loam).
+        dir: PathBuf,
+        /// The scene file, where it is no longer where the run read it (it must be the same
+        /// text).
+        #[arg(long)]
+        scene: Option<PathBuf>,
+        /// As for `run`.
+        #[arg(long, short)]
+        quiet: bool,
+        /// As for `run`.
+        #[arg(long, short, action = clap::ArgAction::Count, conflicts_with = "quiet")]
+        verbose: u8,
+        /// As for `run`.
+        #[arg(long, value_parser = parse_size)]
+        max_memory: Option<u64>,
+        /// As for `run`: stop after this many steps in all.
+        #[arg(long)]
+        steps: Option<usize>,
+        /// As for `run` [default: as the interrupted run did].
+        #[arg(long, value_name = "N|TIME")]
+        checkpoint_every: Option<CheckpointEvery>,
     },
     /// Draw the plots of a run from the CSV files in its output folder (loam run draws
     /// them at its end too): run_log.svg, load_displacement.svg, energies.svg,
@@ -133,12 +167,27 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             }
             Ok(())
         }
-        Command::Run { scene, out, quiet, verbose, max_memory, overwrite, steps } => {
+        Command::Run { scene, out, quiet, verbose, max_memory, overwrite, steps, checkpoint_every } => {
             let out = out.unwrap_or_else(|| {
                 PathBuf::from("out").join(scene.file_stem().map(|s| s.to_owned()).unwrap_or_default())
             });
-            let options = CliRunOptions { quiet, verbose, max_memory, steps, overwrite };
-            run_command(&scene, &out, &options)
+            let options = CliRunOptions { quiet, verbose, max_memory, steps, overwrite, checkpoint_every };
+            run_command(&scene, &out, &options, None)
+        }
+        Command::Resume { dir, scene, quiet, verbose, max_memory, steps, checkpoint_every } => {
+            let path = dir.join(CHECKPOINT_FILE);
+            let checkpoint =
+                Checkpoint::load(&path).with_context(|| format!("resuming the run in {}", dir.display()))?;
+            let scene = match scene {
+                Some(scene) => scene,
+                None => checkpoint_scene(&checkpoint)?,
+            };
+            let checkpoint_every = match checkpoint_every {
+                Some(every) => Some(every),
+                None => checkpoint_interval(&checkpoint)?,
+            };
+            let options = CliRunOptions { quiet, verbose, max_memory, steps, overwrite: false, checkpoint_every };
+            run_command(&scene, &dir, &options, Some(checkpoint))
         }
     }
 }
@@ -180,11 +229,18 @@ struct CliRunOptions {
     max_memory: Option<u64>,
     steps: Option<usize>,
     overwrite: bool,
+    checkpoint_every: Option<CheckpointEvery>,
 }
 
-/// `loam run`: the scene run into `out` under a progress bar, the solver's log above it.
-fn run_command(scene: &Path, out: &Path, options: &CliRunOptions) -> anyhow::Result<()> {
-    let &CliRunOptions { quiet, verbose, max_memory, steps, overwrite } = options;
+/// `loam run` (or `loam resume`, given the `checkpoint` to go on from): the scene run into
+/// `out` under a progress bar, the solver's log above it.
+fn run_command(
+    scene: &Path,
+    out: &Path,
+    options: &CliRunOptions,
+    checkpoint: Option<Checkpoint>,
+) -> anyhow::Result<()> {
+    let &CliRunOptions { quiet, verbose, max_memory, steps, overwrite, checkpoint_every } = options;
     let loaded = load(scene, max_memory)?;
     if let loam_io::scene::AnalysisSpec::QuasiStatic { strength_reduction: Some(srf), .. } = &loaded.scene.analysis {
         if !quiet {
@@ -203,14 +259,24 @@ fn run_command(scene: &Path, out: &Path, options: &CliRunOptions) -> anyhow::Res
     );
     install_log(&bar, quiet, verbose);
     let mut trials = 0;
-    let run_options = RunOptions { max_steps: steps, overwrite };
-    let result = run_scene_with(&loaded, out, &run_options, &mut |event| match event {
+    let run_options = RunOptions { max_steps: steps, overwrite, checkpoint_every };
+    let mut progress = |event: RunEvent| match event {
         RunEvent::Step { report, end } => show_progress(&bar, report, end),
         RunEvent::Trial(t) => {
             trials += 1;
             show_trial(&bar, trials, t, quiet);
         }
-    });
+        RunEvent::Checkpoint(w) => show_line(&bar, &checkpoint_line(&w, out), quiet),
+        RunEvent::Resumed { step, trials: done } => {
+            trials = done;
+            let at = if step > 0 { format!("after step {step}") } else { format!("after trial {done}") };
+            show_line(&bar, &format!("resuming {} {at}", scene.display()), quiet);
+        }
+    };
+    let result = match checkpoint {
+        Some(c) => resume_scene(&loaded, c, out, &run_options, &mut progress),
+        None => run_scene_with(&loaded, out, &run_options, &mut progress),
+    };
     bar.finish_and_clear();
     let summary = result.with_context(|| format!("running {}", scene.display()))?;
     if let Err(e) = &summary.plots {
@@ -289,6 +355,31 @@ fn install_log(bar: &ProgressBar, quiet: bool, verbose: u8) {
         .init();
 }
 
+/// A line above the progress bar, unless quiet.
+fn show_line(bar: &ProgressBar, line: &str, quiet: bool) {
+    if !quiet && bar.is_hidden() {
+        // Not a terminal (a pipe, a log file): the bar draws nothing, so print the line.
+        println!("{line}");
+    } else if !quiet {
+        bar.println(line);
+    }
+}
+
+/// What a checkpoint written says: where the run stands, its size and the time it took.
+fn checkpoint_line(w: &CheckpointWritten, out: &Path) -> String {
+    let at = if w.step > 0 { format!("step {}", w.step) } else { format!("trial {}", w.trials) };
+    let size = if w.bytes < 1_000_000 {
+        format!("{:.1} kB", w.bytes as f64 / 1e3)
+    } else {
+        format!("{:.1} MB", w.bytes as f64 / 1e6)
+    };
+    format!(
+        "checkpoint after {at}: {size} in {:.2} s ({})",
+        w.wall_time.as_secs_f64(),
+        out.join(CHECKPOINT_FILE).display()
+    )
+}
+
 /// A finished strength-reduction trial, one line above the progress bar (unless quiet),
 /// and the bar's message.
 fn show_trial(bar: &ProgressBar, k: usize, t: &StrengthTrial, quiet: bool) {
@@ -300,12 +391,7 @@ fn show_trial(bar: &ProgressBar, k: usize, t: &StrengthTrial, quiet: bool) {
         t.cutbacks,
         t.wall_time.as_secs_f64()
     );
-    if !quiet && bar.is_hidden() {
-        // Not a terminal (a pipe, a log file): the bar draws nothing, so print the line.
-        println!("{line}");
-    } else if !quiet {
-        bar.println(&line);
-    }
+    show_line(bar, &line, quiet);
     bar.set_message(format!("strength reduction: {line}"));
 }
 

@@ -12,6 +12,9 @@
 //!     cargo test --release -p loam-cli --test fuzz -- --nocapture
 //! ```
 
+mod common;
+use common::{env_or, Rng};
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
@@ -37,22 +40,6 @@ const RUNNABLE: [&str; 8] = [
     "slope_runout_explicit.ron",
     "slope_runout_implicit.ron",
 ];
-
-/// xorshift64*: a seeded, reproducible stream (the case number and seed reproduce a case).
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
-    }
-
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
-    }
-}
 
 /// A token of RON text: its byte range and what kind it is.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -201,10 +188,6 @@ fn failure(case: usize, seed: u64, scene: &Path, what: &str) -> String {
 fn non_finite_in(path: &Path) -> bool {
     let Ok(text) = std::fs::read_to_string(path) else { return false };
     text.split([',', '\n']).any(|v| matches!(v.trim().to_ascii_lowercase().as_str(), "nan" | "inf" | "-inf"))
-}
-
-fn env_or(name: &str, default: u64) -> u64 {
-    std::env::var(name).ok().and_then(|v| v.parse().ok()).unwrap_or(default)
 }
 
 fn examples() -> Vec<(String, String)> {

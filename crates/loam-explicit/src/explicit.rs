@@ -6,7 +6,7 @@ use loam_kernels::{
     advance_deformation, check_constraints, connect, embed, gather_internal_force, gather_nodal, internal_force,
     interpolate_pair, update_point, Committed, ConnectError, LoadSupports, RunError,
 };
-use loam_model::{Kinematics, LoadLevel, Model, StateFields};
+use loam_model::{Kinematics, LoadLevel, Model, ModelError, ModelState, StateFields};
 use nalgebra::{Matrix3, SMatrix, SVector};
 use rayon::prelude::*;
 use std::time::{Duration, Instant};
@@ -103,6 +103,13 @@ pub struct Explicit<const D: usize> {
     points: PointScratch<D>,
 }
 
+/// What an explicit analysis carries from step to step beside its model.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ExplicitState {
+    pub steps: usize,
+    pub time: f64,
+}
+
 impl<const D: usize> Explicit<D> {
     /// An explicit analysis of `model` from t = 0 to `settings.duration`. Refuses invalid
     /// settings with [`ExplicitError::InvalidSettings`].
@@ -163,6 +170,25 @@ impl<const D: usize> Explicit<D> {
 
     pub fn is_finished(&self) -> bool {
         self.time >= self.settings.duration
+    }
+
+    /// The step count and time, the state beside the model a checkpoint needs (every
+    /// nodal field is rebuilt from the points each step).
+    pub fn state(&self) -> ExplicitState {
+        ExplicitState { steps: self.steps, time: self.time }
+    }
+
+    /// Go on from `state` and `model`, saved by an analysis of the same scene; a state that
+    /// does not fit is refused and nothing changes.
+    pub fn resume(&mut self, state: ExplicitState, model: ModelState<D>) -> Result<(), ModelError> {
+        let (time, duration) = (state.time, self.settings.duration);
+        if !(time.is_finite() && (0.0..=duration).contains(&time)) {
+            return Err(ModelError::Restore(format!("time {time} outside the run's 0 to {duration}")));
+        }
+        self.model.restore(model)?;
+        self.steps = state.steps;
+        self.time = time;
+        Ok(())
     }
 
     /// Check what can only be checked against the connectivity: every point's basis lies in

@@ -137,6 +137,12 @@ impl<const D: usize> Background<D> {
     /// Move the nodes that move with the body by the converged increment of a step, `du`
     /// (D values per active node of `active`); the grid, reset every step, stays where it
     /// is. Every mesh node belongs to an element, so every one is active.
+    /// Put the nodes of a body-fitted mesh at `positions` (a checkpoint's): `false`, and
+    /// nothing changed, without a mesh or with another number of nodes.
+    pub fn set_mesh_positions(&mut self, positions: &[SVector<f64, D>]) -> bool {
+        self.mesh.as_mut().is_some_and(|mesh| mesh.set_positions(positions))
+    }
+
     pub fn displace(&mut self, active: &ActiveNodes, du: &[f64]) {
         if let Some(mesh) = &mut self.mesh {
             let g2a = &active.grid_to_active;

@@ -231,6 +231,16 @@ impl<const D: usize> FeMesh<D> {
     }
 
     /// Move node `n` by `du[n]` (the converged increment of a step).
+    /// Put every node at `positions` (a checkpoint's, one per node); `false`, and nothing
+    /// changed, when the count differs.
+    pub fn set_positions(&mut self, positions: &[SVector<f64, D>]) -> bool {
+        if positions.len() != self.position.len() {
+            return false;
+        }
+        self.position.copy_from_slice(positions);
+        true
+    }
+
     pub fn displace(&mut self, du: impl Fn(usize) -> SVector<f64, D>) {
         for (n, x) in self.position.iter_mut().enumerate() {
             *x += du(n);

@@ -26,7 +26,7 @@ use crate::{StepError, StepReport};
 use loam_kernels::{
     gather_internal_force, gather_nodal, internal_force, interpolate, interpolate_pair, InvalidSetting,
 };
-use loam_model::{LoadLevel, Model};
+use loam_model::{LoadLevel, Model, ModelError, ModelState};
 use loam_solve::{LinearSolverChoice, LinearSolverKind, NewtonError, NewtonReport, NewtonSettings};
 use rayon::prelude::*;
 use std::time::Instant;
@@ -109,6 +109,22 @@ impl DynamicSettings {
     }
 }
 
+/// What an implicit dynamic analysis carries from step to step beside its model: all a
+/// checkpoint needs to resume it. The nodal fields matter where the nodes persist (the
+/// FEM reference); on a grid they are gathered again every step.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DynamicState {
+    pub step: usize,
+    pub time: f64,
+    /// The initial acceleration has been computed.
+    pub started: bool,
+    pub nodal_mass: Vec<f64>,
+    pub nodal_velocity: Vec<f64>,
+    pub nodal_acceleration: Vec<f64>,
+    /// The linear solver resolved at the first step.
+    pub linear_solver: Option<LinearSolverKind>,
+}
+
 /// Implicit Newmark / Bossak dynamics of a model. See the module docs.
 pub struct Dynamic<const D: usize> {
     engine: Engine<D>,
@@ -169,6 +185,46 @@ impl<const D: usize> Dynamic<D> {
 
     pub fn linear_solver_kind(&self) -> LinearSolverKind {
         self.engine.linear_solver().kind()
+    }
+
+    /// The state [`Dynamic::resume`] takes back.
+    pub fn state(&self) -> DynamicState {
+        DynamicState {
+            step: self.step,
+            time: self.time,
+            started: self.started,
+            nodal_mass: self.inertia.nodal_mass.clone(),
+            nodal_velocity: self.inertia.velocity.clone(),
+            nodal_acceleration: self.acceleration.clone(),
+            linear_solver: self.engine.resolved_linear_solver(),
+        }
+    }
+
+    /// Go on from `state` and `model`, saved by an analysis of the same scene: the next
+    /// step is the one after `state.step`, with the numbers the saving run would have had.
+    /// A state that does not fit is refused and nothing changes.
+    pub fn resume(&mut self, state: DynamicState, model: ModelState<D>) -> Result<(), ModelError> {
+        let (step, time, duration) = (state.step, state.time, self.settings.duration);
+        let nodes = state.nodal_mass.len();
+        if !(time.is_finite() && (0.0..=duration).contains(&time))
+            || state.nodal_velocity.len() != nodes * D
+            || state.nodal_acceleration.len() != nodes * D
+        {
+            return Err(ModelError::Restore(format!(
+                "step {step} at time {time} of {duration} with nodal fields of {nodes}, {} and {} values",
+                state.nodal_velocity.len(),
+                state.nodal_acceleration.len()
+            )));
+        }
+        self.engine.model.restore(model)?;
+        self.engine.resume_linear_solver(state.linear_solver);
+        self.step = step;
+        self.time = time;
+        self.started = state.started;
+        self.inertia.nodal_mass = state.nodal_mass;
+        self.inertia.velocity = state.nodal_velocity;
+        self.acceleration = state.nodal_acceleration;
+        Ok(())
     }
 
     /// Every constraint must hold at least one active node.

@@ -157,6 +157,21 @@ impl<const D: usize> Engine<D> {
         self.conn_current = false;
     }
 
+    /// The linear solver as resolved at the first connectivity (what a resumed run must
+    /// keep, whatever its size then); `None` before.
+    pub fn resolved_linear_solver(&self) -> Option<LinearSolverKind> {
+        self.linear_resolved.then(|| self.linear.kind())
+    }
+
+    /// Resume with the linear solver `kind` resolved by the run that saved the state
+    /// (nothing when `None`: the first step resolves it).
+    pub fn resume_linear_solver(&mut self, kind: Option<LinearSolverKind>) {
+        if let Some(kind) = kind {
+            self.set_linear_solver(kind.solver());
+        }
+        self.conn_current = false;
+    }
+
     /// At the first connectivity: the automatic choice turns to multigrid CG on a grid from
     /// `ITERATIVE_FROM_DOFS` where the tangent is symmetric positive definite (BiCGStab is
     /// only taken when asked for); an iterative solver asked for on a body-fitted mesh (which

@@ -26,11 +26,11 @@ mod residual;
 mod strength_reduction;
 mod tangent;
 
-pub use dynamic::{Dynamic, DynamicSettings, MassMatrix};
+pub use dynamic::{Dynamic, DynamicSettings, DynamicState, MassMatrix};
 pub use loam_kernels::{ConnectError, InvalidSetting, RunError};
 pub use loam_model::{AntiLocking, Kinematics, Model, ModelError, PlaneConstraint};
 pub use points::PointUpdateError;
-pub use quasi_static::{QuasiStatic, QuasiStaticSettings};
+pub use quasi_static::{QuasiStatic, QuasiStaticSettings, QuasiStaticState};
 pub use report::{IterationProfile, StepError, StepReport};
 pub use strength_reduction::{
     has_strength, reduced_strength, FactorOfSafety, StrengthReduction, StrengthReductionError, StrengthTrial,

@@ -9,7 +9,7 @@ use crate::engine::Engine;
 use crate::points::PointUpdateError;
 use crate::{IterationProfile, StepError, StepReport};
 use loam_kernels::RunError;
-use loam_model::{LoadLevel, Model};
+use loam_model::{LoadLevel, Model, ModelError, ModelState};
 use loam_solve::{
     BlockPattern, LinearSolver, LinearSolverChoice, LinearSolverKind, LinearSolverTimings, NewtonError, NewtonReport,
     NewtonSettings,
@@ -46,6 +46,20 @@ impl Default for QuasiStaticSettings {
             extrapolate: false,
         }
     }
+}
+
+/// What a quasi-static analysis carries from step to step beside its model: all a
+/// checkpoint needs to resume it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct QuasiStaticState {
+    pub step: usize,
+    pub load_factor: f64,
+    /// The last converged increment per background node dof and its load increment (with
+    /// `extrapolate`; empty and `None` otherwise).
+    pub previous: Vec<f64>,
+    pub previous_increment: Option<f64>,
+    /// The linear solver resolved at the first step.
+    pub linear_solver: Option<LinearSolverKind>,
 }
 
 /// Quasi-static implicit analysis of a model. See the module docs.
@@ -94,6 +108,35 @@ impl<const D: usize> QuasiStatic<D> {
 
     pub fn is_finished(&self) -> bool {
         self.step >= self.settings.load_steps
+    }
+
+    /// The state [`QuasiStatic::resume`] takes back.
+    pub fn state(&self) -> QuasiStaticState {
+        QuasiStaticState {
+            step: self.step,
+            load_factor: self.load_factor,
+            previous: self.previous.clone(),
+            previous_increment: self.previous_increment,
+            linear_solver: self.engine.resolved_linear_solver(),
+        }
+    }
+
+    /// Go on from `state` and `model`, saved by an analysis of the same scene: the next
+    /// step is the one after `state.step`, with the numbers the saving run would have had.
+    /// A state that does not fit is refused and nothing changes.
+    pub fn resume(&mut self, state: QuasiStaticState, model: ModelState<D>) -> Result<(), ModelError> {
+        let steps = self.settings.load_steps;
+        if state.step > steps || !(0.0..=1.0).contains(&state.load_factor) {
+            let (step, lambda) = (state.step, state.load_factor);
+            return Err(ModelError::Restore(format!("step {step} at load factor {lambda} of {steps} load steps")));
+        }
+        self.engine.model.restore(model)?;
+        self.engine.resume_linear_solver(state.linear_solver);
+        self.step = state.step;
+        self.load_factor = state.load_factor;
+        self.previous = state.previous;
+        self.previous_increment = state.previous_increment;
+        Ok(())
     }
 
     /// Solve with `solver` instead of the settings' choice: a solver of the caller's (a

@@ -83,6 +83,19 @@ impl StrengthReduction {
     pub fn factor_of_safety<const D: usize>(
         &self,
         model: &Model<D>,
+        on_trial: impl FnMut(&StrengthTrial),
+    ) -> Result<FactorOfSafety, StrengthReductionError> {
+        self.factor_of_safety_after(model, &[], on_trial)
+    }
+
+    /// [`StrengthReduction::factor_of_safety`] resumed after the trials `done` (a
+    /// checkpoint's): the bisection takes their outcomes instead of running them again, so
+    /// it goes on with the factors the interrupted search would have tried. `on_trial` is
+    /// called for the new trials only; trials that are not this search's are refused.
+    pub fn factor_of_safety_after<const D: usize>(
+        &self,
+        model: &Model<D>,
+        done: &[StrengthTrial],
         mut on_trial: impl FnMut(&StrengthTrial),
     ) -> Result<FactorOfSafety, StrengthReductionError> {
         let (lo, hi) = self.bracket;
@@ -107,10 +120,23 @@ impl StrengthReduction {
                 valid: "a positive number",
             }));
         }
-        let mut trials = Vec::new();
+        let mut trials: Vec<StrengthTrial> = Vec::new();
         let mut run = |factor: f64| -> Result<bool, StrengthReductionError> {
-            let t = self.trial(model, factor)?;
-            on_trial(&t);
+            let t = match done.get(trials.len()) {
+                Some(t) if t.factor.to_bits() == factor.to_bits() => t.clone(),
+                Some(t) => {
+                    return Err(StrengthReductionError::Reduction(format!(
+                        "saved trial {} is at F = {}, where this search tries F = {factor}: it is another search's",
+                        trials.len() + 1,
+                        t.factor
+                    )))
+                }
+                None => {
+                    let t = self.trial(model, factor)?;
+                    on_trial(&t);
+                    t
+                }
+            };
             let stable = t.stable;
             trials.push(t);
             Ok(stable)

@@ -1,20 +1,25 @@
 //! Checkpoint files: the state a run needs to go on, in one file, so that an interrupted
 //! run (or a strength-reduction search) can resume instead of starting again. This module
-//! is the file format; what goes into a checkpoint is the runner's.
+//! is the file format; what goes into a checkpoint is `restart`'s.
 //!
 //! Layout, little-endian: the magic `LOAMCKPT`; the format version (u32); the header —
 //! loam's version (text), the FNV-1a hash of the scene text (u64), the analysis (text) and
-//! the dimension (u32); the number of sections (u64) and each section: its name (text), its
-//! kind (u8: 0 f64, 1 u64, 2 text) and its values (u64 count, then the values); last the
-//! FNV-1a hash of every byte before it (u64). Text is a u64 byte count and UTF-8 bytes.
+//! the dimension (u32); the number of sections (u64) and each section, in name order: its
+//! name (text), its kind (u8: 0 f64, 1 u64, 2 text) and its values (u64 count, then the
+//! values); last the checksum of every byte before it (u64): FNV-1a over 8-byte
+//! little-endian words, the last one padded with zeros, then over the byte count. Text is a
+//! u64 byte count and UTF-8 bytes.
 //!
 //! Why this format: the state is a few dozen flat arrays of numbers, so named arrays of
 //! fixed-width numbers read back bit for bit (the resumed run must be byte-identical), need
 //! no dependency beyond the standard library and can be read by any language from this
-//! description. HDF5 would add a system library for no gain at this size. A checkpoint is
-//! written to a temporary file and renamed into place, so a run killed while writing one
-//! leaves the previous checkpoint whole; one from another scene, another loam or format
-//! version, or with a byte changed, is refused as a whole, never half read.
+//! description. HDF5 would add a system library for no gain at this size. The checksum
+//! runs a word at a time so that it costs little beside the disk at 10⁶ points; it detects
+//! a changed or truncated file (any one word changed always changes it), which is what it
+//! is for, and does not defend against tampering. A checkpoint is written to a temporary
+//! file and renamed into place, so a run killed while writing one leaves the previous
+//! checkpoint whole; one from another scene, another loam or format version, or with a
+//! byte changed, is refused as a whole, never half read.
 
 use crate::output::{write_atomic, OutputError};
 use std::collections::BTreeMap;
@@ -24,6 +29,9 @@ use std::path::{Path, PathBuf};
 const MAGIC: &[u8; 8] = b"LOAMCKPT";
 /// The version of the layout above; a reader refuses any other.
 pub const FORMAT_VERSION: u32 = 1;
+
+const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
+const FNV_PRIME: u64 = 0x0100_0000_01b3;
 
 /// What a checkpoint belongs to: a resumed run must match all of it.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -74,6 +82,10 @@ pub enum CheckpointError {
     Missing(String),
     #[error("the checkpoint's section `{0}` holds another kind of value")]
     Kind(String),
+    #[error("the checkpoint's section `{section}` does not fit this run: {what}")]
+    Section { section: String, what: String },
+    #[error("the checkpoint's state does not fit this run: {0}")]
+    State(String),
 }
 
 /// A checkpoint in memory: its header and its named sections (kept in name order, so the
@@ -84,14 +96,100 @@ pub struct Checkpoint {
     sections: BTreeMap<String, Section>,
 }
 
-/// FNV-1a, 64 bits: the scene's identity and the file's checksum. It detects a changed or
-/// truncated file, which is what it is for; it does not defend against tampering.
+/// FNV-1a, 64 bits, of the scene text: the scene's identity in a checkpoint.
 pub fn scene_hash(text: &str) -> u64 {
     fnv1a(text.as_bytes())
 }
 
 fn fnv1a(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| (h ^ b as u64).wrapping_mul(0x0100_0000_01b3))
+    bytes.iter().fold(FNV_OFFSET, |h, &b| (h ^ b as u64).wrapping_mul(FNV_PRIME))
+}
+
+/// The file's checksum, fed in pieces of any length: FNV-1a over 8-byte words (the module
+/// docs).
+#[derive(Debug, Clone)]
+struct Checksum {
+    hash: u64,
+    pending: [u8; 8],
+    pending_len: usize,
+    bytes: u64,
+}
+
+impl Checksum {
+    fn new() -> Self {
+        Self { hash: FNV_OFFSET, pending: [0; 8], pending_len: 0, bytes: 0 }
+    }
+
+    fn word(&mut self, w: [u8; 8]) {
+        self.hash = (self.hash ^ u64::from_le_bytes(w)).wrapping_mul(FNV_PRIME);
+    }
+
+    fn update(&mut self, mut bytes: &[u8]) {
+        self.bytes += bytes.len() as u64;
+        if self.pending_len > 0 {
+            let n = (8 - self.pending_len).min(bytes.len());
+            self.pending[self.pending_len..self.pending_len + n].copy_from_slice(&bytes[..n]);
+            self.pending_len += n;
+            bytes = &bytes[n..];
+            if self.pending_len < 8 {
+                return;
+            }
+            self.word(self.pending);
+            self.pending_len = 0;
+        }
+        let mut words = bytes.chunks_exact(8);
+        for w in &mut words {
+            self.word(w.try_into().expect("8 bytes"));
+        }
+        let rest = words.remainder();
+        self.pending[..rest.len()].copy_from_slice(rest);
+        self.pending_len = rest.len();
+    }
+
+    fn finish(mut self) -> u64 {
+        if self.pending_len > 0 {
+            self.pending[self.pending_len..].fill(0);
+            self.word(self.pending);
+        }
+        (self.hash ^ self.bytes).wrapping_mul(FNV_PRIME)
+    }
+}
+
+fn checksum(bytes: &[u8]) -> u64 {
+    let mut sum = Checksum::new();
+    sum.update(bytes);
+    sum.finish()
+}
+
+/// A writer that keeps the checksum of what went through it.
+struct Summed<'w> {
+    out: &'w mut dyn Write,
+    sum: Checksum,
+}
+
+impl Summed<'_> {
+    fn put(&mut self, bytes: &[u8]) -> std::io::Result<()> {
+        self.sum.update(bytes);
+        self.out.write_all(bytes)
+    }
+
+    fn text(&mut self, text: &str) -> std::io::Result<()> {
+        self.put(&(text.len() as u64).to_le_bytes())?;
+        self.put(text.as_bytes())
+    }
+
+    /// A section's kind, count and values, converted a block at a time.
+    fn numbers<T: Copy>(&mut self, kind: u8, values: &[T], bytes: fn(T) -> [u8; 8]) -> std::io::Result<()> {
+        self.put(&[kind])?;
+        self.put(&(values.len() as u64).to_le_bytes())?;
+        let mut block = Vec::with_capacity(8 * 4096);
+        for chunk in values.chunks(4096) {
+            block.clear();
+            block.extend(chunk.iter().flat_map(|&v| bytes(v)));
+            self.put(&block)?;
+        }
+        Ok(())
+    }
 }
 
 impl Checkpoint {
@@ -130,42 +228,62 @@ impl Checkpoint {
 
     /// The file's bytes, checksum included.
     pub fn to_bytes(&self) -> Vec<u8> {
-        let mut b = Vec::new();
-        b.extend_from_slice(MAGIC);
-        b.extend(FORMAT_VERSION.to_le_bytes());
-        put_text(&mut b, &self.header.loam_version);
-        b.extend(self.header.scene_hash.to_le_bytes());
-        put_text(&mut b, &self.header.analysis);
-        b.extend(self.header.dimension.to_le_bytes());
-        b.extend((self.sections.len() as u64).to_le_bytes());
+        let mut bytes = Vec::new();
+        self.write_to(&mut bytes).expect("writing to memory does not fail");
+        bytes
+    }
+
+    /// Stream the file to `out`, the checksum last.
+    fn write_to(&self, out: &mut dyn Write) -> std::io::Result<()> {
+        let mut w = Summed { out, sum: Checksum::new() };
+        w.put(MAGIC)?;
+        w.put(&FORMAT_VERSION.to_le_bytes())?;
+        w.text(&self.header.loam_version)?;
+        w.put(&self.header.scene_hash.to_le_bytes())?;
+        w.text(&self.header.analysis)?;
+        w.put(&self.header.dimension.to_le_bytes())?;
+        w.put(&(self.sections.len() as u64).to_le_bytes())?;
         for (name, section) in &self.sections {
-            put_text(&mut b, name);
+            w.text(name)?;
             match section {
-                Section::F64(v) => put_numbers(&mut b, 0, v.len(), v.iter().flat_map(|x| x.to_le_bytes())),
-                Section::U64(v) => put_numbers(&mut b, 1, v.len(), v.iter().flat_map(|x| x.to_le_bytes())),
+                Section::F64(v) => w.numbers(0, v, f64::to_le_bytes)?,
+                Section::U64(v) => w.numbers(1, v, u64::to_le_bytes)?,
                 Section::Text(t) => {
-                    b.push(2);
-                    put_text(&mut b, t);
+                    w.put(&[2])?;
+                    w.text(t)?;
                 }
             }
         }
-        let sum = fnv1a(&b);
-        b.extend(sum.to_le_bytes());
-        b
+        let sum = w.sum.finish();
+        w.out.write_all(&sum.to_le_bytes())
     }
 
-    /// Write the checkpoint to `path` atomically (a temporary file renamed into place).
-    pub fn write(&self, path: &Path) -> Result<(), OutputError> {
-        let bytes = self.to_bytes();
-        write_atomic(path, |w: &mut dyn Write| w.write_all(&bytes))
+    /// Write the checkpoint to `path` atomically (a temporary file, synced, renamed into
+    /// place); returns its size in bytes.
+    pub fn write(&self, path: &Path) -> Result<u64, OutputError> {
+        write_atomic(path, |w: &mut dyn Write| self.write_to(w))?;
+        std::fs::metadata(path).map(|m| m.len()).map_err(|source| OutputError::Io { path: path.to_owned(), source })
     }
 
     /// Read the checkpoint at `path`, refusing it whole unless it is intact, of this
     /// format, and written for `expected` (the same loam, scene, analysis and dimension).
     pub fn read(path: &Path, expected: &CheckpointHeader) -> Result<Self, CheckpointError> {
+        let checkpoint = Self::load(path)?;
+        checkpoint.verify(path, expected)?;
+        Ok(checkpoint)
+    }
+
+    /// Read the checkpoint at `path`, refusing it whole unless it is intact and of this
+    /// format; whose it is, [`Checkpoint::verify`] says.
+    pub fn load(path: &Path) -> Result<Self, CheckpointError> {
         let bytes = std::fs::read(path).map_err(|source| CheckpointError::Io { path: path.to_owned(), source })?;
-        let checkpoint = Self::from_bytes(&bytes).map_err(|e| e.at(path))?;
-        let h = &checkpoint.header;
+        Self::from_bytes(&bytes).map_err(|e| e.at(path))
+    }
+
+    /// Refuse a checkpoint (read from `path`) not written for `expected`: another scene
+    /// text, another loam, another analysis or dimension.
+    pub fn verify(&self, path: &Path, expected: &CheckpointHeader) -> Result<(), CheckpointError> {
+        let h = &self.header;
         let what = if h.scene_hash != expected.scene_hash {
             Some("another scene file (or this one since changed)".to_string())
         } else if h.loam_version != expected.loam_version {
@@ -177,7 +295,7 @@ impl Checkpoint {
         };
         match what {
             Some(what) => Err(CheckpointError::Mismatch { path: path.to_owned(), what }),
-            None => Ok(checkpoint),
+            None => Ok(()),
         }
     }
 
@@ -188,7 +306,7 @@ impl Checkpoint {
             return Err(ReadError::NotACheckpoint);
         }
         let (body, sum) = bytes.split_at(bytes.len() - 8);
-        if fnv1a(body) != u64::from_le_bytes(sum.try_into().expect("8 bytes")) {
+        if checksum(body) != u64::from_le_bytes(sum.try_into().expect("8 bytes")) {
             return Err(ReadError::Corrupt("its checksum does not match its contents".into()));
         }
         let mut r = Reader { bytes: body, at: MAGIC.len() };
@@ -213,17 +331,6 @@ impl Checkpoint {
         }
         Ok(checkpoint)
     }
-}
-
-fn put_text(b: &mut Vec<u8>, text: &str) {
-    b.extend((text.len() as u64).to_le_bytes());
-    b.extend_from_slice(text.as_bytes());
-}
-
-fn put_numbers(b: &mut Vec<u8>, kind: u8, count: usize, bytes: impl Iterator<Item = u8>) {
-    b.push(kind);
-    b.extend((count as u64).to_le_bytes());
-    b.extend(bytes);
 }
 
 /// A failure of [`Checkpoint::from_bytes`], before it knows the file's path.
@@ -348,7 +455,7 @@ mod tests {
         let mut other_format = bytes.clone();
         other_format[8..12].copy_from_slice(&2u32.to_le_bytes());
         let n = other_format.len() - 8;
-        let sum = fnv1a(&other_format[..n]);
+        let sum = checksum(&other_format[..n]);
         other_format[n..].copy_from_slice(&sum.to_le_bytes());
         assert!(matches!(Checkpoint::from_bytes(&other_format), Err(ReadError::Format(2))));
         c.write(&path).unwrap();
@@ -358,6 +465,22 @@ mod tests {
         let other_loam = CheckpointHeader { loam_version: "0.0.1".into(), ..c.header.clone() };
         let e = Checkpoint::read(&path, &other_loam).unwrap_err();
         assert!(e.to_string().contains("this is loam 0.0.1"), "{e}");
+    }
+
+    /// The checksum fed in pieces of any length is the checksum of the whole, and changes
+    /// with any one byte and with trailing zeros (the byte count is in it).
+    #[test]
+    fn the_checksum_does_not_depend_on_how_it_is_fed() {
+        let bytes: Vec<u8> = (0..1000u32).map(|k| (k.wrapping_mul(2_654_435_761) >> 24) as u8).collect();
+        let whole = checksum(&bytes);
+        for piece in [1, 3, 7, 8, 9, 64, 999] {
+            let mut sum = Checksum::new();
+            bytes.chunks(piece).for_each(|c| sum.update(c));
+            assert_eq!(sum.finish(), whole, "pieces of {piece}");
+        }
+        let mut padded = bytes.clone();
+        padded.push(0);
+        assert_ne!(checksum(&padded), whole);
     }
 
     /// The FNV-1a reference values (Fowler, Noll, Vo: the published test vectors).

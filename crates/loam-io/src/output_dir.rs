@@ -37,7 +37,13 @@ fn is_loam_output(name: &str) -> bool {
     frame.is_some_and(|k| !k.is_empty() && k.bytes().all(|b| b.is_ascii_digit()))
         || matches!(
             name,
-            "points.pvd" | "run_log.csv" | "history.csv" | "points_final.csv" | "strength_reduction.csv" | MARKER
+            "points.pvd"
+                | "run_log.csv"
+                | "history.csv"
+                | "points_final.csv"
+                | "strength_reduction.csv"
+                | MARKER
+                | crate::restart::CHECKPOINT_FILE
         )
         || crate::run_plots::PLOT_FILES.contains(&name)
 }
@@ -67,6 +73,23 @@ pub fn clear_output_dir(dir: &Path) -> Result<(), OutputDirError> {
         std::fs::remove_file(&file).map_err(|source| io_error(&file, source))?;
     }
     Ok(())
+}
+
+/// Remove the temporary files a killed run left in `dir` (a resumed run's folder, whose
+/// outputs stay).
+pub fn remove_temp_files(dir: &Path) -> Result<(), OutputDirError> {
+    for file in loam_files(dir)? {
+        if file.file_name().is_some_and(|n| n.to_string_lossy().ends_with(".tmp")) {
+            std::fs::remove_file(&file).map_err(|source| io_error(&file, source))?;
+        }
+    }
+    Ok(())
+}
+
+/// The scene file whose outputs `dir` holds, as its `loam_run.txt` says.
+pub fn marked_scene(dir: &Path) -> Option<PathBuf> {
+    let text = std::fs::read_to_string(dir.join(MARKER)).ok()?;
+    text.lines().next()?.strip_prefix("scene: ").map(PathBuf::from)
 }
 
 /// Make `dir` ready for a run of the scene file `scene`: created if missing; emptied of
@@ -106,9 +129,15 @@ mod tests {
 
     #[test]
     fn loam_outputs_are_known_by_name() {
-        for name in
-            ["points_00012.vtu", "points.pvd", "run_log.csv", ".points_00012.vtu.a1B2c3.tmp", ".run_log.csv.xYz123.tmp"]
-        {
+        for name in [
+            "points_00012.vtu",
+            "points.pvd",
+            "run_log.csv",
+            ".points_00012.vtu.a1B2c3.tmp",
+            ".run_log.csv.xYz123.tmp",
+            "checkpoint.loam",
+            ".checkpoint.loam.AbC123.tmp",
+        ] {
             assert!(is_loam_output(name), "{name}");
         }
         for name in ["notes.txt", "points_final.vtu", "points_.vtu", "my.csv", ".bashrc", ".notes.txt.abcdef.tmp"] {

@@ -1,11 +1,15 @@
 //! Running a scene end to end with its outputs: a VTU frame per output step collected in a
 //! PVD file, a run log (one CSV row per step, flushed as it goes), `history.csv` (time,
 //! energies, momentum) and `points_final.csv` after the last step. A run that fails mid-way
-//! keeps every file written so far; the error says which step failed and why.
+//! keeps every file written so far; the error says which step failed and why. Asked to,
+//! a run writes a checkpoint between steps (`restart`), from which [`resume_scene`] goes on
+//! as if it had never stopped.
 
+use crate::checkpoint::{Checkpoint, CheckpointError, CheckpointHeader};
 use crate::output::{CsvCell, CsvWriter, OutputError, PvdWriter};
-use crate::output_dir::{clear_output_dir, prepare_output_dir, OutputDirError};
+use crate::output_dir::{clear_output_dir, prepare_output_dir, remove_temp_files, OutputDirError};
 use crate::point_fields::{default_fields, write_frame, write_points_csv};
+use crate::restart::{self, CheckpointEvery, CheckpointWritten, Checkpoints, OutputsState, Phase, RunTotals};
 use crate::run_plots::plot_run;
 use crate::scene::FieldSpec;
 use crate::scene::{AnalysisSpec, LoadedScene, OutputSpec, SceneError};
@@ -30,6 +34,8 @@ pub enum RunFailure {
     OutputDir(#[from] OutputDirError),
     #[error("strength reduction: {0}")]
     StrengthReduction(#[from] StrengthReductionError),
+    #[error(transparent)]
+    Checkpoint(#[from] CheckpointError),
 }
 
 /// What a finished run did.
@@ -60,6 +66,8 @@ pub struct RunOptions {
     /// Remove another run's outputs from the output folder, once the scene has been
     /// checked (only the files loam writes; `output_dir`).
     pub overwrite: bool,
+    /// Write a checkpoint this often (none: never).
+    pub checkpoint_every: Option<CheckpointEvery>,
 }
 
 /// What a run reports as it goes, to show progress.
@@ -69,6 +77,10 @@ pub enum RunEvent<'a> {
     Trial(&'a StrengthTrial),
     /// A step finished; `end` is the run's end time (quasi-static: load factor 1).
     Step { report: &'a Progress, end: f64 },
+    /// A checkpoint was written.
+    Checkpoint(CheckpointWritten),
+    /// A resumed run starts after `step` steps and `trials` strength-reduction trials.
+    Resumed { step: usize, trials: usize },
 }
 
 /// Run a scene, writing its outputs into `out_dir`; `progress` is told of each
@@ -107,11 +119,21 @@ struct History<const D: usize> {
 }
 
 impl<const D: usize> History<D> {
-    fn create(path: &Path, model: &Model<D>, level: LoadLevel) -> Result<Self, OutputError> {
+    fn header() -> Vec<&'static str> {
         let mut header = HISTORY_COLUMNS.to_vec();
         header.extend(["momentum_x", "momentum_y", "momentum_z"].iter().take(D));
-        let writer = CsvWriter::create(path, &header)?;
+        header
+    }
+
+    fn create(path: &Path, model: &Model<D>, level: LoadLevel) -> Result<Self, OutputError> {
+        let writer = CsvWriter::create(path, &Self::header())?;
         Ok(Self { writer, work: ExternalWork::new(model, level) })
+    }
+
+    /// Go on after `bytes` of the file and `work` done, the model at `level`.
+    fn resume(path: &Path, model: &Model<D>, level: LoadLevel, bytes: u64, work: f64) -> Result<Self, OutputError> {
+        let writer = CsvWriter::resume(path, &Self::header(), bytes)?;
+        Ok(Self { writer, work: ExternalWork::resumed(model, level, work) })
     }
 
     fn advance(&mut self, model: &Model<D>, level: LoadLevel) {
@@ -153,42 +175,98 @@ fn run_dim<const D: usize>(
         clear_output_dir(out_dir)?;
     }
     prepare_output_dir(out_dir, &scene.path)?;
-    let result = run_prepared(scene, analysis, out_dir, options.max_steps, progress, start);
+    let result = run_prepared(scene, analysis, out_dir, options, progress, start, None);
+    let plots = plot_run(out_dir).map_err(|e| e.to_string());
+    Ok(RunSummary { plots, ..result? })
+}
+
+/// Go on with the run whose `checkpoint` is in `out_dir`, of the scene `scene` (the
+/// checkpoint's [`restart::checkpoint_scene`]): its outputs are cut back to where the
+/// checkpoint left them and continued, so that they end as those of a run that never
+/// stopped. A checkpoint of another scene text, loam, analysis or dimension is refused
+/// before anything in the folder changes.
+pub fn resume_scene(
+    scene: &LoadedScene,
+    checkpoint: Checkpoint,
+    out_dir: &Path,
+    options: &RunOptions,
+    progress: &mut dyn FnMut(RunEvent),
+) -> Result<RunSummary, RunFailure> {
+    match scene.scene.dimension {
+        3 => resume_dim::<3>(scene, checkpoint, out_dir, options, progress),
+        _ => resume_dim::<2>(scene, checkpoint, out_dir, options, progress),
+    }
+}
+
+fn resume_dim<const D: usize>(
+    scene: &LoadedScene,
+    checkpoint: Checkpoint,
+    out_dir: &Path,
+    options: &RunOptions,
+    progress: &mut dyn FnMut(RunEvent),
+) -> Result<RunSummary, RunFailure> {
+    let start = Instant::now();
+    let path = out_dir.join(restart::CHECKPOINT_FILE);
+    let saved = checkpoint.header.analysis.clone();
+    checkpoint.verify(&path, &CheckpointHeader::new(&scene.source, &saved, D as u32))?;
+    let analysis: Analysis<D> = scene.build::<D>()?;
+    checkpoint.verify(&path, &CheckpointHeader::new(&scene.source, analysis.name(), D as u32))?;
+    remove_temp_files(out_dir)?;
+    let result = run_prepared(scene, analysis, out_dir, options, progress, start, Some(&checkpoint));
     let plots = plot_run(out_dir).map_err(|e| e.to_string());
     Ok(RunSummary { plots, ..result? })
 }
 
 /// The run into a prepared folder: strength reduction if asked, then the steps with their
-/// outputs.
+/// outputs and checkpoints; from `resume`'s state if given.
 fn run_prepared<const D: usize>(
     scene: &LoadedScene,
     mut analysis: Analysis<D>,
     out_dir: &Path,
-    max_steps: Option<usize>,
+    options: &RunOptions,
     progress: &mut dyn FnMut(RunEvent),
     start: Instant,
+    resume: Option<&Checkpoint>,
 ) -> Result<RunSummary, RunFailure> {
-    let factor_of_safety = strength_reduction_first(scene, &mut analysis, out_dir, progress)?;
-    let mut outputs = Outputs::create(&scene.scene.output, &analysis, out_dir)?;
+    let header = CheckpointHeader::new(&scene.source, analysis.name(), D as u32);
+    let mut saver = Checkpoints::new(options.checkpoint_every, out_dir, header, &scene.path);
+    let search = SearchContext { out_dir, resume, saver: &mut saver };
+    let factor_of_safety = strength_reduction_first(scene, &mut analysis, search, progress)?;
+    let stepping = match resume {
+        Some(c) if restart::phase(c)? == Phase::Steps => Some(c),
+        _ => None,
+    };
+    let (mut outputs, mut totals) = match stepping {
+        Some(c) => {
+            restart::resume_analysis(c, &mut analysis)?;
+            progress(RunEvent::Resumed { step: analysis.steps_done(), trials: 0 });
+            (Outputs::resume(&scene.scene.output, &analysis, out_dir, c)?, restart::saved_totals(c)?)
+        }
+        None => (Outputs::create(&scene.scene.output, &analysis, out_dir)?, RunTotals::default()),
+    };
     let end_time = analysis.end_time();
-    let (mut iterations, mut max_its, mut cutbacks) = (0, 0, 0);
-    let stop = |a: &Analysis<D>| a.is_finished() || max_steps.is_some_and(|m| a.steps_done() >= m);
+    let stop = |a: &Analysis<D>| a.is_finished() || options.max_steps.is_some_and(|m| a.steps_done() >= m);
     while !stop(&analysis) {
         let r = analysis.step()?;
-        iterations += r.iterations;
-        max_its = max_its.max(r.iterations);
-        cutbacks += r.cutbacks;
+        totals.iterations += r.iterations;
+        totals.max_iterations = totals.max_iterations.max(r.iterations);
+        totals.cutbacks += r.cutbacks;
         outputs.record(&r, analysis.model(), stop(&analysis))?;
         progress(RunEvent::Step { report: &r, end: end_time });
+        if saver.due_after_step(r.step) && !analysis.is_finished() {
+            let mut c = saver.start();
+            restart::save_steps(&mut c, &analysis, &outputs.state(), totals, factor_of_safety.as_ref());
+            progress(RunEvent::Checkpoint(saver.write(&c, r.step, 0)?));
+        }
     }
     outputs.finish(analysis.model(), analysis.load_level())?;
     Ok(RunSummary {
         analysis: analysis.name(),
         steps: analysis.steps_done(),
         points: analysis.model().points().len(),
-        newton_iterations: iterations,
-        max_iterations_per_step: max_its,
-        cutbacks,
+        newton_iterations: totals.iterations,
+        max_iterations_per_step: totals.max_iterations,
+        cutbacks: totals.cutbacks,
         wall_time: start.elapsed(),
         solver: analysis.solver(),
         output_dir: out_dir.to_owned(),
@@ -197,13 +275,20 @@ fn run_prepared<const D: usize>(
     })
 }
 
-/// A scene that asks for strength reduction first brackets its factor of safety; the run
-/// then goes on at the largest factor that held, so the outputs show the state just
-/// before failure.
+/// Where a strength-reduction search writes and saves, and the checkpoint it may resume.
+struct SearchContext<'a> {
+    out_dir: &'a Path,
+    resume: Option<&'a Checkpoint>,
+    saver: &'a mut Checkpoints,
+}
+
+/// A scene that asks for strength reduction first brackets its factor of safety (or takes
+/// the one a checkpoint saved); the run then goes on at the largest factor that held, so
+/// the outputs show the state just before failure.
 fn strength_reduction_first<const D: usize>(
     scene: &LoadedScene,
     analysis: &mut Analysis<D>,
-    out_dir: &Path,
+    search: SearchContext,
     progress: &mut dyn FnMut(RunEvent),
 ) -> Result<Option<FactorOfSafety>, RunFailure> {
     let (AnalysisSpec::QuasiStatic { strength_reduction: Some(spec), .. }, Analysis::QuasiStatic(qs)) =
@@ -211,7 +296,11 @@ fn strength_reduction_first<const D: usize>(
     else {
         return Ok(None);
     };
-    let fos = factor_of_safety(qs, spec.bracket, spec.tolerance, out_dir, progress)?;
+    let saved = search.resume.map(restart::saved_search_result).transpose()?.flatten();
+    let fos = match saved {
+        Some(fos) => fos,
+        None => factor_of_safety(qs, spec.bracket, spec.tolerance, search, progress)?,
+    };
     let reduced = reduced_strength(qs.model(), fos.stable)?;
     *analysis = Analysis::QuasiStatic(QuasiStatic::new(reduced, qs.settings().clone()));
     Ok(Some(fos))
@@ -247,6 +336,34 @@ impl<'a, const D: usize> Outputs<'a, D> {
             history = Some(h);
         }
         Ok(Self { spec, fields, out_dir, log, pvd, history })
+    }
+
+    /// Go on writing where checkpoint `c` left the files.
+    fn resume(
+        spec: &'a OutputSpec,
+        analysis: &Analysis<D>,
+        out_dir: &'a Path,
+        c: &Checkpoint,
+    ) -> Result<Self, RunFailure> {
+        let model = analysis.model();
+        let saved = restart::saved_outputs(c, spec.history_every > 0, spec.vtu_every > 0)?;
+        let log = RunLog::resume(&out_dir.join("run_log.csv"), model, saved.run_log_bytes)?;
+        let fields = spec.fields.clone().unwrap_or_else(|| default_fields(model));
+        let pvd = saved.frames.map(|frames| PvdWriter::resume(out_dir.join("points.pvd"), frames)).transpose()?;
+        let level = analysis.load_level();
+        let history = (saved.history)
+            .map(|(bytes, work)| History::resume(&out_dir.join("history.csv"), model, level, bytes, work))
+            .transpose()?;
+        Ok(Self { spec, fields, out_dir, log, pvd, history })
+    }
+
+    /// Where the files stand, for a checkpoint.
+    fn state(&self) -> OutputsState {
+        OutputsState {
+            run_log_bytes: self.log.writer.bytes(),
+            history: self.history.as_ref().map(|h| (h.writer.bytes(), h.work.work())),
+            frames: self.pvd.as_ref().map(|p| p.entries().to_vec()),
+        }
     }
 
     /// After step `r`: its log row, and a history row and a frame when due (always after the
@@ -309,6 +426,21 @@ impl RunLog {
     ];
 
     fn create<const D: usize>(path: &Path, model: &Model<D>) -> Result<Self, OutputError> {
+        let (header, held) = Self::columns(model);
+        let writer = CsvWriter::create(path, &header.iter().map(String::as_str).collect::<Vec<_>>())?;
+        Ok(Self { writer, held })
+    }
+
+    /// Go on after `bytes` of the file.
+    fn resume<const D: usize>(path: &Path, model: &Model<D>, bytes: u64) -> Result<Self, OutputError> {
+        let (header, held) = Self::columns(model);
+        let writer = CsvWriter::resume(path, &header.iter().map(String::as_str).collect::<Vec<_>>(), bytes)?;
+        Ok(Self { writer, held })
+    }
+
+    /// The header and the held components of `model`'s log.
+    #[allow(clippy::type_complexity)]
+    fn columns<const D: usize>(model: &Model<D>) -> (Vec<String>, Vec<(usize, usize, Option<f64>)>) {
         let held: Vec<(usize, usize, Option<f64>)> = (model.constraints().iter().enumerate())
             .flat_map(|(k, c)| {
                 (0..D).filter(|&i| c.fixed[i]).map(move |i| (k, i, c.is_displaced().then_some(c.displacement[i])))
@@ -324,8 +456,7 @@ impl RunLog {
         for k in 0..model.loads().len() {
             header.extend(AXES[..D].iter().map(|a| format!("load{k}_{a}")));
         }
-        let writer = CsvWriter::create(path, &header.iter().map(String::as_str).collect::<Vec<_>>())?;
-        Ok(Self { writer, held })
+        (header, held)
     }
 
     fn row<const D: usize>(&mut self, r: &Progress, model: &Model<D>) -> Result<(), OutputError> {
@@ -358,35 +489,73 @@ impl RunLog {
     }
 }
 
+/// The columns of `strength_reduction.csv`.
+const TRIAL_COLUMNS: [&str; 7] =
+    ["factor", "stable", "load_factor", "iterations", "cutbacks", "max_displacement", "wall_time_s"];
+
 /// Bracket the factor of safety of the quasi-static analysis's model, one row per trial in
-/// `strength_reduction.csv` (flushed as it goes, so a long search shows its progress).
+/// `strength_reduction.csv` (flushed as it goes, so a long search shows its progress) and,
+/// when due, a checkpoint after a trial; a search resumed from a checkpoint goes on after
+/// its trials.
 fn factor_of_safety<const D: usize>(
     qs: &QuasiStatic<D>,
     bracket: (f64, f64),
     tolerance: f64,
-    out_dir: &Path,
+    search: SearchContext,
     progress: &mut dyn FnMut(RunEvent),
 ) -> Result<FactorOfSafety, RunFailure> {
-    let header = ["factor", "stable", "load_factor", "iterations", "cutbacks", "max_displacement", "wall_time_s"];
-    let mut csv = CsvWriter::create(out_dir.join("strength_reduction.csv"), &header)?;
+    let path = search.out_dir.join("strength_reduction.csv");
+    let resumed = match search.resume {
+        Some(c) if restart::phase(c)? == Phase::Search => Some(restart::saved_search(c)?),
+        _ => None,
+    };
+    let (done, mut csv) = match resumed {
+        Some((done, bytes)) => (done, CsvWriter::resume(&path, &TRIAL_COLUMNS, bytes)?),
+        None => (Vec::new(), CsvWriter::create(&path, &TRIAL_COLUMNS)?),
+    };
+    if !done.is_empty() {
+        progress(RunEvent::Resumed { step: 0, trials: done.len() });
+    }
     let srf = StrengthReduction { trial: qs.settings().clone(), bracket, tolerance };
+    let (saver, mut trials) = (search.saver, done.clone());
     let mut written = Ok(());
-    let fos = srf.factor_of_safety(qs.model(), |t| {
+    let fos = srf.factor_of_safety_after(qs.model(), &done, |t| {
         progress(RunEvent::Trial(t));
+        trials.push(t.clone());
         if written.is_ok() {
-            written = csv.row_mixed(&[
-                CsvCell::Float(t.factor),
-                CsvCell::Int(t.stable as i64),
-                CsvCell::Float(t.load_factor),
-                CsvCell::Int(t.iterations as i64),
-                CsvCell::Int(t.cutbacks as i64),
-                CsvCell::Float(t.max_displacement),
-                CsvCell::Float(t.wall_time.as_secs_f64()),
-            ]);
+            written = record_trial(&mut csv, t, &trials, saver).map(|w| {
+                if let Some(w) = w {
+                    progress(RunEvent::Checkpoint(w));
+                }
+            });
         }
     });
     written?;
     Ok(fos?)
+}
+
+/// Trial `t`'s row, and a checkpoint after `trials` if one is due.
+fn record_trial(
+    csv: &mut CsvWriter,
+    t: &StrengthTrial,
+    trials: &[StrengthTrial],
+    saver: &mut Checkpoints,
+) -> Result<Option<CheckpointWritten>, OutputError> {
+    csv.row_mixed(&[
+        CsvCell::Float(t.factor),
+        CsvCell::Int(t.stable as i64),
+        CsvCell::Float(t.load_factor),
+        CsvCell::Int(t.iterations as i64),
+        CsvCell::Int(t.cutbacks as i64),
+        CsvCell::Float(t.max_displacement),
+        CsvCell::Float(t.wall_time.as_secs_f64()),
+    ])?;
+    if !saver.due_after_trial() {
+        return Ok(None);
+    }
+    let mut c = saver.start();
+    restart::save_search(&mut c, trials, csv.bytes());
+    saver.write(&c, 0, trials.len()).map(Some)
 }
 
 #[cfg(test)]

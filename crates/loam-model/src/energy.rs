@@ -53,6 +53,12 @@ impl<const D: usize> ExternalWork<D> {
         }
     }
 
+    /// Go on accumulating from `work`, done before the model reached its current state at
+    /// `level` (a resumed run's): the same as the accumulator that reached it.
+    pub fn resumed(model: &Model<D>, level: LoadLevel, work: f64) -> Self {
+        Self { work, ..Self::new(model, level) }
+    }
+
     /// Add the work done since the last call; the loads went linearly from their level then
     /// to `level`. Returns the accumulated work.
     pub fn advance(&mut self, model: &Model<D>, level: LoadLevel) -> f64 {

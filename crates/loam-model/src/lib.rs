@@ -122,6 +122,21 @@ pub enum ModelError {
     GhostPenalty(String),
     #[error("geometrically linear analysis: {0}")]
     GeometricallyLinear(String),
+    #[error("the saved state does not fit this model: {0}")]
+    Restore(String),
+}
+
+/// What an analysis changes in a model as it advances: the points' state, the places of
+/// the loads' vertices and the nodes of a body-fitted mesh. With the analysis's own
+/// counters it is all a checkpoint needs to go on (everything else is rebuilt from the
+/// scene).
+#[derive(Debug, Clone)]
+pub struct ModelState<const D: usize> {
+    pub points: PointStore<D>,
+    /// Per load, its vertices' current places.
+    pub load_vertices: Vec<Vec<SVector<f64, D>>>,
+    /// The nodes of the body-fitted mesh (FEM reference); `None` on a grid.
+    pub mesh_nodes: Option<Vec<SVector<f64, D>>>,
 }
 
 /// A complete MPM model. Build it, then hand it to an analysis.
@@ -506,6 +521,52 @@ impl<const D: usize> Model<D> {
     pub fn update_load_vertices(&mut self) {
         for load in &mut self.loads {
             load.follow(&self.points.position, &self.points.deformation_gradient);
+        }
+    }
+
+    /// Put the model in `state`, saved from a model of the same scene: refused, and nothing
+    /// changed, unless it has as many points, each of the same material and with the same
+    /// history layout, valid volumes and masses, as many vertices per load and a mesh of as
+    /// many nodes (none on a grid).
+    pub fn restore(&mut self, state: ModelState<D>) -> Result<(), ModelError> {
+        let ModelState { points, load_vertices, mesh_nodes } = state;
+        let fail = |what: String| Err(ModelError::Restore(what));
+        if points.len() != self.points.len() {
+            return fail(format!("{} points saved, {} in the model", points.len(), self.points.len()));
+        }
+        points.check()?;
+        if points.material != self.points.material {
+            return fail("the points' materials differ".into());
+        }
+        let stride = self.points.history_stride();
+        if points.history_stride() != stride || points.history.len() != stride * points.len() {
+            return fail(format!("the material history is not {stride} values per point"));
+        }
+        let saved: Vec<usize> = load_vertices.iter().map(Vec::len).collect();
+        let model: Vec<usize> = self.loads.iter().map(|l| l.positions().len()).collect();
+        if saved != model {
+            return fail(format!("vertices per load {saved:?} saved, {model:?} in the model"));
+        }
+        let nodes = self.background.mesh().map(|m| m.num_nodes());
+        if mesh_nodes.as_ref().map(Vec::len) != nodes {
+            return fail(format!("mesh nodes {:?} saved, {nodes:?} in the model", mesh_nodes.as_ref().map(Vec::len)));
+        }
+        if let Some(x) = &mesh_nodes {
+            self.background.set_mesh_positions(x);
+        }
+        for (load, x) in self.loads.iter_mut().zip(&load_vertices) {
+            load.set_positions(x);
+        }
+        self.points = points;
+        Ok(())
+    }
+
+    /// The state [`Model::restore`] puts back (a copy of the points).
+    pub fn state(&self) -> ModelState<D> {
+        ModelState {
+            points: self.points.clone(),
+            load_vertices: self.loads.iter().map(|l| l.positions().to_vec()).collect(),
+            mesh_nodes: self.background.mesh().map(|m| m.positions().to_vec()),
         }
     }
 

@@ -275,6 +275,16 @@ impl<const D: usize> Load<D> {
             (self.surface.vertices.iter().zip(&self.carrier)).map(|(x, &p)| x - positions[p as usize]).collect();
     }
 
+    /// Put the vertices at `positions` (a checkpoint's, one per vertex); `false`, and
+    /// nothing changed, when the count differs.
+    pub(crate) fn set_positions(&mut self, positions: &[SVector<f64, D>]) -> bool {
+        if positions.len() != self.position.len() {
+            return false;
+        }
+        self.position.copy_from_slice(positions);
+        true
+    }
+
     /// Put every vertex where its carrier now puts it.
     pub(crate) fn follow(&mut self, positions: &[SVector<f64, D>], f: &[Matrix3<f64>]) {
         for v in 0..self.position.len() {

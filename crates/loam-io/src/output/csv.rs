@@ -68,6 +68,8 @@ pub struct CsvWriter {
     path: PathBuf,
     columns: usize,
     out: BufWriter<File>,
+    /// Bytes in the file (every row is flushed).
+    bytes: u64,
 }
 
 impl CsvWriter {
@@ -75,10 +77,37 @@ impl CsvWriter {
     pub fn create(path: impl AsRef<Path>, header: &[&str]) -> Result<Self, OutputError> {
         let path = path.as_ref().to_path_buf();
         let file = File::create(&path).map_err(io_err(&path))?;
-        let mut w = Self { columns: header.len(), out: BufWriter::new(file), path };
-        let line: Vec<Cow<str>> = header.iter().map(|h| quote(h)).collect();
-        w.write_line(&line.join(","))?;
+        let mut w = Self { columns: header.len(), out: BufWriter::new(file), path, bytes: 0 };
+        w.write_line(&header_line(header))?;
         Ok(w)
+    }
+
+    /// Go on appending to `path`, written by a run that had written `bytes` of it when it
+    /// saved its checkpoint: what came after is cut off (rows of steps the resumed run will
+    /// write again, or a row half written when the run was killed). Refused unless the file
+    /// has `header` and at least `bytes` bytes.
+    pub fn resume(path: impl AsRef<Path>, header: &[&str], bytes: u64) -> Result<Self, OutputError> {
+        use std::io::{BufRead, BufReader, Seek};
+        let path = path.as_ref().to_path_buf();
+        let resume = |what: String| OutputError::Resume { path: path.clone(), what };
+        let mut file = std::fs::OpenOptions::new().read(true).write(true).open(&path).map_err(io_err(&path))?;
+        let found = file.metadata().map_err(io_err(&path))?.len();
+        if found < bytes {
+            return Err(resume(format!("it holds {found} bytes, fewer than the {bytes} the checkpoint counted")));
+        }
+        let mut first = String::new();
+        BufReader::new(&mut file).read_line(&mut first).map_err(io_err(&path))?;
+        if first.trim_end_matches('\n') != header_line(header) {
+            return Err(resume("its columns are not this run's".into()));
+        }
+        file.set_len(bytes).map_err(io_err(&path))?;
+        file.seek(std::io::SeekFrom::End(0)).map_err(io_err(&path))?;
+        Ok(Self { columns: header.len(), out: BufWriter::new(file), path, bytes })
+    }
+
+    /// Bytes in the file so far (all of them on disk: rows are flushed as written).
+    pub fn bytes(&self) -> u64 {
+        self.bytes
     }
 
     /// The path of the CSV file.
@@ -120,8 +149,16 @@ impl CsvWriter {
             self.out.write_all(b"\n")?;
             self.out.flush()
         })();
-        r.map_err(io_err(&self.path))
+        r.map_err(io_err(&self.path))?;
+        self.bytes += line.len() as u64 + 1;
+        Ok(())
     }
+}
+
+/// The header line: the column names, quoted where needed.
+fn header_line(header: &[&str]) -> String {
+    let line: Vec<Cow<str>> = header.iter().map(|h| quote(h)).collect();
+    line.join(",")
 }
 
 /// Writes a whole CSV table atomically (temporary file + rename): a header
@@ -143,8 +180,7 @@ pub fn write_csv_table(path: impl AsRef<Path>, header: &[&str], columns: &[&[f64
         }
     }
     write_atomic(path, |w| {
-        let head: Vec<Cow<str>> = header.iter().map(|h| quote(h)).collect();
-        writeln!(w, "{}", head.join(","))?;
+        writeln!(w, "{}", header_line(header))?;
         let mut line = String::new();
         for i in 0..rows {
             line.clear();
@@ -163,6 +199,27 @@ pub fn write_csv_table(path: impl AsRef<Path>, header: &[&str], columns: &[&[f64
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A resumed log is cut back to the checkpoint's length (a row half written by a killed
+    /// run goes) and goes on; a file with other columns, or shorter than the checkpoint
+    /// says, is refused and left as it was.
+    #[test]
+    fn a_resumed_log_goes_on_from_the_checkpoint() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("log.csv");
+        let mut w = CsvWriter::create(&p, &["step", "x"]).unwrap();
+        w.row(&[1.0, 0.5]).unwrap();
+        let saved = w.bytes();
+        w.row(&[2.0, 0.25]).unwrap();
+        drop(w);
+        std::fs::write(&p, std::fs::read_to_string(&p).unwrap() + "3,0.1").unwrap();
+        assert!(matches!(CsvWriter::resume(&p, &["step", "y"], saved), Err(OutputError::Resume { .. })));
+        assert!(matches!(CsvWriter::resume(&p, &["step", "x"], 1000), Err(OutputError::Resume { .. })));
+        let mut w = CsvWriter::resume(&p, &["step", "x"], saved).unwrap();
+        w.row(&[2.0, 0.75]).unwrap();
+        assert_eq!(std::fs::read_to_string(&p).unwrap(), "step,x\n1,0.5\n2,0.75\n");
+        assert_eq!(w.bytes(), std::fs::metadata(&p).unwrap().len());
+    }
     use std::fs;
 
     #[test]

@@ -159,6 +159,14 @@ pub enum OutputError {
         /// The time (or load factor) of the row.
         time: f64,
     },
+    /// A file a resumed run goes on writing is not as the checkpoint left it.
+    #[error("cannot resume writing {}: {what}; the folder does not hold the outputs of the checkpoint's run", path.display())]
+    Resume {
+        /// The file.
+        path: PathBuf,
+        /// What differs.
+        what: String,
+    },
     /// `PointCloud::dim` is neither 2 nor 3.
     #[error("point cloud dimension must be 2 or 3, found {found}")]
     Dim {

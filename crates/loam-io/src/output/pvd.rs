@@ -26,6 +26,19 @@ impl PvdWriter {
         Ok(w)
     }
 
+    /// Go on with the collection at `path` as a checkpoint left it: `entries` (time, file)
+    /// are written at once, any data set listed after them dropped.
+    pub fn resume(path: impl AsRef<Path>, entries: Vec<(f64, String)>) -> Result<Self, OutputError> {
+        let w = Self { path: path.as_ref().to_path_buf(), entries };
+        w.flush()?;
+        Ok(w)
+    }
+
+    /// The data sets listed: (time, file).
+    pub fn entries(&self) -> &[(f64, String)] {
+        &self.entries
+    }
+
     /// Appends a data set at `time`, referring to `vtu_file_name_relative`
     /// (a path relative to the folder of the `.pvd` file), then rewrites the
     /// collection. A non-finite `time` is refused and nothing changes.

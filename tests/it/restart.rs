@@ -1,0 +1,77 @@
+//! Restart through the library: a run stopped after some steps with a checkpoint, then
+//! resumed from it, ends in the same state as a run that never stopped — every value of
+//! `points_final.csv` bit for bit, and the same Newton iterations. The cases are the
+//! state the SIGKILL tests of the `loam` program (crates/loam-cli/tests/restart.rs) do not
+//! reach: a body-fitted mesh whose nodes move, loads whose vertices follow the surface, a
+//! dead load, two bodies in explicit FLIP, and 3D.
+
+use loam::io::checkpoint::Checkpoint;
+use loam::io::{resume_scene, run_scene_with, CheckpointEvery, LoadedScene, RunOptions, CHECKPOINT_FILE};
+use std::path::Path;
+
+fn scene(name: &str, edits: &[(&str, &str)]) -> LoadedScene {
+    let path = Path::new("examples").join(name);
+    let mut text = std::fs::read_to_string(&path).unwrap();
+    for (from, to) in edits {
+        assert!(text.contains(from), "{name} no longer has {from:?}");
+        text = text.replacen(from, to, 1);
+    }
+    LoadedScene::parse(&path, text).unwrap()
+}
+
+/// Run `scene` whole, and stopped after `stop` steps and resumed: the same final points.
+fn resumed_run_matches(scene: &LoadedScene, stop: usize) {
+    let (whole, cut) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+    let a = run_scene_with(scene, whole.path(), &RunOptions::default(), &mut |_| {}).unwrap();
+    let options = RunOptions {
+        max_steps: Some(stop),
+        checkpoint_every: Some(CheckpointEvery::Steps(stop)),
+        ..Default::default()
+    };
+    run_scene_with(scene, cut.path(), &options, &mut |_| {}).unwrap();
+    let checkpoint = Checkpoint::load(&cut.path().join(CHECKPOINT_FILE)).unwrap();
+    let b = resume_scene(scene, checkpoint, cut.path(), &RunOptions::default(), &mut |_| {}).unwrap();
+    assert_eq!((a.steps, a.newton_iterations), (b.steps, b.newton_iterations), "{}", scene.path.display());
+    let points = |dir: &Path| std::fs::read(dir.join("points_final.csv")).unwrap();
+    assert!(points(whole.path()) == points(cut.path()), "{}: the final points differ", scene.path.display());
+}
+
+/// The FEM reference: the mesh's nodes move with the body and are saved with it.
+#[test]
+fn a_moving_mesh_resumes() {
+    resumed_run_matches(&scene("column_fem.ron", &[]), 4);
+}
+
+/// A follower pressure: its vertices ride on the points and are saved with them.
+#[test]
+fn follower_loads_resume() {
+    let coarse = [("cell_size: [0.125, 0.125], cells: [44, 44]", "cell_size: [0.25, 0.25], cells: [22, 22]")];
+    resumed_run_matches(&scene("cavity_pressure.ron", &coarse), 11);
+}
+
+/// A dead pressure, ramped to 40 kPa (below the footing's collapse at 51.4 kPa).
+#[test]
+fn dead_loads_resume() {
+    let below_collapse = [("load_steps: 100", "load_steps: 30"), ("Uniform(64.26990816987241)", "Uniform(40.0)")];
+    resumed_run_matches(&scene("footing_load_control.ron", &below_collapse), 13);
+}
+
+/// Explicit FLIP with two bodies, and the last step landing on the end time.
+#[test]
+fn explicit_flip_resumes() {
+    resumed_run_matches(&scene("disks.ron", &[("duration: 3.0", "duration: 1.0")]), 17);
+}
+
+/// 3D: the slope between rough walls at full strength (Mohr–Coulomb history, B-bar), on
+/// 4 m cells in four load steps.
+#[test]
+fn a_3d_run_resumes() {
+    let steps = [
+        ("cell_size: [2.0, 2.0, 2.0], cells: [26, 6, 11]", "cell_size: [4.0, 4.0, 4.0], cells: [13, 3, 6]"),
+        (
+        "load_steps: 10, max_cutbacks: 4,\n                          strength_reduction: Some((bracket: (1.0, 2.5), tolerance: 0.01))",
+        "load_steps: 4, max_cutbacks: 4",
+        ),
+    ];
+    resumed_run_matches(&scene("slope_3d.ron", &steps), 2);
+}
