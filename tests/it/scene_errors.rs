@@ -462,12 +462,59 @@ fn unsupported_body_names_its_free_motions() {
     let end = start + GOOD[start..].find("],").unwrap();
     let free = format!("{}constraints: [{}", &GOOD[..start], &GOOD[end..]);
     let e = refused_source(&free, line_of("constraints"), &["not supported against rigid motion"]);
-    for s in ["translation along x", "translation along y", "rotation in the x-y plane"] {
+    for s in ["the body against translation along x", "translation along y", "rotation about (0.1562, "] {
         assert!(e.to_string().contains(s), "{e} should say {s}");
     }
     let base_only = format!("{}constraints: [Roller(axis: Y, at: 0.0){}", &GOOD[..start], &GOOD[end..]);
     let e = check(&base_only).unwrap_err();
-    assert!(e.to_string().contains("its translation along x;"), "{e}");
+    assert!(e.to_string().contains("the body against translation along x;"), "{e}");
+}
+
+/// A scene of two blocks 2 m apart (2D, linear basis, 1 m cells) with `constraints`.
+fn two_blocks(constraints: &str) -> String {
+    format!(
+        "Scene(title: \"two blocks\", dimension: 2,
+            grid: (origin: [0.0, 0.0], cell_size: [1.0, 1.0], cells: [6, 3]),
+            materials: [(name: \"soil\", density: 2.0, law: Elastic(young: 1e5, poisson: 0.3))],
+            bodies: [(material: \"soil\", shape: Box(min: [0.0, 0.0], max: [2.0, 2.0]), points_per_cell: 2),
+                     (material: \"soil\", shape: Box(min: [4.0, 0.0], max: [6.0, 2.0]), points_per_cell: 2)],
+            gravity: [0.0, -10.0],
+            constraints: [{constraints}],
+            analysis: QuasiStatic(load_steps: 1))"
+    )
+}
+
+/// A second body that no constraint reaches is named, by its points and centre, while the
+/// held one is not; held too, the scene is accepted.
+#[test]
+fn a_loose_second_body_is_named() {
+    let left = "Fixed(axis: Y, at: 0.0, within: Some((min: [0.0, 0.0], max: [2.0, 0.0])))";
+    let e = check(&two_blocks(left)).unwrap_err().to_string();
+    let says = "no constraint holds the body of 16 points around (5, 1) against translation along x, \
+                translation along y, rotation about (5, 1);";
+    assert!(e.contains(says), "{e}");
+    assert!(check(&two_blocks("Fixed(axis: Y, at: 0.0)")).is_ok());
+}
+
+/// In 3D, a block held at two corners of its base on a diagonal turns about that diagonal:
+/// the rotation is named by its axis and the point of it nearest the block's centre.
+#[test]
+fn a_rotation_about_a_diagonal_is_named() {
+    let pin = |x: f64| format!("Fixed(axis: Z, at: 0.0, within: Some((min: [{x}, {x}, 0.0], max: [{x}, {x}, 0.0])))");
+    let scene = format!(
+        "Scene(title: \"pinned on a diagonal\", dimension: 3,
+            grid: (origin: [0.0, 0.0, 0.0], cell_size: [1.0, 1.0, 1.0], cells: [3, 3, 3]),
+            materials: [(name: \"soil\", density: 2.0, law: Elastic(young: 1e5, poisson: 0.3))],
+            bodies: [(material: \"soil\", shape: Box(min: [0.0, 0.0, 0.0], max: [2.0, 2.0, 2.0]), points_per_cell: 2)],
+            gravity: [0.0, 0.0, -10.0],
+            constraints: [{}, {}],
+            analysis: QuasiStatic(load_steps: 1))",
+        pin(0.0),
+        pin(2.0)
+    );
+    let loaded = LoadedScene::parse(Path::new("pinned.ron"), scene).unwrap();
+    let e = loaded.build::<3>().map(|_| ()).unwrap_err().to_string();
+    assert!(e.contains("the body against rotation about the axis (0.7071, 0.7071, 0) through (1, 1, 0);"), "{e}");
 }
 
 /// Two identical bodies would double the mass: the second is refused at its shape, unless

@@ -16,7 +16,7 @@ use loam_grid::{Connectivity, GhostFace};
 use loam_kernels::{
     advance_deformation, check_constraints, connect, gather_nodal, interpolate_add, trial_vertices, LoadSupports,
 };
-use loam_model::{Kinematics, LoadLevel, Model, RigidMode};
+use loam_model::{FreeBody, Kinematics, LoadLevel, Model};
 use loam_solve::{
     norm, BlockPattern, LinearSolveError, LinearSolver, LinearSolverChoice, LinearSolverKind, LinearSystem,
     NewtonControl, NewtonError, NewtonReport, NewtonSettings, NodeLattice, SparseDirectSolver, SystemMatrix,
@@ -259,9 +259,9 @@ impl<const D: usize> Engine<D> {
         Ok(check_constraints(&self.model, &self.conn)?)
     }
 
-    /// The rigid-body motions no constraint holds on the active nodes.
-    pub fn free_rigid_modes(&self) -> Vec<RigidMode> {
-        self.model.free_rigid_modes(self.conn.active_nodes())
+    /// The bodies with rigid-body motions no constraint holds on the active nodes.
+    pub fn free_rigid_bodies(&self) -> Vec<FreeBody> {
+        self.model.free_rigid_bodies(&self.conn)
     }
 
     pub fn num_dofs(&self) -> usize {

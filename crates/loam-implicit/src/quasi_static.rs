@@ -160,11 +160,11 @@ impl<const D: usize> QuasiStatic<D> {
     /// calls this before the first step.
     pub fn check(&mut self) -> Result<(), StepError> {
         self.engine.check(self.step + 1)?;
-        let modes = self.engine.free_rigid_modes();
-        if modes.is_empty() {
+        let bodies = self.engine.free_rigid_bodies();
+        if bodies.is_empty() {
             Ok(())
         } else {
-            Err(StepError::Unsupported { modes })
+            Err(StepError::Unsupported { bodies, dimension: D })
         }
     }
 

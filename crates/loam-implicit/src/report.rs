@@ -68,11 +68,11 @@ pub enum StepError {
     #[error("the analysis is already finished ({0} steps)")]
     Finished(usize),
     #[error(
-        "the body is not supported against rigid motion: no constraint holds its {}; a quasi-static \
-         analysis needs supports against every one (e.g. Fixed on the base, Roller on the sides)",
-        modes.iter().map(|m| m.to_string()).collect::<Vec<_>>().join(", ")
+        "not supported against rigid motion: no constraint holds {}; a quasi-static analysis needs \
+         supports against every rigid motion of every body (e.g. Fixed on the base, Roller on the sides)",
+        bodies.iter().map(|b| b.describe(*dimension)).collect::<Vec<_>>().join("; ")
     )]
-    Unsupported { modes: Vec<loam_model::RigidMode> },
+    Unsupported { bodies: Vec<loam_model::FreeBody>, dimension: usize },
 }
 
 /// Wall time of the phases of one Newton iteration (see `QuasiStatic::profile_iteration`).

@@ -42,23 +42,3 @@ impl PlaneConstraint {
         self.displacement.iter().zip(&self.fixed).any(|(d, &f)| f && *d != 0.0)
     }
 }
-
-/// A rigid-body motion of the whole model that no constraint resists
-/// (`Model::free_rigid_modes`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum RigidMode {
-    /// Translation along the axis.
-    Translation(usize),
-    /// Rotation in the plane of the two axes.
-    Rotation(usize, usize),
-}
-
-impl std::fmt::Display for RigidMode {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        const AXES: [&str; 3] = ["x", "y", "z"];
-        match *self {
-            RigidMode::Translation(a) => write!(f, "translation along {}", AXES[a]),
-            RigidMode::Rotation(a, b) => write!(f, "rotation in the {}-{} plane", AXES[a], AXES[b]),
-        }
-    }
-}

@@ -14,12 +14,14 @@ mod energy;
 mod geostatic;
 mod loads;
 mod points_mut;
+mod rigid;
 mod water;
 
-pub use constraint::{PlaneConstraint, RigidMode};
+pub use constraint::PlaneConstraint;
 pub use energy::ExternalWork;
 pub use loads::{Load, LoadKind, LoadLevel, TimeFunction};
 pub use points_mut::{PointsMut, StateFields};
+pub use rigid::{FreeBody, RigidMode};
 pub use water::{PhreaticLevel, Water};
 
 use loam_constitutive::ConstitutiveLaw;
@@ -674,42 +676,6 @@ impl<const D: usize> Model<D> {
             .iter()
             .enumerate()
             .find(|(_, c)| !active.active_to_grid.iter().any(|&g| self.node_on_plane(g as usize, c)))
-    }
-
-    /// The rigid-body motions of the whole model that no constraint on the active nodes
-    /// resists, of the kinds plane constraints leave: a translation along an axis no
-    /// constraint holds, a rotation in the plane of axes (a, b) where the nodes holding a
-    /// share one b coordinate and those holding b one a coordinate (a pin, or nothing). A
-    /// quasi-static tangent with one is singular. Not detected: rotations about an axis
-    /// that is not a coordinate axis (two pinned nodes on a diagonal), and a body that is
-    /// free while another one is held; the factorisation still fails there, in words.
-    pub fn free_rigid_modes(&self, active: &ActiveNodes) -> Vec<RigidMode> {
-        // Per held component a, the range of every coordinate over the nodes holding it.
-        let mut lo = [[f64::INFINITY; 3]; 3];
-        let mut hi = [[f64::NEG_INFINITY; 3]; 3];
-        for &g in &active.active_to_grid {
-            let x = self.background.node_reference_position(g as usize);
-            for c in self.constraints.iter().filter(|c| self.node_on_plane(g as usize, c)) {
-                for a in (0..D).filter(|&a| c.fixed[a]) {
-                    for b in 0..D {
-                        lo[a][b] = lo[a][b].min(x[b]);
-                        hi[a][b] = hi[a][b].max(x[b]);
-                    }
-                }
-            }
-        }
-        let h = self.grid().cell_size().min();
-        // Nodes holding a all at one b coordinate (or none holding a).
-        let one_line = |a: usize, b: usize| hi[a][b] - lo[a][b] <= 1e-9 * h;
-        let mut modes: Vec<RigidMode> = (0..D).filter(|&a| lo[a][0] > hi[a][0]).map(RigidMode::Translation).collect();
-        for a in 0..D {
-            for b in a + 1..D {
-                if one_line(a, b) && one_line(b, a) {
-                    modes.push(RigidMode::Rotation(a, b));
-                }
-            }
-        }
-        modes
     }
 
     /// Dead load on point `p` at full load: gravity on its mass plus its point force.

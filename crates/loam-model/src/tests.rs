@@ -200,21 +200,59 @@ fn inconsistent_points_and_constraint_values_are_refused() {
     );
 }
 
-/// The rigid modes no constraint holds on a 4 × 3-cell grid, every node active: all three
-/// with none; x alone with a roller on the base; none with rollers on the base and a side;
-/// the rotation alone when one node is pinned in both components.
+/// The free rigid bodies of a model whose points fill `shapes`, with `constraints`.
+fn free_bodies(shapes: &[(f64, f64)], constraints: Vec<PlaneConstraint>) -> Vec<FreeBody> {
+    let mut points = PointStore::new();
+    for &(x0, x1) in shapes {
+        let shape = Shape::Box { min: Vector2::new(x0, 0.0), max: Vector2::new(x1, 2.0) };
+        points.fill(&grid(), &shape, 2, 1000.0, 0).unwrap();
+    }
+    let model = Model::new(
+        grid(),
+        BasisKind::Linear,
+        Kinematics::SmallStrain,
+        points,
+        vec![elastic()],
+        constraints,
+        Vector2::zeros(),
+    )
+    .unwrap();
+    let mut conn = loam_grid::Connectivity::new(BasisKind::Linear);
+    conn.compute(model.grid(), &model.points().position, &model.points().half_length).unwrap();
+    model.free_rigid_bodies(&conn)
+}
+
+/// The rigid motions no constraint holds on the 2 × 2-cell block at the grid's corner: all
+/// three with none (the rotation about its centre); x alone with a roller on the base; none
+/// with rollers on the base and a side; the rotation about the pin alone when one node is
+/// pinned in both components; with a second block apart, held, the first alone is named.
 #[test]
-fn free_rigid_modes_are_those_no_constraint_holds() {
-    let nodes = 5 * 4;
-    let active = ActiveNodes { grid_to_active: (0..nodes).collect(), active_to_grid: (0..nodes).collect() };
-    let modes = |constraints| model_with(constraints).unwrap().free_rigid_modes(&active);
+fn free_rigid_bodies_are_those_no_constraint_holds() {
+    let block = [(0.0, 2.0)];
     let base = PlaneConstraint::new(1, 0, [false, true, false]);
     let side = PlaneConstraint::new(0, 0, [true, false, false]);
     let pin = PlaneConstraint::new(1, 0, [true, true, false]).within([-0.1, -1.0, 0.0], [0.1, 1.0, 0.0]);
     use RigidMode::*;
-    assert_eq!(modes(vec![]), vec![Translation(0), Translation(1), Rotation(0, 1)]);
-    assert_eq!(modes(vec![base.clone()]), vec![Translation(0)]);
-    assert_eq!(modes(vec![base, side]), vec![]);
-    assert_eq!(modes(vec![pin]), vec![Rotation(0, 1)]);
-    assert_eq!(Rotation(0, 2).to_string(), "rotation in the x-z plane");
+    let about = |x: f64, y: f64| Rotation { axis: [0.0, 0.0, 1.0], through: [x, y, 0.0] };
+    let modes = |bodies: Vec<FreeBody>| bodies.into_iter().flat_map(|b| b.modes).collect::<Vec<_>>();
+    let free = free_bodies(&block, vec![]);
+    assert_eq!((free.len(), free[0].alone, free[0].points), (1, true, 16));
+    let close = |m: &RigidMode, n: &RigidMode| match (m, n) {
+        (Rotation { axis: a, through: p }, Rotation { axis: b, through: q }) => {
+            (0..3).all(|i| (a[i] - b[i]).abs() < 1e-9 && (p[i] - q[i]).abs() < 1e-9)
+        }
+        _ => m == n,
+    };
+    let expect = |got: Vec<RigidMode>, want: &[RigidMode]| {
+        assert!(got.len() == want.len() && got.iter().zip(want).all(|(m, n)| close(m, n)), "{got:?} != {want:?}");
+    };
+    expect(modes(free), &[Translation(0), Translation(1), about(1.0, 1.0)]);
+    expect(modes(free_bodies(&block, vec![base.clone()])), &[Translation(0)]);
+    expect(modes(free_bodies(&block, vec![base.clone(), side])), &[]);
+    expect(modes(free_bodies(&block, vec![pin])), &[about(0.0, 0.0)]);
+    let held_left = PlaneConstraint::new(1, 0, [true, true, false]).within([-1.0, -1.0, 0.0], [1.0, 1.0, 0.0]);
+    let two = free_bodies(&[(0.0, 1.0), (3.0, 4.0)], vec![held_left]);
+    assert_eq!((two.len(), two[0].alone, two[0].points, two[0].centre), (1, false, 8, [3.5, 1.0, 0.0]));
+    expect(two[0].modes.clone(), &[Translation(0), Translation(1), about(3.5, 1.0)]);
+    assert_eq!(two[0].describe(2), "the body of 8 points around (3.5, 1) against translation along x, translation along y, rotation about (3.5, 1)");
 }
