@@ -31,32 +31,13 @@ enum Command {
         /// Output folder [default: out/SCENE, SCENE the scene file's name without extension].
         #[arg(long)]
         out: Option<PathBuf>,
-        /// No progress bar, and only errors in the log.
-        #[arg(long, short)]
-        quiet: bool,
-        /// More of the solver's log on stderr: warnings are shown by default; -v adds the
-        /// linear solver chosen and each cut-back with its cause, -vv every Newton
-        /// iteration.
-        #[arg(long, short, action = clap::ArgAction::Count, conflicts_with = "quiet")]
-        verbose: u8,
-        /// The most memory the run may take (e.g. 32G, 500M, 2TiB); a scene estimated above
-        /// it is refused before its points are made [default: this machine's memory].
-        #[arg(long, value_parser = parse_size)]
-        max_memory: Option<u64>,
-        /// Stop after this many steps, as if the run ended there (a look at the first steps
-        /// of a long run).
-        #[arg(long)]
-        steps: Option<usize>,
         /// Remove the outputs of another run from the output folder first (only the files
         /// loam writes); without it such a folder is refused. A re-run of the same scene
         /// replaces its own outputs either way.
         #[arg(long)]
         overwrite: bool,
-        /// Write a checkpoint (checkpoint.loam in the output folder, replaced each time)
-        /// every N steps, or at a wall-time interval (90s, 10m, 2h); `loam resume` goes on
-        /// from it. A strength-reduction search is saved after each trial.
-        #[arg(long, value_name = "N|TIME")]
-        checkpoint_every: Option<CheckpointEvery>,
+        #[command(flatten)]
+        flags: RunFlags,
     },
     /// Go on with an interrupted run from the checkpoint in its output folder: its outputs
     /// end as those of a run that never stopped.
@@ -67,21 +48,8 @@ enum Command {
         /// text).
         #[arg(long)]
         scene: Option<PathBuf>,
-        /// As for `run`.
-        #[arg(long, short)]
-        quiet: bool,
-        /// As for `run`.
-        #[arg(long, short, action = clap::ArgAction::Count, conflicts_with = "quiet")]
-        verbose: u8,
-        /// As for `run`.
-        #[arg(long, value_parser = parse_size)]
-        max_memory: Option<u64>,
-        /// As for `run`: stop after this many steps in all.
-        #[arg(long)]
-        steps: Option<usize>,
-        /// As for `run` [default: as the interrupted run did].
-        #[arg(long, value_name = "N|TIME")]
-        checkpoint_every: Option<CheckpointEvery>,
+        #[command(flatten)]
+        flags: RunFlags,
     },
     /// Draw the plots of a run from the CSV files in its output folder (loam run draws
     /// them at its end too): run_log.svg, load_displacement.svg, energies.svg,
@@ -98,6 +66,32 @@ enum Command {
         #[arg(long, value_parser = parse_size)]
         max_memory: Option<u64>,
     },
+}
+
+/// The flags `loam run` and `loam resume` share.
+#[derive(clap::Args, Clone)]
+struct RunFlags {
+    /// No progress bar, and only errors in the log.
+    #[arg(long, short)]
+    quiet: bool,
+    /// More of the solver's log on stderr: warnings are shown by default; -v adds the
+    /// linear solver chosen and each cut-back with its cause, -vv every Newton iteration.
+    #[arg(long, short, action = clap::ArgAction::Count, conflicts_with = "quiet")]
+    verbose: u8,
+    /// The most memory the run may take (e.g. 32G, 500M, 2TiB); a scene estimated above it
+    /// is refused before its points are made [default: this machine's memory].
+    #[arg(long, value_parser = parse_size)]
+    max_memory: Option<u64>,
+    /// Stop after this many steps in all, as if the run ended there (a look at the first
+    /// steps of a long run).
+    #[arg(long)]
+    steps: Option<usize>,
+    /// Write a checkpoint (checkpoint.loam in the output folder, replaced each time) every
+    /// N steps, or at a wall-time interval (90s, 10m, 2h); `loam resume` goes on from it. A
+    /// strength-reduction search is saved after each trial [resume's default: as the
+    /// interrupted run did].
+    #[arg(long, value_name = "N|TIME")]
+    checkpoint_every: Option<CheckpointEvery>,
 }
 
 /// One log line on its way to stderr: written whole, with the progress bar cleared
@@ -167,14 +161,13 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             }
             Ok(())
         }
-        Command::Run { scene, out, quiet, verbose, max_memory, overwrite, steps, checkpoint_every } => {
+        Command::Run { scene, out, overwrite, flags } => {
             let out = out.unwrap_or_else(|| {
                 PathBuf::from("out").join(scene.file_stem().map(|s| s.to_owned()).unwrap_or_default())
             });
-            let options = CliRunOptions { quiet, verbose, max_memory, steps, overwrite, checkpoint_every };
-            run_command(&scene, &out, &options, None)
+            run_command(&scene, &out, &flags, overwrite, None)
         }
-        Command::Resume { dir, scene, quiet, verbose, max_memory, steps, checkpoint_every } => {
+        Command::Resume { dir, scene, mut flags } => {
             let path = dir.join(CHECKPOINT_FILE);
             let checkpoint =
                 Checkpoint::load(&path).with_context(|| format!("resuming the run in {}", dir.display()))?;
@@ -182,12 +175,10 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 Some(scene) => scene,
                 None => checkpoint_scene(&checkpoint)?,
             };
-            let checkpoint_every = match checkpoint_every {
-                Some(every) => Some(every),
-                None => checkpoint_interval(&checkpoint)?,
-            };
-            let options = CliRunOptions { quiet, verbose, max_memory, steps, overwrite: false, checkpoint_every };
-            run_command(&scene, &dir, &options, Some(checkpoint))
+            if flags.checkpoint_every.is_none() {
+                flags.checkpoint_every = checkpoint_interval(&checkpoint)?;
+            }
+            run_command(&scene, &dir, &flags, false, Some(checkpoint))
         }
     }
 }
@@ -222,25 +213,16 @@ fn load(scene: &Path, max_memory: Option<u64>) -> anyhow::Result<LoadedScene> {
     Ok(loaded)
 }
 
-/// The flags of `loam run`.
-struct CliRunOptions {
-    quiet: bool,
-    verbose: u8,
-    max_memory: Option<u64>,
-    steps: Option<usize>,
-    overwrite: bool,
-    checkpoint_every: Option<CheckpointEvery>,
-}
-
 /// `loam run` (or `loam resume`, given the `checkpoint` to go on from): the scene run into
 /// `out` under a progress bar, the solver's log above it.
 fn run_command(
     scene: &Path,
     out: &Path,
-    options: &CliRunOptions,
+    flags: &RunFlags,
+    overwrite: bool,
     checkpoint: Option<Checkpoint>,
 ) -> anyhow::Result<()> {
-    let &CliRunOptions { quiet, verbose, max_memory, steps, overwrite, checkpoint_every } = options;
+    let RunFlags { quiet, verbose, max_memory, steps, checkpoint_every } = flags.clone();
     let loaded = load(scene, max_memory)?;
     if let loam_io::scene::AnalysisSpec::QuasiStatic { strength_reduction: Some(srf), .. } = &loaded.scene.analysis {
         if !quiet {

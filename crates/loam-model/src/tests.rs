@@ -27,16 +27,21 @@ fn model_on(basis: BasisKind, kinematics: Kinematics) -> Model<2> {
     Model::new(grid(), basis, kinematics, points(0), vec![elastic()], vec![], Vector2::zeros()).unwrap()
 }
 
-fn model_with(constraints: Vec<PlaneConstraint>) -> Result<Model<2>, ModelError> {
+/// A linear-basis, small-strain elastic model of `points` with `constraints`, no gravity.
+fn model_of(points: PointStore<2>, constraints: Vec<PlaneConstraint>) -> Result<Model<2>, ModelError> {
     Model::new(
         grid(),
         BasisKind::Linear,
         Kinematics::SmallStrain,
-        points(0),
+        points,
         vec![elastic()],
         constraints,
         Vector2::zeros(),
     )
+}
+
+fn model_with(constraints: Vec<PlaneConstraint>) -> Result<Model<2>, ModelError> {
+    model_of(points(0), constraints)
 }
 
 #[test]
@@ -173,17 +178,7 @@ fn the_mutable_view_writes_state_and_keeps_the_points() {
 /// indexed into a panic later.
 #[test]
 fn inconsistent_points_and_constraint_values_are_refused() {
-    let build = |points: PointStore<2>, constraints: Vec<PlaneConstraint>| {
-        Model::new(
-            grid(),
-            BasisKind::Linear,
-            Kinematics::SmallStrain,
-            points,
-            vec![elastic()],
-            constraints,
-            Vector2::zeros(),
-        )
-    };
+    let build = model_of;
     let mut short = points(0);
     short.mass.pop();
     assert!(matches!(build(short, vec![]), Err(ModelError::Points(PointsError::FieldLength { field: "mass", .. }))));
@@ -207,16 +202,7 @@ fn free_bodies(shapes: &[(f64, f64)], constraints: Vec<PlaneConstraint>) -> Vec<
         let shape = Shape::Box { min: Vector2::new(x0, 0.0), max: Vector2::new(x1, 2.0) };
         points.fill(&grid(), &shape, 2, 1000.0, 0).unwrap();
     }
-    let model = Model::new(
-        grid(),
-        BasisKind::Linear,
-        Kinematics::SmallStrain,
-        points,
-        vec![elastic()],
-        constraints,
-        Vector2::zeros(),
-    )
-    .unwrap();
+    let model = model_of(points, constraints).unwrap();
     let mut conn = loam_grid::Connectivity::new(BasisKind::Linear);
     conn.compute(model.grid(), &model.points().position, &model.points().half_length).unwrap();
     model.free_rigid_bodies(&conn)
