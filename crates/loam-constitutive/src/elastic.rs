@@ -75,6 +75,16 @@ impl ConstitutiveLaw for Elastic {
         Ok(StressUpdate { stress: self.stress(eps_trial), elastic_strain: *eps_trial, tangent: self.stiffness() })
     }
 
+    fn update_stress(
+        &self,
+        eps_trial: &Matrix3<f64>,
+        _h_n: &[f64],
+        _h_out: &mut [f64],
+    ) -> Result<(Matrix3<f64>, Matrix3<f64>), ConstitutiveError> {
+        check_finite(eps_trial, "trial strain")?;
+        Ok((self.stress(eps_trial), *eps_trial))
+    }
+
     fn stored_energy(&self, eps: &Matrix3<f64>) -> f64 {
         let (lambda, mu) = self.lame();
         0.5 * lambda * eps.trace().powi(2) + mu * eps.component_mul(eps).sum()

@@ -27,7 +27,10 @@ mod mohr_coulomb;
 mod von_mises;
 
 pub use elastic::Elastic;
-pub use kinematics::{finite_strain_update, small_strain_update, FiniteStrainUpdate};
+pub use kinematics::{
+    finite_strain_stress, finite_strain_update, small_strain_stress, small_strain_update, FiniteStrainStress,
+    FiniteStrainUpdate,
+};
 pub use mohr_coulomb::{MohrCoulomb, MohrCoulombRegion, MohrCoulombReturn, Softening};
 pub use tensor::Tensor4;
 pub use von_mises::{VonMises, VonMisesRegion};
@@ -109,6 +112,18 @@ pub trait ConstitutiveLaw: Send + Sync + std::fmt::Debug {
         h_n: &[f64],
         h_out: &mut [f64],
     ) -> Result<StressUpdate, ConstitutiveError>;
+    /// The stress and elastic strain of [`ConstitutiveLaw::update`] (the same values, the
+    /// same history), without the algorithmic modulus, for an analysis with no use for it
+    /// (explicit MPM). By default `update`'s; a law whose modulus costs overrides it.
+    fn update_stress(
+        &self,
+        eps_trial: &Matrix3<f64>,
+        h_n: &[f64],
+        h_out: &mut [f64],
+    ) -> Result<(Matrix3<f64>, Matrix3<f64>), ConstitutiveError> {
+        let u = self.update(eps_trial, h_n, h_out)?;
+        Ok((u.stress, u.elastic_strain))
+    }
     /// The law's isotropic elasticity, if it has one: initial stress states (K0) are turned
     /// into elastic strains with it.
     fn elasticity(&self) -> Option<Elastic> {

@@ -4,7 +4,7 @@ use crate::{ExplicitError, ExplicitSettings, TimeStep, UpdateScheme};
 use loam_grid::{BasisError, Connectivity, PointBasisError};
 use loam_kernels::{
     advance_deformation, check_constraints, connect, embed, gather_internal_force, gather_nodal, internal_force,
-    interpolate_pair, update_point, Committed, ConnectError, LoadSupports, RunError,
+    interpolate_pair, update_point_stress, Committed, ConnectError, LoadSupports, RunError,
 };
 use loam_model::{Kinematics, LoadLevel, Model, ModelError, ModelState, StateFields};
 use nalgebra::{Matrix3, SMatrix, SVector};
@@ -35,6 +35,52 @@ pub struct ExplicitStepReport {
     pub critical_dt: f64,
     pub active_nodes: usize,
     pub wall_time: Duration,
+    /// Where the wall time went, stage by stage.
+    pub phases: StepPhases,
+}
+
+/// The wall time of a step's stages (the crate docs' numbering): where to look first when
+/// a step is slow (`cargo xtask bench`).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct StepPhases {
+    /// Stage 1 and the critical time step.
+    pub connectivity: Duration,
+    /// Stage 2, points to grid (and USF's stress update and internal force).
+    pub to_grid: Duration,
+    /// Stages 3–4.
+    pub grid_update: Duration,
+    /// Stage 5.
+    pub to_points: Duration,
+    /// Stage 6 (USL, MUSL).
+    pub stress: Duration,
+    /// Stage 7.
+    pub commit: Duration,
+}
+
+impl StepPhases {
+    /// The phases of two steps added (to sum a run's).
+    pub fn add(&self, other: &StepPhases) -> StepPhases {
+        StepPhases {
+            connectivity: self.connectivity + other.connectivity,
+            to_grid: self.to_grid + other.to_grid,
+            grid_update: self.grid_update + other.grid_update,
+            to_points: self.to_points + other.to_points,
+            stress: self.stress + other.stress,
+            commit: self.commit + other.commit,
+        }
+    }
+
+    /// The phases with their names, in order.
+    pub fn named(&self) -> [(&'static str, Duration); 6] {
+        [
+            ("connectivity", self.connectivity),
+            ("to_grid", self.to_grid),
+            ("grid_update", self.grid_update),
+            ("to_points", self.to_points),
+            ("stress", self.stress),
+            ("commit", self.commit),
+        ]
+    }
 }
 
 /// Nodal scratch of one step, reused across steps.
@@ -76,6 +122,22 @@ impl<const D: usize> PointScratch<D> {
         f.history.resize(n * history_stride.max(1), 0.0);
         self.delta_f.resize(n, Matrix3::identity());
         self.volume.resize(n, 0.0);
+    }
+}
+
+/// The time since the last lap.
+struct PhaseClock(Instant);
+
+impl PhaseClock {
+    fn new() -> Self {
+        Self(Instant::now())
+    }
+
+    fn lap(&mut self) -> Duration {
+        let now = Instant::now();
+        let lap = now - self.0;
+        self.0 = now;
+        lap
     }
 }
 
@@ -279,6 +341,7 @@ impl<const D: usize> Explicit<D> {
             return Err(ExplicitError::Finished(self.steps));
         }
         let start = Instant::now();
+        let mut clock = PhaseClock::new();
         let step = self.steps + 1;
         connect(&self.model, &mut self.conn, &mut self.constrained, step)?;
         self.loads.connect(&self.model, &self.conn, step)?;
@@ -286,11 +349,14 @@ impl<const D: usize> Explicit<D> {
         let dt = self.time_step(step, critical)?;
         self.check_time_advances(step, dt)?;
         self.size_buffers();
+        let connectivity = clock.lap();
         let m_min = self.map_to_grid();
         if self.settings.scheme == UpdateScheme::Usf {
             self.update_stress_first(step, dt, m_min)?;
         }
+        let to_grid = clock.lap();
         self.update_grid(dt, m_min);
+        let grid_update = clock.lap();
         let (conn, nodes) = (&self.conn, &self.nodes);
         let moved = grid_to_points(
             &self.model,
@@ -302,8 +368,11 @@ impl<const D: usize> Explicit<D> {
             &mut self.points,
         );
         moved.map_err(|e| self.failure(step, e))?;
+        let to_points = clock.lap();
         self.update_stress_last(step, dt, m_min)?;
+        let stress = clock.lap();
         self.commit();
+        let phases = StepPhases { connectivity, to_grid, grid_update, to_points, stress, commit: clock.lap() };
         let remaining = self.settings.duration - self.time;
         self.time = if dt >= remaining { self.settings.duration } else { self.time + dt };
         self.steps = step;
@@ -316,6 +385,7 @@ impl<const D: usize> Explicit<D> {
             critical_dt: critical,
             active_nodes,
             wall_time: start.elapsed(),
+            phases,
         })
     }
 
@@ -695,13 +765,9 @@ fn point_stress<const D: usize>(
         return Err(format!("det ΔF = {det:e}: the point was inverted or torn apart within one step"));
     }
     let committed = Committed::of(model.points(), p);
-    let state = update_point(model.kinematics(), model.law(p), &grad_du, committed, h_out, |u| PointState {
-        delta_f: *u.delta_f,
-        det,
-        stress: *u.stress,
-        elastic_strain: *u.elastic_strain,
-    })
-    .map_err(|e| format!("stress update failed: {e}"))?;
+    let u = update_point_stress(model.kinematics(), model.law(p), &grad_du, committed, h_out)
+        .map_err(|e| format!("stress update failed: {e}"))?;
+    let state = PointState { delta_f: u.delta_f, det, stress: u.stress, elastic_strain: u.elastic_strain };
     if !state.stress.iter().chain(state.elastic_strain.iter()).all(|c| c.is_finite()) {
         return Err("stress update failed: non-finite stress".into());
     }

@@ -46,7 +46,7 @@ mod settings;
 
 pub use energy::LeapfrogEnergy;
 pub use error::ExplicitError;
-pub use explicit::{Explicit, ExplicitState, ExplicitStepReport};
+pub use explicit::{Explicit, ExplicitState, ExplicitStepReport, StepPhases};
 pub use loam_kernels::{ConnectError, InvalidSetting, RunError};
 pub use loam_model::{Kinematics, Model, ModelError, PlaneConstraint};
 pub use settings::{ExplicitSettings, TimeStep, UpdateScheme};

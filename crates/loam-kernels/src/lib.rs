@@ -26,5 +26,5 @@ pub use connect::{check_constraints, connect};
 pub use error::{ConnectError, InvalidSetting, RunError};
 pub use force::{gather_internal_force, internal_force};
 pub use load::{trial_vertices, LoadSupports};
-pub use point::{advance_deformation, embed, update_point, Committed, PointUpdate};
+pub use point::{advance_deformation, embed, update_point, update_point_stress, Committed, PointStress, PointUpdate};
 pub use transfer::{gather_nodal, interpolate, interpolate_add, interpolate_pair};

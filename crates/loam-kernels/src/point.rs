@@ -2,7 +2,10 @@
 //! gradient to the increment of deformation, the stress and tangent of the point's law,
 //! and, once the step is committed, the new deformation gradient and GIMP domain.
 
-use loam_constitutive::{finite_strain_update, small_strain_update, ConstitutiveError, ConstitutiveLaw, Tensor4};
+use loam_constitutive::{
+    finite_strain_stress, finite_strain_update, small_strain_stress, small_strain_update, ConstitutiveError,
+    ConstitutiveLaw, Tensor4,
+};
 use loam_model::Kinematics;
 use loam_points::{stretched_half_length, PointStore};
 use nalgebra::{Matrix3, SMatrix, SVector};
@@ -92,6 +95,42 @@ pub fn update_point<R>(
     })
 }
 
+/// A point's trial state without its tangent ([`update_point_stress`]).
+#[derive(Debug, Clone, Copy)]
+pub struct PointStress {
+    /// ΔF = I + ∇Δu.
+    pub delta_f: Matrix3<f64>,
+    /// Cauchy stress σ.
+    pub stress: Matrix3<f64>,
+    /// b^e (finite strain) or ε^e (small strain).
+    pub elastic_strain: Matrix3<f64>,
+}
+
+/// [`update_point`] for an analysis with no use for the tangent (explicit MPM): the same
+/// stress, elastic strain and history, without the finite-strain tangent's cost.
+#[inline]
+pub fn update_point_stress(
+    kinematics: Kinematics,
+    law: &dyn ConstitutiveLaw,
+    grad_du: &Matrix3<f64>,
+    committed: Committed<'_>,
+    h_out: &mut [f64],
+) -> Result<PointStress, ConstitutiveError> {
+    let Committed { f, elastic_strain, history } = committed;
+    let delta_f = Matrix3::identity() + grad_du;
+    Ok(match kinematics {
+        Kinematics::FiniteStrain => {
+            let j_total = delta_f.determinant() * f.determinant();
+            let u = finite_strain_stress(law, &delta_f, elastic_strain, j_total, history, h_out)?;
+            PointStress { delta_f, stress: u.cauchy, elastic_strain: u.be }
+        }
+        Kinematics::SmallStrain => {
+            let (stress, elastic_strain) = small_strain_stress(law, grad_du, elastic_strain, history, h_out)?;
+            PointStress { delta_f, stress, elastic_strain }
+        }
+    })
+}
+
 /// Commit a point's increment of deformation: F ← ΔF F, and the GIMP half-lengths
 /// stretched with the new F (iGIMP, docs/theory.md §4).
 #[inline]
@@ -132,5 +171,13 @@ mod tests {
         let e = f64::ln(stretch);
         assert!((finite[(0, 0)] - (lame + 2.0 * mu) * e / stretch).abs() < 1e-10);
         assert!((det - stretch).abs() < 1e-15);
+        // Without the tangent: the same stress to the last bit, in either kinematics.
+        for kinematics in [Kinematics::FiniteStrain, Kinematics::SmallStrain] {
+            let b = if kinematics == Kinematics::FiniteStrain { Matrix3::identity() } else { Matrix3::zeros() };
+            let c = Committed { f: &f, elastic_strain: &b, history: &[] };
+            let full = update_point(kinematics, &law, &g, c, &mut h, |u| (*u.stress, *u.elastic_strain)).unwrap();
+            let only = update_point_stress(kinematics, &law, &g, c, &mut h).unwrap();
+            assert_eq!((only.stress, only.elastic_strain), full);
+        }
     }
 }

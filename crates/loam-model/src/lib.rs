@@ -126,6 +126,8 @@ pub enum ModelError {
     GeometricallyLinear(String),
     #[error("the saved state does not fit this model: {0}")]
     Restore(String),
+    #[error("basis: {0}")]
+    Basis(String),
 }
 
 /// What an analysis changes in a model as it advances: the points' state, the places of
@@ -389,6 +391,20 @@ impl<const D: usize> Model<D> {
             ));
         }
         self.ghost_penalty = Some(gamma);
+        Ok(self)
+    }
+
+    /// The same model on the grid's `basis` instead (the points' GIMP domains kept, used by
+    /// Gimp only). A body-fitted FEM mesh has no other basis, and the ghost penalty none
+    /// but Linear and Gimp.
+    pub fn with_basis(mut self, basis: BasisKind) -> Result<Self, ModelError> {
+        if self.background.moves_with_body() {
+            return Err(ModelError::Basis("a body-fitted FEM mesh has its element functions, no other basis".into()));
+        }
+        if self.ghost_penalty.is_some() && basis == BasisKind::QuadraticBSpline {
+            return Err(ModelError::Basis("the ghost penalty needs Linear or Gimp".into()));
+        }
+        self.background = Background::on_grid(self.background.grid().clone(), basis);
         Ok(self)
     }
 
