@@ -1,7 +1,7 @@
 //! Benchmarks of the explicit MPM (criterion; `cargo xtask bench`): point-steps per second
 //! of the elastic block under gravity of issue 19 — 2D, 256 × 256 cells and 3D, 32³ cells,
 //! 2 points per cell and axis (262 144 points each), E = 1e7, ν = 0.3, ρ = 2000, g = 10
-//! (the block of `scripts/peers/`'s Taichi script), MUSL, FLIP, CFL step 0.5, finite strain
+//! (the block of the Taichi scripts in `scripts/peers/`; `scripts/bench_explicit.sh` runs them side by side), MUSL, FLIP, CFL step 0.5, finite strain
 //! — with GIMP and with the quadratic B-spline. Before each, one line gives the step's
 //! split by stage (`StepPhases`) and the memory per point (growth of the resident set from
 //! before the model is built to after its first steps; Linux). Criterion's throughput is in
