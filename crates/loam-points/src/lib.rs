@@ -16,8 +16,18 @@ use nalgebra::{Matrix3, SVector, Vector2};
 
 /// GIMP half-lengths of a deformed point, l = l₀ ⊙ diag(U) with U = √(FᵀF) the right
 /// stretch (iGIMP, Charlton et al. 2017). In plane strain F is block-diagonal, so the
-/// in-plane block of the 3×3 U is the in-plane stretch.
+/// in-plane block of the 3×3 U is the in-plane stretch, the square root of the 2 × 2
+/// C = FᵀF in closed form (Cayley–Hamilton): √C = (C + s I) / √(tr C + 2s), s = √det C =
+/// |det F|; in 3D by C's eigen-decomposition.
 pub fn stretched_half_length<const D: usize>(l0: &SVector<f64, D>, f: &Matrix3<f64>) -> SVector<f64, D> {
+    let plane = D == 2 && f[(0, 2)] == 0.0 && f[(1, 2)] == 0.0 && f[(2, 0)] == 0.0 && f[(2, 1)] == 0.0;
+    if plane {
+        let c = f.fixed_view::<2, 2>(0, 0).transpose() * f.fixed_view::<2, 2>(0, 0);
+        let s = (f[(0, 0)] * f[(1, 1)] - f[(0, 1)] * f[(1, 0)]).abs();
+        let t = (c.trace() + 2.0 * s).sqrt();
+        // t = 0 only for F = 0 in the plane, which no valid state reaches: U = 0 then.
+        return SVector::from_fn(|i, _| if t > 0.0 { l0[i] * (c[(i, i)] + s) / t } else { 0.0 });
+    }
     let eig = (f.transpose() * f).symmetric_eigen();
     let u = eig.eigenvectors
         * Matrix3::from_diagonal(&eig.eigenvalues.map(|e| e.max(0.0).sqrt()))
@@ -457,6 +467,27 @@ fn sub_cell_centres<const D: usize>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The plane-strain closed form of √(FᵀF) gives the half-lengths of the 3D
+    /// eigen-decomposition (the same F seen as a 3D one) to round-off: a stretch, a
+    /// rotation with a stretch, a simple shear and a compression.
+    #[test]
+    fn the_plane_stretch_is_that_of_the_eigen_decomposition() {
+        let l0 = Vector2::new(0.25, 0.5);
+        let (c, s) = (0.6f64.cos(), 0.6f64.sin());
+        for f in [
+            Matrix3::new(1.2, 0.0, 0.0, 0.0, 0.9, 0.0, 0.0, 0.0, 1.0),
+            Matrix3::new(1.3 * c, -0.8 * s, 0.0, 1.3 * s, 0.8 * c, 0.0, 0.0, 0.0, 1.0),
+            Matrix3::new(1.0, 0.7, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0),
+            Matrix3::new(0.05, 0.01, 0.0, -0.02, 0.3, 0.0, 0.0, 0.0, 1.0),
+        ] {
+            let plane = stretched_half_length(&l0, &f);
+            let l3 = stretched_half_length(&Vector3::new(0.25, 0.5, 1.0), &f);
+            for i in 0..2 {
+                assert!((plane[i] - l3[i]).abs() <= 1e-15 * l3[i].max(1e-3), "{f}: {plane} vs {l3}");
+            }
+        }
+    }
     use approx::assert_relative_eq;
     use nalgebra::{Vector2, Vector3};
 
