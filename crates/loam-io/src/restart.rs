@@ -177,6 +177,15 @@ pub(crate) struct RunTotals {
     pub cutbacks: usize,
 }
 
+impl RunTotals {
+    /// Count step `r` in.
+    pub fn add(&mut self, r: &loam_analysis::Progress) {
+        self.iterations += r.iterations;
+        self.max_iterations = self.max_iterations.max(r.iterations);
+        self.cutbacks += r.cutbacks;
+    }
+}
+
 /// The outputs' counters a resumed run starts from.
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct OutputsState {
@@ -198,7 +207,7 @@ pub(crate) fn save_search(c: &mut Checkpoint, trials: &[StrengthTrial], csv_byte
 /// The trials a search checkpoint holds and the bytes of `strength_reduction.csv` they
 /// wrote.
 pub(crate) fn saved_search(c: &Checkpoint) -> Result<(Vec<StrengthTrial>, u64), CheckpointError> {
-    Ok((take_trials(c)?, one(c.u64s("search.csv_bytes")?, "search.csv_bytes")?))
+    Ok((take_trials(c)?, one_u64(c, "search.csv_bytes")?))
 }
 
 /// The checkpoint of a run between steps.
@@ -234,10 +243,10 @@ pub(crate) fn save_steps<const D: usize>(
 
 /// The factor of safety a stepping checkpoint's search bracketed, if it had one.
 pub(crate) fn saved_search_result(c: &Checkpoint) -> Result<Option<FactorOfSafety>, CheckpointError> {
-    if phase(c)? != Phase::Steps || c.f64s("search.result").is_err() {
-        return Ok(None);
-    }
-    let r = c.f64s("search.result")?;
+    let r = match c.f64s("search.result") {
+        Err(CheckpointError::Missing(_)) => return Ok(None),
+        r => r?,
+    };
     let [stable, failed] = r[..] else {
         return Err(shape_error("search.result", format!("{} values where 2 belong", r.len())));
     };
@@ -257,10 +266,10 @@ pub(crate) fn saved_totals(c: &Checkpoint) -> Result<RunTotals, CheckpointError>
 
 /// The outputs' counters of a stepping checkpoint; which outputs exist is the scene's.
 pub(crate) fn saved_outputs(c: &Checkpoint, history: bool, frames: bool) -> Result<OutputsState, CheckpointError> {
-    let run_log_bytes = one(c.u64s("outputs.run_log_bytes")?, "outputs.run_log_bytes")?;
+    let run_log_bytes = one_u64(c, "outputs.run_log_bytes")?;
     let history = if history {
-        let bytes = one(c.u64s("outputs.history_bytes")?, "outputs.history_bytes")?;
-        Some((bytes, one(c.f64s("outputs.history_work")?, "outputs.history_work")?))
+        let bytes = one_u64(c, "outputs.history_bytes")?;
+        Some((bytes, one_f64(c, "outputs.history_work")?))
     } else {
         None
     };
@@ -289,11 +298,20 @@ pub(crate) fn resume_analysis<const D: usize>(
     analysis.resume(state, model).map_err(|e| CheckpointError::State(e.to_string()))
 }
 
+/// The one value of a section of numbers.
 fn one<T: Copy>(values: &[T], section: &str) -> Result<T, CheckpointError> {
     match values {
         &[v] => Ok(v),
         v => Err(shape_error(section, format!("{} values where 1 belongs", v.len()))),
     }
+}
+
+fn one_u64(c: &Checkpoint, section: &str) -> Result<u64, CheckpointError> {
+    one(c.u64s(section)?, section)
+}
+
+fn one_f64(c: &Checkpoint, section: &str) -> Result<f64, CheckpointError> {
+    one(c.f64s(section)?, section)
 }
 
 const TRIAL_COLUMNS: usize = 7;
@@ -481,8 +499,8 @@ fn put_analysis(c: &mut Checkpoint, state: &AnalysisState) {
 
 /// The analysis state of checkpoint `c` for an analysis named `name`.
 fn take_analysis(c: &Checkpoint, name: &str) -> Result<AnalysisState, CheckpointError> {
-    let step = one(c.u64s("analysis.step")?, "analysis.step")? as usize;
-    let time = one(c.f64s("analysis.time")?, "analysis.time")?;
+    let step = one_u64(c, "analysis.step")? as usize;
+    let time = one_f64(c, "analysis.time")?;
     Ok(match name {
         "quasi-static" => {
             let increment = c.f64s("quasi_static.previous_increment")?;
@@ -500,7 +518,7 @@ fn take_analysis(c: &Checkpoint, name: &str) -> Result<AnalysisState, Checkpoint
         "implicit dynamic" => AnalysisState::Dynamic(DynamicState {
             step,
             time,
-            started: one(c.u64s("dynamic.started")?, "dynamic.started")? != 0,
+            started: one_u64(c, "dynamic.started")? != 0,
             nodal_mass: c.f64s("dynamic.nodal_mass")?.to_vec(),
             nodal_velocity: c.f64s("dynamic.nodal_velocity")?.to_vec(),
             nodal_acceleration: c.f64s("dynamic.nodal_acceleration")?.to_vec(),

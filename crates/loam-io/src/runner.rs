@@ -125,15 +125,15 @@ impl<const D: usize> History<D> {
         header
     }
 
-    fn create(path: &Path, model: &Model<D>, level: LoadLevel) -> Result<Self, OutputError> {
-        let writer = CsvWriter::create(path, &Self::header())?;
-        Ok(Self { writer, work: ExternalWork::new(model, level) })
-    }
-
-    /// Go on after `bytes` of the file and `work` done, the model at `level`.
-    fn resume(path: &Path, model: &Model<D>, level: LoadLevel, bytes: u64, work: f64) -> Result<Self, OutputError> {
-        let writer = CsvWriter::resume(path, &Self::header(), bytes)?;
-        Ok(Self { writer, work: ExternalWork::resumed(model, level, work) })
+    /// A new history of the model at `level`, or, given `saved` (bytes of the file and
+    /// work done), the one a checkpoint left.
+    fn open(path: &Path, model: &Model<D>, level: LoadLevel, saved: Option<(u64, f64)>) -> Result<Self, OutputError> {
+        let writer = CsvWriter::open(path, &Self::header(), saved.map(|(bytes, _)| bytes))?;
+        let work = match saved {
+            Some((_, work)) => ExternalWork::resumed(model, level, work),
+            None => ExternalWork::new(model, level),
+        };
+        Ok(Self { writer, work })
     }
 
     fn advance(&mut self, model: &Model<D>, level: LoadLevel) {
@@ -175,7 +175,11 @@ fn run_dim<const D: usize>(
         clear_output_dir(out_dir)?;
     }
     prepare_output_dir(out_dir, &scene.path)?;
-    let result = run_prepared(scene, analysis, out_dir, options, progress, start, None);
+    with_plots(out_dir, run_prepared(scene, analysis, out_dir, options, progress, start, None))
+}
+
+/// The run's `result` with the plots of its folder, drawn whether it finished or not.
+fn with_plots(out_dir: &Path, result: Result<RunSummary, RunFailure>) -> Result<RunSummary, RunFailure> {
     let plots = plot_run(out_dir).map_err(|e| e.to_string());
     Ok(RunSummary { plots, ..result? })
 }
@@ -212,9 +216,7 @@ fn resume_dim<const D: usize>(
     let analysis: Analysis<D> = scene.build::<D>()?;
     checkpoint.verify(&path, &CheckpointHeader::new(&scene.source, analysis.name(), D as u32))?;
     remove_temp_files(out_dir)?;
-    let result = run_prepared(scene, analysis, out_dir, options, progress, start, Some(&checkpoint));
-    let plots = plot_run(out_dir).map_err(|e| e.to_string());
-    Ok(RunSummary { plots, ..result? })
+    with_plots(out_dir, run_prepared(scene, analysis, out_dir, options, progress, start, Some(&checkpoint)))
 }
 
 /// The run into a prepared folder: strength reduction if asked, then the steps with their
@@ -230,12 +232,13 @@ fn run_prepared<const D: usize>(
 ) -> Result<RunSummary, RunFailure> {
     let header = CheckpointHeader::new(&scene.source, analysis.name(), D as u32);
     let mut saver = Checkpoints::new(options.checkpoint_every, out_dir, header, &scene.path);
-    let search = SearchContext { out_dir, resume, saver: &mut saver };
-    let factor_of_safety = strength_reduction_first(scene, &mut analysis, search, progress)?;
-    let stepping = match resume {
-        Some(c) if restart::phase(c)? == Phase::Steps => Some(c),
-        _ => None,
+    let (searching, stepping) = match resume.map(|c| restart::phase(c).map(|p| (c, p))).transpose()? {
+        Some((c, Phase::Search)) => (Some(c), None),
+        Some((c, Phase::Steps)) => (None, Some(c)),
+        None => (None, None),
     };
+    let search = SearchContext { out_dir, searching, stepping, saver: &mut saver };
+    let factor_of_safety = strength_reduction_first(scene, &mut analysis, search, progress)?;
     let (mut outputs, mut totals) = match stepping {
         Some(c) => {
             restart::resume_analysis(c, &mut analysis)?;
@@ -248,9 +251,7 @@ fn run_prepared<const D: usize>(
     let stop = |a: &Analysis<D>| a.is_finished() || options.max_steps.is_some_and(|m| a.steps_done() >= m);
     while !stop(&analysis) {
         let r = analysis.step()?;
-        totals.iterations += r.iterations;
-        totals.max_iterations = totals.max_iterations.max(r.iterations);
-        totals.cutbacks += r.cutbacks;
+        totals.add(&r);
         outputs.record(&r, analysis.model(), stop(&analysis))?;
         progress(RunEvent::Step { report: &r, end: end_time });
         if saver.due_after_step(r.step) && !analysis.is_finished() {
@@ -275,10 +276,12 @@ fn run_prepared<const D: usize>(
     })
 }
 
-/// Where a strength-reduction search writes and saves, and the checkpoint it may resume.
+/// Where a strength-reduction search writes and saves, and the checkpoint it goes on from:
+/// one saved during the search, or one saved in the run after it (with its result).
 struct SearchContext<'a> {
     out_dir: &'a Path,
-    resume: Option<&'a Checkpoint>,
+    searching: Option<&'a Checkpoint>,
+    stepping: Option<&'a Checkpoint>,
     saver: &'a mut Checkpoints,
 }
 
@@ -296,7 +299,7 @@ fn strength_reduction_first<const D: usize>(
     else {
         return Ok(None);
     };
-    let saved = search.resume.map(restart::saved_search_result).transpose()?.flatten();
+    let saved = search.stepping.map(restart::saved_search_result).transpose()?.flatten();
     let fos = match saved {
         Some(fos) => fos,
         None => factor_of_safety(qs, spec.bracket, spec.tolerance, search, progress)?,
@@ -322,7 +325,7 @@ impl<'a, const D: usize> Outputs<'a, D> {
     /// history row).
     fn create(spec: &'a OutputSpec, analysis: &Analysis<D>, out_dir: &'a Path) -> Result<Self, OutputError> {
         let model = analysis.model();
-        let log = RunLog::create(&out_dir.join("run_log.csv"), model)?;
+        let log = RunLog::open(&out_dir.join("run_log.csv"), model, None)?;
         let fields = spec.fields.clone().unwrap_or_else(|| default_fields(model));
         let mut pvd = if spec.vtu_every > 0 { Some(PvdWriter::create(out_dir.join("points.pvd"))?) } else { None };
         if let Some(pvd) = pvd.as_mut() {
@@ -331,7 +334,7 @@ impl<'a, const D: usize> Outputs<'a, D> {
         }
         let mut history = None;
         if spec.history_every > 0 {
-            let mut h = History::create(&out_dir.join("history.csv"), model, analysis.load_level())?;
+            let mut h = History::open(&out_dir.join("history.csv"), model, analysis.load_level(), None)?;
             h.row(model, analysis.time())?;
             history = Some(h);
         }
@@ -347,12 +350,12 @@ impl<'a, const D: usize> Outputs<'a, D> {
     ) -> Result<Self, RunFailure> {
         let model = analysis.model();
         let saved = restart::saved_outputs(c, spec.history_every > 0, spec.vtu_every > 0)?;
-        let log = RunLog::resume(&out_dir.join("run_log.csv"), model, saved.run_log_bytes)?;
+        let log = RunLog::open(&out_dir.join("run_log.csv"), model, Some(saved.run_log_bytes))?;
         let fields = spec.fields.clone().unwrap_or_else(|| default_fields(model));
         let pvd = saved.frames.map(|frames| PvdWriter::resume(out_dir.join("points.pvd"), frames)).transpose()?;
         let level = analysis.load_level();
         let history = (saved.history)
-            .map(|(bytes, work)| History::resume(&out_dir.join("history.csv"), model, level, bytes, work))
+            .map(|saved| History::open(&out_dir.join("history.csv"), model, level, Some(saved)))
             .transpose()?;
         Ok(Self { spec, fields, out_dir, log, pvd, history })
     }
@@ -425,22 +428,8 @@ impl RunLog {
         "wall_time_s",
     ];
 
-    fn create<const D: usize>(path: &Path, model: &Model<D>) -> Result<Self, OutputError> {
-        let (header, held) = Self::columns(model);
-        let writer = CsvWriter::create(path, &header.iter().map(String::as_str).collect::<Vec<_>>())?;
-        Ok(Self { writer, held })
-    }
-
-    /// Go on after `bytes` of the file.
-    fn resume<const D: usize>(path: &Path, model: &Model<D>, bytes: u64) -> Result<Self, OutputError> {
-        let (header, held) = Self::columns(model);
-        let writer = CsvWriter::resume(path, &header.iter().map(String::as_str).collect::<Vec<_>>(), bytes)?;
-        Ok(Self { writer, held })
-    }
-
-    /// The header and the held components of `model`'s log.
-    #[allow(clippy::type_complexity)]
-    fn columns<const D: usize>(model: &Model<D>) -> (Vec<String>, Vec<(usize, usize, Option<f64>)>) {
+    /// A new log of `model`, or the one a checkpoint left after `resume_at` bytes.
+    fn open<const D: usize>(path: &Path, model: &Model<D>, resume_at: Option<u64>) -> Result<Self, OutputError> {
         let held: Vec<(usize, usize, Option<f64>)> = (model.constraints().iter().enumerate())
             .flat_map(|(k, c)| {
                 (0..D).filter(|&i| c.fixed[i]).map(move |i| (k, i, c.is_displaced().then_some(c.displacement[i])))
@@ -456,7 +445,8 @@ impl RunLog {
         for k in 0..model.loads().len() {
             header.extend(AXES[..D].iter().map(|a| format!("load{k}_{a}")));
         }
-        (header, held)
+        let writer = CsvWriter::open(path, &header.iter().map(String::as_str).collect::<Vec<_>>(), resume_at)?;
+        Ok(Self { writer, held })
     }
 
     fn row<const D: usize>(&mut self, r: &Progress, model: &Model<D>) -> Result<(), OutputError> {
@@ -505,14 +495,11 @@ fn factor_of_safety<const D: usize>(
     progress: &mut dyn FnMut(RunEvent),
 ) -> Result<FactorOfSafety, RunFailure> {
     let path = search.out_dir.join("strength_reduction.csv");
-    let resumed = match search.resume {
-        Some(c) if restart::phase(c)? == Phase::Search => Some(restart::saved_search(c)?),
-        _ => None,
+    let (done, bytes) = match search.searching {
+        Some(c) => restart::saved_search(c).map(|(done, bytes)| (done, Some(bytes)))?,
+        None => (Vec::new(), None),
     };
-    let (done, mut csv) = match resumed {
-        Some((done, bytes)) => (done, CsvWriter::resume(&path, &TRIAL_COLUMNS, bytes)?),
-        None => (Vec::new(), CsvWriter::create(&path, &TRIAL_COLUMNS)?),
-    };
+    let mut csv = CsvWriter::open(&path, &TRIAL_COLUMNS, bytes)?;
     if !done.is_empty() {
         progress(RunEvent::Resumed { step: 0, trials: done.len() });
     }
@@ -571,7 +558,7 @@ mod tests {
         let mut model = scene.build::<2>().unwrap().into_model();
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("history.csv");
-        let mut history = History::create(&path, &model, LoadLevel::Factor(0.0)).unwrap();
+        let mut history = History::open(&path, &model, LoadLevel::Factor(0.0), None).unwrap();
         history.row(&model, 0.0).unwrap();
         model.velocities_mut()[3] = nalgebra::Vector2::new(0.0, 1e200);
         match history.row(&model, 0.5) {

@@ -105,6 +105,14 @@ impl CsvWriter {
         Ok(Self { columns: header.len(), out: BufWriter::new(file), path, bytes })
     }
 
+    /// [`CsvWriter::create`], or [`CsvWriter::resume`] after `resume_at` bytes when given.
+    pub fn open(path: impl AsRef<Path>, header: &[&str], resume_at: Option<u64>) -> Result<Self, OutputError> {
+        match resume_at {
+            Some(bytes) => Self::resume(path, header, bytes),
+            None => Self::create(path, header),
+        }
+    }
+
     /// Bytes in the file so far (all of them on disk: rows are flushed as written).
     pub fn bytes(&self) -> u64 {
         self.bytes
