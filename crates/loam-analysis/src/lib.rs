@@ -189,7 +189,8 @@ impl<const D: usize> Analysis<D> {
         }
     }
 
-    /// The state [`Analysis::resume`] takes back, with the model's ([`Model::state`]).
+    /// The state [`Analysis::resume`] takes back, with the model's (a `ModelState` of its
+    /// points, load vertices and mesh nodes).
     pub fn state(&self) -> AnalysisState {
         match self {
             Analysis::QuasiStatic(a) => AnalysisState::QuasiStatic(a.state()),

@@ -579,15 +579,6 @@ impl<const D: usize> Model<D> {
         Ok(())
     }
 
-    /// The state [`Model::restore`] puts back (a copy of the points).
-    pub fn state(&self) -> ModelState<D> {
-        ModelState {
-            points: self.points.clone(),
-            load_vertices: self.loads.iter().map(|l| l.positions().to_vec()).collect(),
-            mesh_nodes: self.background.mesh().map(|m| m.positions().to_vec()),
-        }
-    }
-
     /// Body force per unit mass at full load.
     pub fn gravity(&self) -> &SVector<f64, D> {
         &self.gravity

@@ -208,12 +208,15 @@ fn rotations<const D: usize>(null: &[DVector<f64>], free_axes: &[usize], c: Vect
     // combination that gives a rotation ω: a = R⁺ ω.
     let n = DMatrix::from_columns(null);
     let r = n.rows(D, rot.len()).into_owned();
-    let pinv = match r.clone().pseudo_inverse(1e-9) {
+    // One SVD gives R's rank, its column space and its pseudo-inverse.
+    let svd = r.clone().svd(true, true);
+    let rank = svd.singular_values.iter().filter(|&&s| s > 1e-9).count();
+    let u = svd.u.clone().expect("asked for");
+    let pinv = match svd.pseudo_inverse(1e-9) {
         Ok(p) => p,
         Err(_) => return Vec::new(),
     };
     let reachable = |w: &DVector<f64>| (&r * (&pinv * w) - w).norm() < 1e-6 * w.norm().max(1.0);
-    let rank = r.clone().svd(true, false).singular_values.iter().filter(|&&s| s > 1e-9).count();
     let mut axes: Vec<DVector<f64>> = Vec::new();
     for j in 0..rot.len() {
         let w = DVector::from_fn(rot.len(), |i, _| if i == j { 1.0 } else { 0.0 });
@@ -223,7 +226,6 @@ fn rotations<const D: usize>(null: &[DVector<f64>], free_axes: &[usize], c: Vect
     }
     // The other free rotation directions, orthogonal to the coordinate ones found.
     if axes.len() < rank {
-        let u = r.clone().svd(true, false).u.expect("asked for");
         for k in 0..rank {
             let mut w = u.column(k).into_owned();
             for a in &axes {

@@ -30,8 +30,8 @@ pub enum VtuFormat {
     Ascii,
 }
 
-/// Writes `cloud` as a VTK XML UnstructuredGrid, one `VTK_VERTEX` cell per point,
-/// Float64 data, in `format`.
+/// Writes `cloud` as a VTK XML UnstructuredGrid, one `VTK_VERTEX` cell per point, in
+/// `format` (which sets how the arrays are stored and the floats' precision).
 ///
 /// Positions and vectors are padded with zeros to 3 components in 2D;
 /// tensors are written as 6-component symmetric tensors (`XX, YY, ZZ, XY,
