@@ -143,7 +143,7 @@ impl BasisKind {
     /// unit length) into `idx`, `w`, `dw`; returns how many.
     #[allow(clippy::too_many_arguments)]
     #[inline]
-    fn evaluate_axis<const D: usize>(
+    pub(crate) fn evaluate_axis<const D: usize>(
         self,
         grid: &Grid<D>,
         x: &SVector<f64, D>,

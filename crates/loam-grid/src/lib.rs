@@ -10,6 +10,7 @@
 //! See docs/theory.md §4 for the basis functions (Bardenhagen & Kober 2004; iGIMP of
 //! Charlton, Coombs & Augarde 2017) and §12 for the mesh.
 
+mod axis_basis;
 mod background;
 mod basis;
 mod connectivity;
@@ -18,6 +19,7 @@ mod ghost;
 mod index;
 mod mesh;
 
+pub use axis_basis::AxisBasis;
 pub use background::{Background, LocateError};
 pub use basis::{bspline_greville, BasisError, BasisKind};
 pub use connectivity::{ActiveNodes, Connectivity, NodePointAdjacency, PointBasisError, INACTIVE};

@@ -214,7 +214,7 @@ impl<const D: usize> Engine<D> {
             return Ok(());
         }
         connect(&self.model, &mut self.conn, &mut self.constrained, step)?;
-        self.loads.connect(&self.model, &self.conn, step)?;
+        self.loads.connect(&self.model, self.conn.active_nodes(), step)?;
         if let Some(gamma) = self.model.ghost_penalty() {
             self.ghost = scaled_ghost_faces(&self.model, &self.conn, gamma);
         }

@@ -5,6 +5,8 @@
 //!   active nodes, mark the constrained dofs; [`check_constraints`] before a first step.
 //! - [`gather_nodal`]: point → node transfer, node by node in ascending point order, so
 //!   that the sums are bitwise the same on any number of threads.
+//! - [`BandScatter`]: point → node transfer as a scatter into a dense grid field, bands of
+//!   grid rows in two colours, equally deterministic (the explicit step's).
 //! - [`interpolate`], [`interpolate_add`], [`interpolate_pair`]: node → point transfer,
 //!   Σ_I N_I(x_p) u_I.
 //! - [`internal_force`] and [`gather_internal_force`]: f_int,I = Σ_p v_p σ_p ∂N_I/∂x.
@@ -20,6 +22,7 @@ mod error;
 mod force;
 mod load;
 mod point;
+mod scatter;
 mod transfer;
 
 pub use connect::{check_constraints, connect};
@@ -27,4 +30,5 @@ pub use error::{ConnectError, InvalidSetting, RunError};
 pub use force::{gather_internal_force, internal_force};
 pub use load::{trial_vertices, LoadSupports};
 pub use point::{advance_deformation, embed, update_point, update_point_stress, Committed, PointStress, PointUpdate};
+pub use scatter::{BandScatter, NodeWindow, ROWS_PER_BAND};
 pub use transfer::{gather_nodal, interpolate, interpolate_add, interpolate_pair};

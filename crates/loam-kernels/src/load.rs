@@ -12,7 +12,7 @@
 
 use crate::interpolate;
 use crate::ConnectError;
-use loam_grid::{Connectivity, Grid, INACTIVE};
+use loam_grid::{ActiveNodes, Connectivity, Grid, INACTIVE};
 use loam_model::{Load, LoadLevel, Model};
 use loam_points::PointStore;
 use nalgebra::{Matrix3, SVector};
@@ -48,16 +48,15 @@ pub struct LoadSupports {
 
 impl LoadSupports {
     /// Connect the vertices of `model`'s loads (at the configuration the mechanics is
-    /// written on) to the active nodes of `conn`. A vertex that touches no active node
+    /// written on) to the active nodes `active`. A vertex that touches no active node
     /// (the load is not on the material) is an error naming the load and the place.
     pub fn connect<const D: usize>(
         &mut self,
         model: &Model<D>,
-        conn: &Connectivity<D>,
+        active: &ActiveNodes,
         step: usize,
     ) -> Result<(), ConnectError> {
         let (grid, basis) = (model.grid(), model.basis());
-        let active = conn.active_nodes();
         let mut nodes = vec![0u32; basis.max_support(D)];
         let mut values = vec![0.0; nodes.len()];
         let mut gradients = vec![SVector::<f64, D>::zeros(); nodes.len()];

@@ -1,0 +1,142 @@
+//! Points to grid as a deterministic parallel *scatter* into a dense nodal field: each
+//! point adds its contributions to the nodes of its support, as the explicit step's
+//! transfers want (one pass over the points, in their order, no node → point adjacency).
+//!
+//! Two points of one thread's work may share a node, two of different threads' must not.
+//! The grid's node rows along the last (slowest) axis are cut into bands of
+//! [`ROWS_PER_BAND`] rows, and each point belongs to the band of its first support row.
+//! A point's support spans at most 4 rows (`BasisKind::max_support_1d`), so the points of
+//! band b write only rows [3b, 3b + 6): bands two apart never share a node. The even bands
+//! scatter in parallel, then the odd ones, each band's points in ascending index. Every
+//! node therefore sums its contributions in one fixed order, whatever the number of
+//! threads: bitwise identical results on 1 or N threads (docs/theory.md §7), with no
+//! atomics and no per-thread copies of the grid.
+
+use loam_grid::{AxisBasis, Grid};
+use rayon::prelude::*;
+
+/// Node rows per band: at least the widest 1D support (4 nodes) less one, so that bands of
+/// one colour are disjoint.
+pub const ROWS_PER_BAND: usize = 3;
+
+/// The points grouped by band for [`BandScatter::scatter`] (module docs). Buffers are
+/// reused from step to step.
+#[derive(Debug, Clone, Default)]
+pub struct BandScatter {
+    /// Nodes per row: the product of the nodes along every axis but the last.
+    row_len: usize,
+    rows: usize,
+    /// `band << 32 | point`, ascending: the points of each band, ascending.
+    keys: Vec<u64>,
+    /// Per band, its first key; one more entry at the end.
+    starts: Vec<usize>,
+}
+
+/// The nodes a band's points may write: `width` values per node from node `first_node`.
+pub struct NodeWindow<'a> {
+    values: &'a mut [f64],
+    first_node: usize,
+    width: usize,
+}
+
+impl NodeWindow<'_> {
+    /// The values of grid node `node`, to add to.
+    #[inline]
+    pub fn node(&mut self, node: usize) -> &mut [f64] {
+        let s = (node - self.first_node) * self.width;
+        &mut self.values[s..s + self.width]
+    }
+}
+
+impl BandScatter {
+    /// Group the points of `basis` (computed on `grid`) by band; points are at most 2³²
+    /// (the point indices of the connectivity are `u32`).
+    pub fn group<const D: usize>(&mut self, grid: &Grid<D>, basis: &AxisBasis<D>) {
+        let nodes = grid.nodes_per_axis();
+        self.rows = nodes[D - 1];
+        self.row_len = nodes[..D - 1].iter().product();
+        let n = basis.num_points();
+        self.keys.resize(n, 0);
+        self.keys.par_iter_mut().enumerate().for_each(|(p, key)| {
+            let band = basis.first(p)[D - 1] as usize / ROWS_PER_BAND;
+            *key = (band as u64) << 32 | p as u64;
+        });
+        // The keys are distinct, so the order is unique; points that keep their band keep
+        // the keys sorted, which the sort detects in one pass.
+        self.keys.par_sort_unstable();
+        let bands = self.rows.div_ceil(ROWS_PER_BAND);
+        self.starts.clear();
+        self.starts.extend((0..=bands).map(|b| self.keys.partition_point(|&k| ((k >> 32) as usize) < b)));
+    }
+
+    /// Zero `out` (`width` values per grid node) and add every point's contributions:
+    /// `contrib(p, window)` adds point `p`'s to the nodes of its support through `window`.
+    pub fn scatter(&self, width: usize, out: &mut [f64], contrib: impl Fn(usize, &mut NodeWindow) + Sync) {
+        assert_eq!(out.len(), self.rows * self.row_len * width, "a field of the grouped grid");
+        out.par_iter_mut().for_each(|v| *v = 0.0);
+        let band_len = ROWS_PER_BAND * self.row_len * width;
+        let bands = self.starts.len() - 1;
+        for colour in 0..2 {
+            let skip = (colour * band_len).min(out.len());
+            out[skip..].par_chunks_mut(2 * band_len).enumerate().for_each(|(k, values)| {
+                let band = 2 * k + colour;
+                if band >= bands {
+                    return;
+                }
+                let mut window = NodeWindow { values, first_node: band * ROWS_PER_BAND * self.row_len, width };
+                for &key in &self.keys[self.starts[band]..self.starts[band + 1]] {
+                    contrib(key as u32 as usize, &mut window);
+                }
+            });
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use loam_grid::BasisKind;
+    use nalgebra::Vector2;
+
+    /// The scatter of the basis values and of m N (mass) gives every node the sum over the
+    /// points of their shares, the same as a serial loop to round-off, and bitwise the same
+    /// on 1 and 3 threads; the shares sum to the number of points (partition of unity).
+    #[test]
+    fn scatter_sums_every_share_in_a_fixed_order() {
+        let grid = Grid::new(Vector2::zeros(), Vector2::new(0.5, 0.5), [9, 20]).unwrap();
+        let x: Vec<_> = (0..400).map(|i| Vector2::new(0.3 + 0.01 * i as f64, 0.2 + 0.023 * i as f64)).collect();
+        let l = vec![Vector2::repeat(0.125); x.len()];
+        let mut basis = AxisBasis::new(BasisKind::Gimp);
+        basis.compute(&grid, &x, &l).unwrap();
+        let mut bands = BandScatter::default();
+        bands.group(&grid, &basis);
+        let run = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            let mut out = vec![1.0; grid.num_nodes() * 2];
+            pool.install(|| {
+                bands.scatter(2, &mut out, |p, w| {
+                    basis.for_each_node(p, |node, n, _| {
+                        let v = w.node(node);
+                        v[0] += n;
+                        v[1] += n * (1.0 + p as f64);
+                    })
+                })
+            });
+            out
+        };
+        let one = run(1);
+        assert_eq!(one, run(3));
+        let mut serial = vec![0.0; grid.num_nodes() * 2];
+        for p in 0..x.len() {
+            basis.for_each_node(p, |node, n, _| {
+                serial[2 * node] += n;
+                serial[2 * node + 1] += n * (1.0 + p as f64);
+            });
+        }
+        for (a, b) in one.iter().zip(&serial) {
+            assert!((a - b).abs() <= 1e-12 * b.abs().max(1.0), "{a} vs {b}");
+        }
+        let total: f64 = one.iter().step_by(2).sum();
+        assert!((total - x.len() as f64).abs() < 1e-10, "{total}");
+    }
+}
