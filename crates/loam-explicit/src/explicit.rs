@@ -1,10 +1,10 @@
 //! The explicit analysis: one time step as described in the crate docs.
 
 use crate::{ExplicitError, ExplicitSettings, TimeStep, UpdateScheme};
-use loam_grid::{BasisError, Connectivity, PointBasisError};
+use loam_grid::{ActiveNodes, AxisBasis, BasisError, Connectivity, PointBasisError, INACTIVE};
 use loam_kernels::{
-    advance_deformation, check_constraints, connect, embed, gather_internal_force, gather_nodal, internal_force,
-    interpolate_pair, update_point_stress, Committed, ConnectError, LoadSupports, RunError,
+    advance_deformation, check_constraints, connect, embed, internal_force, update_point_stress, BandScatter,
+    Committed, ConnectError, LoadSupports, RunError,
 };
 use loam_model::{Kinematics, LoadLevel, Model, ModelError, ModelState, StateFields};
 use nalgebra::{Matrix3, SMatrix, SVector};
@@ -83,10 +83,11 @@ impl StepPhases {
     }
 }
 
-/// Nodal scratch of one step, reused across steps.
+/// Nodal scratch of one step, reused across steps: dense over the grid's nodes (an empty
+/// node has zero mass and is left at rest).
 #[derive(Debug, Default)]
 struct NodalScratch {
-    /// Per active node [m, p (D), f (D)] as gathered from the points.
+    /// Per node [m, p (D), f (D)] as scattered from the points.
     gathered: Vec<f64>,
     /// USF: internal force of the updated stress (D per node).
     internal: Vec<f64>,
@@ -157,10 +158,19 @@ pub struct Explicit<const D: usize> {
     steps: usize,
     /// P-wave modulus of each material, for the critical time step.
     p_wave: Vec<f64>,
-    conn: Connectivity<D>,
+    /// The step's basis at the points, as 1D factors.
+    basis: AxisBasis<D>,
+    /// The points grouped for the deterministic scatter.
+    bands: BandScatter,
+    /// The constrained dofs of every grid node (D per node): the constraints of an explicit
+    /// run hold still, so they are marked once.
     constrained: Vec<bool>,
-    /// The load vertices on the active nodes.
+    /// The nodes with mass of the step, numbered for the loads (kept empty without loads).
+    loaded: ActiveNodes,
+    /// The load vertices on the nodes of `loaded`.
     loads: LoadSupports,
+    /// Nodes with mass in the step.
+    active_nodes: usize,
     nodes: NodalScratch,
     points: PointScratch<D>,
 }
@@ -195,15 +205,22 @@ impl<const D: usize> Explicit<D> {
         tracing::info!(scheme = ?settings.scheme, flip = settings.flip, time_step = ?settings.time_step,
             damping = settings.damping, duration = settings.duration, "explicit analysis");
         let p_wave = model.materials().iter().map(|m| m.p_wave_modulus()).collect();
+        let n = model.grid().num_nodes() as u32;
+        let every_node = ActiveNodes { grid_to_active: (0..n).collect(), active_to_grid: (0..n).collect() };
+        let mut constrained = Vec::new();
+        model.constrained_dofs(&every_node, &mut constrained);
         Ok(Self {
-            conn: Connectivity::new(model.basis()),
+            basis: AxisBasis::new(model.basis()),
             model,
             settings,
             time: 0.0,
             steps: 0,
             p_wave,
-            constrained: Vec::new(),
+            bands: BandScatter::default(),
+            constrained,
+            loaded: ActiveNodes::default(),
             loads: LoadSupports::default(),
+            active_nodes: 0,
             nodes: NodalScratch::default(),
             points: PointScratch::default(),
         })
@@ -260,9 +277,10 @@ impl<const D: usize> Explicit<D> {
     /// validation calls this before the first step.
     pub fn check(&mut self) -> Result<(), ExplicitError> {
         let step = self.steps + 1;
-        connect(&self.model, &mut self.conn, &mut self.constrained, step)?;
-        self.loads.connect(&self.model, &self.conn, step)?;
-        check_constraints(&self.model, &self.conn)?;
+        let mut conn = Connectivity::new(self.model.basis());
+        connect(&self.model, &mut conn, &mut Vec::new(), step)?;
+        self.loads.connect(&self.model, conn.active_nodes(), step)?;
+        check_constraints(&self.model, &conn)?;
         let dt = match self.time_step(step, self.critical_time_step()) {
             Err(ExplicitError::AboveCritical { dt, .. }) => dt,
             dt => dt?,
@@ -343,24 +361,23 @@ impl<const D: usize> Explicit<D> {
         let start = Instant::now();
         let mut clock = PhaseClock::new();
         let step = self.steps + 1;
-        connect(&self.model, &mut self.conn, &mut self.constrained, step)?;
-        self.loads.connect(&self.model, &self.conn, step)?;
+        self.connect(step)?;
         let critical = self.critical_time_step();
         let dt = self.time_step(step, critical)?;
         self.check_time_advances(step, dt)?;
         self.size_buffers();
         let connectivity = clock.lap();
-        let m_min = self.map_to_grid();
+        let m_min = self.map_to_grid(step)?;
         if self.settings.scheme == UpdateScheme::Usf {
             self.update_stress_first(step, dt, m_min)?;
         }
         let to_grid = clock.lap();
         self.update_grid(dt, m_min);
         let grid_update = clock.lap();
-        let (conn, nodes) = (&self.conn, &self.nodes);
+        let (basis, nodes) = (&self.basis, &self.nodes);
         let moved = grid_to_points(
             &self.model,
-            conn,
+            basis,
             &nodes.velocity,
             &nodes.acceleration,
             dt,
@@ -376,7 +393,7 @@ impl<const D: usize> Explicit<D> {
         let remaining = self.settings.duration - self.time;
         self.time = if dt >= remaining { self.settings.duration } else { self.time + dt };
         self.steps = step;
-        let active_nodes = self.conn.active_nodes().len();
+        let active_nodes = self.active_nodes;
         tracing::debug!(step, time = self.time, dt, critical, active_nodes, "explicit step");
         Ok(ExplicitStepReport {
             step,
@@ -389,9 +406,19 @@ impl<const D: usize> Explicit<D> {
         })
     }
 
-    /// Size the nodal and point scratch to the step's connectivity.
+    /// Stage 1: the basis of every point at its start-of-step place, and the points grouped
+    /// for the scatter.
+    fn connect(&mut self, step: usize) -> Result<(), ExplicitError> {
+        let (model, grid) = (&self.model, self.model.grid());
+        let located = self.basis.compute(grid, model.configuration(), &model.points().half_length);
+        located.map_err(|source| ConnectError::PointOutsideGrid { step, source })?;
+        self.bands.group(grid, &self.basis);
+        Ok(())
+    }
+
+    /// Size the nodal and point scratch to the grid and the points.
     fn size_buffers(&mut self) {
-        let n_nodes = self.conn.active_nodes().len();
+        let n_nodes = self.model.grid().num_nodes();
         let nodes = &mut self.nodes;
         nodes.gathered.resize(n_nodes * (1 + 2 * D), 0.0);
         for v in [&mut nodes.internal, &mut nodes.velocity, &mut nodes.acceleration, &mut nodes.strain_velocity] {
@@ -400,34 +427,54 @@ impl<const D: usize> Explicit<D> {
         self.points.resize(self.model.points().len(), self.model.points().history_stride());
     }
 
-    /// Stage 2, points to grid: [m_I, p_I, f_I] per active node, with the internal force of
-    /// the committed stress unless USF updates the stress first; returns the mass below
-    /// which a node counts as empty.
-    fn map_to_grid(&mut self) -> f64 {
+    /// Stage 2, points to grid: [m_I, p_I, f_I] per node, with the internal force of the
+    /// committed stress unless USF updates the stress first; returns the mass below which
+    /// a node counts as empty.
+    fn map_to_grid(&mut self, step: usize) -> Result<f64, ExplicitError> {
         let usf = self.settings.scheme == UpdateScheme::Usf;
-        gather_grid(&self.model, &self.conn, !usf, &mut self.nodes.gathered);
-        self.add_loads();
-        let max_mass = self.nodes.gathered.par_chunks(1 + 2 * D).map(|g| g[0]).reduce(|| 0.0, f64::max);
-        EMPTY_NODE_MASS * max_mass
+        scatter_grid(&self.model, &self.basis, &self.bands, !usf, &mut self.nodes.gathered);
+        let (max_mass, active) = self
+            .nodes
+            .gathered
+            .par_chunks(1 + 2 * D)
+            .map(|g| (g[0], usize::from(g[0] > 0.0)))
+            .reduce(|| (0.0, 0), |a, b| (a.0.max(b.0), a.1 + b.1));
+        self.active_nodes = active;
+        self.add_loads(step)?;
+        Ok(EMPTY_NODE_MASS * max_mass)
     }
 
-    /// The loads on surfaces and at points at the step's start time, added to the gathered
-    /// nodal forces.
-    fn add_loads(&mut self) {
+    /// The loads on surfaces and at points at the step's start time, added to the nodal
+    /// forces; their vertices are connected to the nodes with mass (a share on a node with
+    /// none goes to the vertex's other nodes, `LoadSupports`).
+    fn add_loads(&mut self, step: usize) -> Result<(), ExplicitError> {
         if self.model.loads().is_empty() {
-            return;
+            return Ok(());
         }
+        let stride = 1 + 2 * D;
+        let loaded = &mut self.loaded;
+        loaded.grid_to_active.clear();
+        loaded.active_to_grid.clear();
+        for (g, m) in self.nodes.gathered.chunks(stride).map(|g| g[0]).enumerate() {
+            loaded.grid_to_active.push(if m > 0.0 { loaded.active_to_grid.len() as u32 } else { INACTIVE });
+            if m > 0.0 {
+                loaded.active_to_grid.push(g as u32);
+            }
+        }
+        self.loads.connect(&self.model, &self.loaded, step)?;
         let level = LoadLevel::Time(self.time);
         let f = &mut self.nodes.loads;
         f.clear();
-        f.resize(self.conn.active_nodes().len() * D, 0.0);
+        f.resize(self.loaded.len() * D, 0.0);
         self.loads.add_dead(&self.model, level, f);
         self.loads.add_follower(&self.model, level, |_, l| l.positions().to_vec(), f);
-        for (g, f) in self.nodes.gathered.chunks_mut(1 + 2 * D).zip(f.chunks(D)) {
+        for (&g, f) in self.loaded.active_to_grid.iter().zip(f.chunks(D)) {
+            let node = &mut self.nodes.gathered[g as usize * stride..(g as usize + 1) * stride];
             for i in 0..D {
-                g[1 + D + i] += f[i];
+                node[1 + D + i] += f[i];
             }
         }
+        Ok(())
     }
 
     /// USF: the stress updated from the start-of-step nodal velocity p_I / m_I before the
@@ -440,9 +487,10 @@ impl<const D: usize> Explicit<D> {
             .zip(nodes.gathered.par_chunks(1 + 2 * D))
             .for_each(|(v, g)| v.copy_from_slice(&g[1..1 + D]));
         momentum_to_velocity::<D>(&nodes.gathered, &self.constrained, m_min, &mut nodes.strain_velocity);
-        let updated = update_stress(&self.model, &self.conn, &nodes.strain_velocity, dt, &mut self.points);
+        let updated = update_stress(&self.model, &self.basis, &nodes.strain_velocity, dt, &mut self.points);
         updated.map_err(|e| self.failure(step, e))?;
-        negative_internal_force(&self.model, &self.conn, &self.points, &mut self.nodes.internal);
+        let (basis, bands) = (&self.basis, &self.bands);
+        negative_internal_force(&self.model, basis, bands, &self.points, &mut self.nodes.internal);
         Ok(())
     }
 
@@ -465,14 +513,15 @@ impl<const D: usize> Explicit<D> {
     /// Stage 6 for USL (the new grid velocity) and MUSL (the velocity re-mapped from the
     /// updated points); USF updated the stress first.
     fn update_stress_last(&mut self, step: usize, dt: f64, m_min: f64) -> Result<(), ExplicitError> {
-        let (model, conn, nodes) = (&self.model, &self.conn, &mut self.nodes);
+        let (model, basis, nodes) = (&self.model, &self.basis, &mut self.nodes);
         let updated = match self.settings.scheme {
             UpdateScheme::Usf => return Ok(()),
-            UpdateScheme::Usl => update_stress(model, conn, &nodes.velocity, dt, &mut self.points),
+            UpdateScheme::Usl => update_stress(model, basis, &nodes.velocity, dt, &mut self.points),
             UpdateScheme::Musl => {
-                remap_momentum(model, conn, &self.points.fields.velocity, &mut nodes.strain_velocity);
+                let velocity = &self.points.fields.velocity;
+                remap_momentum(model, basis, &self.bands, velocity, &mut nodes.strain_velocity);
                 momentum_to_velocity::<D>(&nodes.gathered, &self.constrained, m_min, &mut nodes.strain_velocity);
-                update_stress(model, conn, &nodes.strain_velocity, dt, &mut self.points)
+                update_stress(model, basis, &nodes.strain_velocity, dt, &mut self.points)
             }
         };
         updated.map_err(|e| self.failure(step, e))
@@ -554,27 +603,34 @@ fn sign(x: f64) -> f64 {
     }
 }
 
-/// Gather [m_I, p_I, f_I] per active node; f_I is the external force, plus the internal
-/// force of the committed stress when `with_internal`.
-fn gather_grid<const D: usize>(model: &Model<D>, conn: &Connectivity<D>, with_internal: bool, out: &mut [f64]) {
+/// Scatter [m_I, p_I, f_I] per node; f_I is the external force, plus the internal force of
+/// the committed stress when `with_internal`.
+fn scatter_grid<const D: usize>(
+    model: &Model<D>,
+    basis: &AxisBasis<D>,
+    bands: &BandScatter,
+    with_internal: bool,
+    out: &mut [f64],
+) {
     let pts = model.points();
-    gather_nodal(conn, 1 + 2 * D, out, |p, a, o| {
-        let n = conn.support_values(p)[a];
-        let nm = n * pts.mass[p];
-        let v = &pts.velocity[p];
-        let load = model.point_load(p);
-        o[0] += nm;
-        for i in 0..D {
-            o[1 + i] += nm * v[i];
-            o[1 + D + i] += n * load[i];
-        }
-        if with_internal {
-            // f_ext − f_int, point by point in one sum.
-            let f = internal_force(pts.volume[p], &pts.stress[p], &conn.support_gradients(p)[a], None);
+    bands.scatter(1 + 2 * D, out, |p, window| {
+        let (m, v, load) = (pts.mass[p], &pts.velocity[p], model.point_load(p));
+        basis.for_each_node(p, |node, n, grad| {
+            let o = window.node(node);
+            let nm = n * m;
+            o[0] += nm;
             for i in 0..D {
-                o[1 + D + i] -= f[i];
+                o[1 + i] += nm * v[i];
+                o[1 + D + i] += n * load[i];
             }
-        }
+            if with_internal {
+                // f_ext − f_int, point by point in one sum.
+                let f = internal_force(pts.volume[p], &pts.stress[p], &grad, None);
+                for i in 0..D {
+                    o[1 + D + i] -= f[i];
+                }
+            }
+        });
     });
 }
 
@@ -583,31 +639,42 @@ fn gather_grid<const D: usize>(model: &Model<D>, conn: &Connectivity<D>, with_in
 /// so that the grid update adds it to the external force.
 fn negative_internal_force<const D: usize>(
     model: &Model<D>,
-    conn: &Connectivity<D>,
+    basis: &AxisBasis<D>,
+    bands: &BandScatter,
     sc: &PointScratch<D>,
     out: &mut [f64],
 ) {
     let finite = model.kinematics() == Kinematics::FiniteStrain;
     let pts = model.points();
-    gather_internal_force(conn, out, |p, a| {
+    bands.scatter(D, out, |p, window| {
         let v = if finite { sc.volume[p] } else { pts.volume[p] };
-        -internal_force(v, &sc.fields.stress[p], &conn.support_gradients(p)[a], None)
+        basis.for_each_node(p, |node, _, grad| {
+            let f = -internal_force(v, &sc.fields.stress[p], &grad, None);
+            let o = window.node(node);
+            for i in 0..D {
+                o[i] += f[i];
+            }
+        });
     });
 }
 
 /// MUSL: p_I = Σ N_I m_p v_p^{n+1} from the updated point velocities.
 fn remap_momentum<const D: usize>(
     model: &Model<D>,
-    conn: &Connectivity<D>,
+    basis: &AxisBasis<D>,
+    bands: &BandScatter,
     velocity: &[SVector<f64, D>],
     out: &mut [f64],
 ) {
     let mass = &model.points().mass;
-    gather_nodal(conn, D, out, |p, a, o| {
-        let nm = conn.support_values(p)[a] * mass[p];
-        for i in 0..D {
-            o[i] += nm * velocity[p][i];
-        }
+    bands.scatter(D, out, |p, window| {
+        basis.for_each_node(p, |node, n, _| {
+            let nm = n * mass[p];
+            let o = window.node(node);
+            for i in 0..D {
+                o[i] += nm * velocity[p][i];
+            }
+        });
     });
 }
 
@@ -660,7 +727,7 @@ fn nodal_update<const D: usize>(
 /// non-finite result or a point leaving the grid (lowest point index first).
 fn grid_to_points<const D: usize>(
     model: &Model<D>,
-    conn: &Connectivity<D>,
+    basis: &AxisBasis<D>,
     velocity: &[f64],
     acceleration: &[f64],
     dt: f64,
@@ -676,7 +743,13 @@ fn grid_to_points<const D: usize>(
         .zip(fields.velocity.par_iter_mut())
         .enumerate()
         .filter_map(|(p, (x, v))| {
-            let (vi, ai) = interpolate_pair(conn, p, velocity, acceleration);
+            let (mut vi, mut ai) = (SVector::<f64, D>::zeros(), SVector::<f64, D>::zeros());
+            basis.for_each_node(p, |node, n, _| {
+                for i in 0..D {
+                    vi[i] += n * velocity[node * D + i];
+                    ai[i] += n * acceleration[node * D + i];
+                }
+            });
             *v = (pts.velocity[p] + ai * dt) * flip + vi * (1.0 - flip);
             *x = pts.position[p] + vi * dt;
             if !(v.iter().all(|c| c.is_finite()) && x.iter().all(|c| c.is_finite())) {
@@ -699,7 +772,7 @@ fn grid_to_points<const D: usize>(
 /// Stress update of every point from the nodal velocities `velocity` into the scratch.
 fn update_stress<const D: usize>(
     model: &Model<D>,
-    conn: &Connectivity<D>,
+    basis: &AxisBasis<D>,
     velocity: &[f64],
     dt: f64,
     sc: &mut PointScratch<D>,
@@ -716,7 +789,7 @@ fn update_stress<const D: usize>(
         .zip(sc.fields.history.par_chunks_mut(hs.max(1)))
         .enumerate()
         .filter_map(|(p, ((delta_f, volume, stress, elastic), h_out))| {
-            match point_stress(model, conn, velocity, dt, p, &mut h_out[..hs]) {
+            match point_stress(model, basis, velocity, dt, p, &mut h_out[..hs]) {
                 Ok(state) => {
                     (*delta_f, *stress, *elastic) = (state.delta_f, state.stress, state.elastic_strain);
                     *volume = state.det * pts.volume[p];
@@ -743,18 +816,17 @@ struct PointState {
 /// kernel; or why the point became unstable.
 fn point_stress<const D: usize>(
     model: &Model<D>,
-    conn: &Connectivity<D>,
+    basis: &AxisBasis<D>,
     velocity: &[f64],
     dt: f64,
     p: usize,
     h_out: &mut [f64],
 ) -> Result<PointState, String> {
     let mut l = SMatrix::<f64, D, D>::zeros();
-    for (&node, g) in conn.support_nodes(p).iter().zip(conn.support_gradients(p)) {
-        let k = node as usize * D;
-        let v = SVector::<f64, D>::from_column_slice(&velocity[k..k + D]);
+    basis.for_each_node(p, |node, _, g| {
+        let v = SVector::<f64, D>::from_column_slice(&velocity[node * D..(node + 1) * D]);
         l += v * g.transpose();
-    }
+    });
     let grad_du = embed(&(l * dt));
     let df = Matrix3::identity() + grad_du;
     if !df.iter().all(|c| c.is_finite()) {

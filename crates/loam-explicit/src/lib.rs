@@ -3,8 +3,11 @@
 //!
 //! One step, updated Lagrangian with the grid reset every step:
 //!
-//! 1. Connectivity (basis values and gradients) at the committed point positions.
-//! 2. Point → grid by a deterministic per-node gather (`loam_kernels::gather_nodal`):
+//! 1. Connect: every point's basis at its committed position, as the 1D factors of the
+//!    tensor product (`loam_grid::AxisBasis`, evaluated once and read by stages 2, 5 and
+//!    6), and the points grouped into bands of grid rows for the scatter.
+//! 2. Point → grid by a deterministic parallel scatter into dense nodal fields
+//!    (`loam_kernels::BandScatter`):
 //!    m_I = Σ_p N_I m_p, p_I = Σ_p N_I m_p v_p, f_I = Σ_p N_I f_ext,p − Σ_p v_p σ_p ∇N_I.
 //!    Nodes with m_I ≤ 1e-12 · max m_I are empty (zero velocity and acceleration);
 //!    constrained dofs get zero momentum and force.
@@ -35,9 +38,9 @@
 //! Everything a step computes goes into scratch buffers reused from step to step; the
 //! model is changed only when the whole step has succeeded, so a failed step (a point
 //! leaving the grid, a blow-up) leaves the last committed state intact. Every point → node
-//! transfer is a gather in a fixed order and every point loop is independent, so results
-//! are bitwise identical for any number of threads (docs/theory.md
-//! §7).
+//! transfer sums each node's contributions in a fixed order (the bands of the scatter) and
+//! every point loop is independent, so results are bitwise identical for any number of
+//! threads (docs/theory.md §7).
 
 mod energy;
 mod error;

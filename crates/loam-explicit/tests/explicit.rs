@@ -303,8 +303,9 @@ fn local_damping_settles_the_column_to_the_static_answer() {
     assert!(ke > 1e-2, "undamped kinetic energy ratio {ke:e}");
 }
 
-/// (5) One and two threads give bitwise identical results: every transfer is a per-node
-/// gather in a fixed order and the point loops are independent.
+/// (5) One and two threads give bitwise identical results: every point → node transfer
+/// sums each node's contributions in a fixed order (the scatter's bands) and the point
+/// loops are independent.
 #[test]
 fn one_or_two_threads_give_bitwise_identical_results() {
     for scheme in SCHEMES {
