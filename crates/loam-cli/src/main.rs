@@ -92,6 +92,10 @@ struct RunFlags {
     /// interrupted run did].
     #[arg(long, value_name = "N|TIME")]
     checkpoint_every: Option<CheckpointEvery>,
+    /// Worker threads of the run; the results are bitwise the same for any number
+    /// [default: one per core, or RAYON_NUM_THREADS].
+    #[arg(long, value_parser = clap::value_parser!(u16).range(1..))]
+    threads: Option<u16>,
 }
 
 /// One log line on its way to stderr: written whole, with the progress bar cleared
@@ -222,7 +226,13 @@ fn run_command(
     overwrite: bool,
     checkpoint: Option<Checkpoint>,
 ) -> anyhow::Result<()> {
-    let RunFlags { quiet, verbose, max_memory, steps, checkpoint_every } = flags.clone();
+    let RunFlags { quiet, verbose, max_memory, steps, checkpoint_every, threads } = flags.clone();
+    if let Some(threads) = threads {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads.into())
+            .build_global()
+            .context("starting the worker threads")?;
+    }
     let loaded = load(scene, max_memory)?;
     if let loam_io::scene::AnalysisSpec::QuasiStatic { strength_reduction: Some(srf), .. } = &loaded.scene.analysis {
         if !quiet {
