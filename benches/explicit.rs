@@ -1,11 +1,14 @@
 //! Benchmarks of the explicit MPM (criterion; `cargo xtask bench`): point-steps per second
 //! of the elastic block under gravity of issue 19 — 2D, 256 × 256 cells and 3D, 32³ cells,
 //! 2 points per cell and axis (262 144 points each), E = 1e7, ν = 0.3, ρ = 2000, g = 10
-//! (the block of the Taichi scripts in `scripts/peers/`; `scripts/bench_explicit.sh` runs them side by side), MUSL, FLIP, CFL step 0.5, finite strain
-//! — with GIMP and with the quadratic B-spline. Before each, one line gives the step's
-//! split by stage (`StepPhases`) and the memory per point (growth of the resident set from
-//! before the model is built to after its first steps; Linux). Criterion's throughput is in
-//! elements (points) per second of one step: point-steps per second.
+//! (the block of the Taichi scripts in `scripts/peers/`; `scripts/bench_explicit.sh` runs
+//! them side by side), MUSL, FLIP, CFL step 0.5, finite strain — with GIMP and with the
+//! quadratic B-spline; and the 2D block at 128² and 512² cells (65 536 and 1 048 576
+//! points), whose figures beside the 256² one show how the cost scales with the points.
+//! Before each, one line gives the step's split by stage (`StepPhases`) and the memory per
+//! point (growth of the resident set from before the model is built to after its first
+//! steps; Linux). Criterion's throughput is in elements (points) per second of one step:
+//! point-steps per second.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use loam::explicit::{Explicit, ExplicitSettings, StepPhases};
@@ -70,6 +73,9 @@ fn bench_block<const D: usize>(c: &mut Criterion, name: &str, n: usize, basis: B
 
 fn explicit(c: &mut Criterion) {
     bench_block::<2>(c, "block_2d_256_gimp", 256, BasisKind::Gimp);
+    // Cost linear in the points: 65 536 and 1 048 576 points beside the 262 144.
+    bench_block::<2>(c, "block_2d_128_gimp", 128, BasisKind::Gimp);
+    bench_block::<2>(c, "block_2d_512_gimp", 512, BasisKind::Gimp);
     bench_block::<2>(c, "block_2d_256_bspline", 256, BasisKind::QuadraticBSpline);
     bench_block::<3>(c, "block_3d_32_gimp", 32, BasisKind::Gimp);
     bench_block::<3>(c, "block_3d_32_bspline", 32, BasisKind::QuadraticBSpline);
