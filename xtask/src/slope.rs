@@ -198,21 +198,32 @@ fn heave(profile: &[f64], h: f64, g: &SlopeGeometry) -> f64 {
 /// V4c's slope: γH/c_u = 8 (well past collapse), a softer E, released under full gravity.
 const N_RUNOUT: f64 = 8.0;
 const YOUNG_RUNOUT: f64 = 1e4;
-const DURATION: f64 = 4.0;
+pub(crate) const DURATION: f64 = 4.0;
 
 /// A run-out to `DURATION`: its steps, the range of its time steps, its Newton iterations
 /// and cut-backs in all, its wall time and the final profile.
-struct Runout {
-    steps: usize,
-    dt: (f64, f64),
-    iterations: usize,
-    cutbacks: usize,
-    wall_s: f64,
-    profile: Vec<f64>,
+pub(crate) struct Runout {
+    pub(crate) steps: usize,
+    pub(crate) dt: (f64, f64),
+    pub(crate) iterations: usize,
+    pub(crate) cutbacks: usize,
+    pub(crate) wall_s: f64,
+    pub(crate) profile: Vec<f64>,
+}
+
+/// The V4c slope at `cells` cells per H (GIMP, finite strain), as a fresh model per call,
+/// and its cell size.
+pub(crate) fn runout_model(cells: usize) -> Result<(impl Fn() -> Model<2>, f64)> {
+    let g = SlopeGeometry::UNDRAINED;
+    let law = soil::undrained(Elastic::new(YOUNG_RUNOUT, POISSON)?, C_U)?;
+    let gamma = N_RUNOUT * C_U / g.height;
+    let model =
+        move || slope_model_with(&g, law.clone(), gamma / 10.0, 10.0, cells, BasisKind::Gimp, Kinematics::FiniteStrain);
+    Ok((model, g.height / cells as f64))
 }
 
 /// Run an analysis of the run-out to its end; the wall time includes setting it up.
-fn run_out(start: impl FnOnce() -> Result<Analysis<2>>) -> Result<Runout> {
+pub(crate) fn run_out(start: impl FnOnce() -> Result<Analysis<2>>) -> Result<Runout> {
     let t = Instant::now();
     let mut a = start()?;
     let mut out =
@@ -234,11 +245,7 @@ fn run_out(start: impl FnOnce() -> Result<Analysis<2>>) -> Result<Runout> {
 fn runout(quick: bool, report: &mut Report) -> Result<()> {
     let cells = if quick { 5 } else { 10 };
     let g = SlopeGeometry::UNDRAINED;
-    let law = soil::undrained(Elastic::new(YOUNG_RUNOUT, POISSON)?, C_U)?;
-    let gamma = N_RUNOUT * C_U / g.height;
-    let model =
-        || slope_model_with(&g, law.clone(), gamma / 10.0, 10.0, cells, BasisKind::Gimp, Kinematics::FiniteStrain);
-    let h = g.height / cells as f64;
+    let (model, h) = runout_model(cells)?;
     writeln!(report.md, "## V4c run-out of the undrained slope: implicit and explicit side by side\n\nThe V4a slope with γH/c_u = {N_RUNOUT} (collapse is at 5.4), E = {YOUNG_RUNOUT:e}, released under full gravity at t = 0 and followed for {DURATION} s (the kinetic energy has fallen by two orders by then); GIMP, finite strain (no anti-locking: B-bar is small-strain only), {cells} cells per H (h = {h}), 2×2 points per cell. Implicit: trapezoidal Newmark, lumped mass. Explicit: MUSL, FLIP, CFL safety 0.5. Profile = highest point per column of cells; crest height = the profile where the crest was (initially {}), heave = the largest rise of the ground in front of the toe (a base failure lifts it). Bound: the implicit and explicit final profiles agree within two cells.\n", (g.depth + 1.0) * g.height)?;
     writeln!(report.md, "| scheme | Δt [s] | steps | Newton its | cut-backs | wall [s] | crest height [m] | heave before the toe [m] | max profile difference from explicit [cells] |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|")?;
     eprintln!("verify: V4c run-out, explicit, {cells} cells per H");

@@ -8,14 +8,19 @@
 //!   MUSL with local damping run to a steady state, e_σ against wall time.
 //! - Both problems also with the updated Lagrangian FEM reference (the seed paper's
 //!   comparison), through the same implicit analyses.
+//! - V4c slope run-out (large deformation, collapse under gravity): implicit trapezoidal
+//!   Newmark at several Δt and explicit MUSL at several CFL safety factors, the final
+//!   profile's error against an implicit run at a small Δt, against the wall time.
 //!
 //! Writes `steps.md`, `steps.csv` and SVG plots into the output folder.
 
 use crate::dynamics::{bar_explicit, bar_fem_implicit, bar_implicit, explicit, run_analysis, DynRun};
+use crate::slope::{self, Runout};
 use anyhow::{Context, Result};
-use loam::explicit::{ExplicitSettings, TimeStep};
+use loam::analysis::Analysis;
+use loam::explicit::{Explicit, ExplicitSettings, TimeStep};
 use loam::grid::BasisKind;
-use loam::implicit::{Kinematics, QuasiStatic, QuasiStaticSettings};
+use loam::implicit::{Dynamic, DynamicSettings, Kinematics, QuasiStatic, QuasiStaticSettings};
 use loam::io::output::plot::{Plot, Series};
 use loam::io::output::{CsvCell, CsvWriter};
 use loam::model::Model;
@@ -71,6 +76,7 @@ pub fn run(quick: bool, out: &Path) -> Result<()> {
     writeln!(study.md, "# Implicit vs explicit step sizes\n\nMode: {}. Wall time: the steps alone, on this machine, one run each (noisy; compare ratios, not absolute values).\n", if quick { "quick" } else { "full" })?;
     bar_study(quick, &mut study)?;
     column_study(quick, &mut study)?;
+    runout_study(quick, &mut study)?;
     std::fs::write(out.join("steps.md"), &study.md)?;
     println!("{}", study.md);
     eprintln!("steps: wrote {}/steps.md, steps.csv and SVG plots", out.display());
@@ -405,6 +411,95 @@ fn column_findings(
     match implicit_pts.iter().filter(|p| p.1 <= e_x).min_by(|a, b| a.0.total_cmp(&b.0)) {
         Some(&(w_i, e_i, steps)) => writeln!(md, "\nExplicit (α = {damping}) settles to e_σ = {e_x:.3e} after {w_x:.3} s of steps; implicit reaches e_σ = {e_i:.3e} ≤ that with {steps} load steps in {w_i:.4} s: **{:.0}× less wall time**.\n", w_x / w_i)?,
         None => writeln!(md, "\nNo implicit run reached the explicit error {e_x:.3e}.\n")?,
+    }
+    Ok(())
+}
+
+/// One V4c run of the study: the scheme, its Δt or CFL safety, and the run.
+struct RunoutPoint {
+    scheme: &'static str,
+    setting: f64,
+    run: Runout,
+    /// Max over the columns of cells of |profile − reference profile|, in cells.
+    error: f64,
+}
+
+/// V4c: the slope run-out by implicit trapezoidal Newmark at Δt from 0.01 to 0.1 s and by
+/// explicit MUSL at CFL safety 0.25 to 0.9, each final profile against an implicit run at
+/// Δt = 0.0025 s; the table, the finding at equal accuracy and the plot.
+fn runout_study(quick: bool, study: &mut Study) -> Result<()> {
+    let cells = if quick { 5 } else { 10 };
+    let (model, h) = slope::runout_model(cells)?;
+    let reference_dt = 0.0025;
+    writeln!(study.md, "## V4c slope run-out (large deformation)\n\nThe verify report's V4c slope (γH/c_u = 8, released under full gravity, {} s), {cells} cells per H, GIMP, 2×2 points per cell, finite strain. Implicit: trapezoidal Newmark, lumped mass, fixed Δt. Explicit: MUSL, FLIP, CFL steps. Error: the largest difference of the final profile (highest point per column of cells) from that of an implicit run at Δt = {reference_dt} s, in cells; the two schemes' own limits differ by a few hundredths of a cell (verify's V4c row), so errors below that compare the schemes, not the steps. Wall time: the whole run, set-up included.\n", slope::DURATION)?;
+    eprintln!("steps: V4c reference, implicit Δt = {reference_dt}");
+    let implicit = |dt: f64| {
+        let settings = DynamicSettings::trapezoidal(dt, slope::DURATION);
+        slope::run_out(|| Ok(Analysis::Dynamic(Dynamic::new(model(), settings)?)))
+    };
+    let reference = implicit(reference_dt)?.profile;
+    let error = |run: &Runout| run.profile.iter().zip(&reference).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max) / h;
+    let mut points = Vec::new();
+    for dt in [0.01, 0.02, 0.05, 0.1] {
+        eprintln!("steps: V4c implicit Δt = {dt}");
+        let run = implicit(dt)?;
+        points.push(RunoutPoint { scheme: "implicit", setting: dt, error: error(&run), run });
+    }
+    for safety in [0.25, 0.5, 0.9] {
+        eprintln!("steps: V4c explicit CFL safety {safety}");
+        let settings =
+            ExplicitSettings { time_step: TimeStep::Cfl { safety }, ..ExplicitSettings::new(slope::DURATION) };
+        let run = slope::run_out(|| Ok(Analysis::Explicit(Explicit::new(model(), settings)?)))?;
+        points.push(RunoutPoint { scheme: "explicit", setting: safety, error: error(&run), run });
+    }
+    runout_table(study, &points)?;
+    runout_findings(&mut study.md, &points)?;
+    let mut plot = Plot {
+        log_x: true,
+        ..Plot::new("V4c run-out: profile error against wall time", "wall time [s]", "max profile error [cells]")
+    };
+    for scheme in ["implicit", "explicit"] {
+        let curve = points.iter().filter(|p| p.scheme == scheme).map(|p| (p.run.wall_s, p.error)).collect();
+        let series = Series::new(
+            format!("{scheme} ({})", if scheme == "implicit" { "Δt 0.01…0.1 s" } else { "CFL 0.25…0.9" }),
+            curve,
+        );
+        plot.series.push(if scheme == "explicit" { series.dashed() } else { series });
+    }
+    plot.write(&study.out.join("runout_error_vs_wall.svg"))?;
+    writeln!(study.md, "![run-out](runout_error_vs_wall.svg)\n")?;
+    Ok(())
+}
+
+/// The V4c table and its csv rows.
+fn runout_table(study: &mut Study, points: &[RunoutPoint]) -> Result<()> {
+    writeln!(study.md, "| scheme | Δt [s] or CFL safety | steps | Δt range [s] | Newton its | profile error [cells] | wall [s] |\n|---|---:|---:|---:|---:|---:|---:|")?;
+    for p in points {
+        let r = &p.run;
+        let its = if p.scheme == "implicit" { r.iterations.to_string() } else { "–".into() };
+        writeln!(
+            study.md,
+            "| {} | {} | {} | {:.2e}–{:.2e} | {its} | {:.3} | {:.2} |",
+            p.scheme, p.setting, r.steps, r.dt.0, r.dt.1, p.error, r.wall_s
+        )?;
+        let errors = [CsvCell::Float(p.error), CsvCell::Text("")];
+        study.csv_row(["V4c", p.scheme], CsvCell::Float(p.setting), r.steps, errors, r.wall_s, "ran to the end")?;
+    }
+    writeln!(study.md)?;
+    Ok(())
+}
+
+/// At the explicit run's accuracy (CFL 0.5, the verify setting), the cheapest implicit run
+/// at least as accurate, and the ratio of their wall times.
+fn runout_findings(md: &mut String, points: &[RunoutPoint]) -> Result<()> {
+    let Some(ex) = points.iter().find(|p| p.scheme == "explicit" && p.setting == 0.5) else { return Ok(()) };
+    let im = points
+        .iter()
+        .filter(|p| p.scheme == "implicit" && p.error <= ex.error)
+        .min_by(|a, b| a.run.wall_s.total_cmp(&b.run.wall_s));
+    match im {
+        Some(im) => writeln!(md, "- At the explicit run's accuracy (CFL 0.5: {:.3} cells, {} steps, {:.2} s), the cheapest implicit run as accurate is Δt = {} s: {:.3} cells, {} steps, {:.2} s — explicit/implicit wall time {:.2}.\n", ex.error, ex.run.steps, ex.run.wall_s, im.setting, im.error, im.run.steps, im.run.wall_s, ex.run.wall_s / im.run.wall_s)?,
+        None => writeln!(md, "- No implicit run tried is as accurate as the explicit run at CFL 0.5 ({:.3} cells, {:.2} s).\n", ex.error, ex.run.wall_s)?,
     }
     Ok(())
 }
