@@ -409,7 +409,9 @@ fn ghost_penalty_is_checked() {
 fn explicit_time_step_that_cannot_reach_the_end() {
     let src = DISKS.replacen("Uniform([0.1, 0.1])", "Uniform([1e150, 0.1])", 1);
     let e = check_text(&src).unwrap_err();
-    for s in ["time step", "below", "speed 1e150", "point 0", "velocity"] {
+    // All points move alike: the one named is whichever the grid's carried speed (1e150 to
+    // round-off) makes fastest.
+    for s in ["time step", "below", "speed 1.0000e150", "point ", "velocity"] {
         assert!(e.to_string().contains(s), "{e} should say {s}");
     }
     let src = DISKS.replacen("Uniform([0.1, 0.1])", "Uniform([1e300, 0.1])", 1);

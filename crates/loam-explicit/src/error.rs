@@ -32,8 +32,9 @@ pub enum ExplicitError {
     #[error(
         "step {step} (t = {time:e}): the time step {dt:e} is below {floor:e} (1e-9 of the \
          duration), so the run would not reach its end; point {point} sets it, with P-wave \
-         speed {wave_speed:e} and speed {speed:e}. Check the point's body velocity and its \
-         material's stiffness and density against the grid and the duration"
+         speed {wave_speed:.4e} and speed {speed:.4e} (the velocity the grid carries it at). \
+         Check the point's body velocity and its material's stiffness and density against \
+         the grid and the duration"
     )]
     TimeStepCollapsed { step: usize, time: f64, dt: f64, floor: f64, point: usize, wave_speed: f64, speed: f64 },
     #[error("the model asks for a ghost penalty, which stabilises the implicit tangent; explicit analysis has none (remove it)")]

@@ -15,7 +15,9 @@
 //!    f_I ← f_I − α |f_I| sign(v_I), per component.
 //! 4. Grid momentum update v_I^{n+1} = (p_I + Δt f_I) / m_I, a_I = f_I / m_I.
 //! 5. Grid → point: v_p ← flip (v_p + Δt Σ N_I a_I) + (1 − flip) Σ N_I v_I^{n+1}
-//!    (FLIP of Brackbill & Ruppel 1986 blended with PIC), x_p ← x_p + Δt Σ N_I v_I^{n+1}.
+//!    (FLIP of Brackbill & Ruppel 1986 blended with PIC), x_p ← x_p + Δt Σ N_I v_I^{n+1},
+//!    with Δt a_I = v_I^{n+1} − p_I / m_I the node's change of velocity: at a held dof
+//!    −p_I / m_I, the velocity the support stopped.
 //! 6. Stress update from ∇v_p = Σ_I v_I ⊗ ∇N_I: ΔF = I + Δt ∇v_p, then the finite-strain
 //!    (Hencky, b^e) or small-strain driver of `loam-constitutive`. Which nodal velocity
 //!    v_I, and when, is the update scheme (Bardenhagen 2002, "Energy conservation error in
@@ -32,8 +34,10 @@
 //!
 //! The algorithm is that of Sulsky, Chen & Schreyer (1994), "A particle method for
 //! history-dependent materials", Comput. Methods Appl. Mech. Engrg. 118. The time step is
-//! the CFL limit Δt_c = min_p h_min / (c_p + |v_p|), c_p = √(M / ρ_p) with M the P-wave
-//! modulus of the point's law and ρ_p = m_p / v_p its current density (docs/theory.md §10).
+//! the CFL limit Δt_c = min_p h_min / (c_p + |v̄_p|), c_p = √(M / ρ_p) with M the P-wave
+//! modulus of the point's law and ρ_p = m_p / v_p its current density, and v̄_p the
+//! velocity the grid carries the point at, interpolated from the step's p_I / m_I
+//! (docs/theory.md §10); the step is therefore taken after stage 2.
 //!
 //! Everything a step computes goes into scratch buffers reused from step to step; the
 //! model is changed only when the whole step has succeeded, so a failed step (a point

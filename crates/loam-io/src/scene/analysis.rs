@@ -159,7 +159,8 @@ impl LoadedScene {
         })?;
         if let Analysis::Explicit(e) = &*analysis {
             if let TimeStep::Fixed { dt, allow_above_critical: false } = e.settings().time_step {
-                let critical = e.critical_time_step();
+                // `check` has located every point, so this finds them again.
+                let critical = e.critical_time_step().map_err(|err| self.error(&[], err.to_string()))?;
                 if dt > critical {
                     return Err(self.error(&analysis_key("time_step"), format!(
                         "the fixed time step {dt:e} is above the critical step {critical:e} (h / (c_p + |v|)): the explicit run would blow up; use Cfl(0.5), a step ≤ {critical:e}, or allow_above_critical: true"
