@@ -13,6 +13,7 @@
 //! - [`disks`]: V5, two colliding elastic disks;
 //! - [`cylinder`]: V6, the thick-walled cylinder under internal pressure (Lamé);
 //! - [`water`]: V7, columns under a water table and submerged;
+//! - [`granular`]: V8, the collapse of a granular column (explicit);
 //! - [`hard_cases`]: where implicit MPM usually breaks (softening, small cuts, ...).
 //!
 //! Shared tools: [`block`] (the elastic block that sizes the solvers), [`dynamics`] (time histories and the periods measured from them),
@@ -30,6 +31,7 @@ pub mod cylinder;
 pub mod disks;
 pub mod dynamics;
 pub mod footing;
+pub mod granular;
 pub mod hard_cases;
 pub mod slope;
 pub mod water;
