@@ -179,6 +179,9 @@ fn slope_examples_are_valid_scenes() {
     let analysis = scene.build::<3>().unwrap();
     // 26 × 6 × 11 cells of 2 m, the 2:1 section's 205 cells of soil, 8 points each.
     assert_eq!(analysis.model().points().len(), 205 * 6 * 8);
+    // The large explicit run-out is read and validated, not built here: its 10⁶ points take
+    // a gigabyte (`loam check` builds it).
+    LoadedScene::read(Path::new("examples/slope_runout_3d_explicit.ron")).unwrap();
 }
 
 /// The load examples run: the cavity under a follower pressure to its full load, with the
