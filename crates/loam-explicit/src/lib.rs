@@ -34,10 +34,11 @@
 //!
 //! The algorithm is that of Sulsky, Chen & Schreyer (1994), "A particle method for
 //! history-dependent materials", Comput. Methods Appl. Mech. Engrg. 118. The time step is
-//! the CFL limit Δt_c = min_p h_min / (c_p + |v̄_p|), c_p = √(M / ρ_p) with M the P-wave
-//! modulus of the point's law and ρ_p = m_p / v_p its current density, and v̄_p the
-//! velocity the grid carries the point at, interpolated from the step's p_I / m_I
-//! (docs/theory.md §10); the step is therefore taken after stage 2.
+//! the CFL limit Δt_c = h_min / (max_p c_p + max_I |v_I|), c_p = √(M / ρ_p) with M the
+//! P-wave modulus of the point's law and ρ_p = m_p / v_p its current density, and
+//! v_I = p_I / m_I the velocity the grid carries the material at (docs/theory.md §10): a
+//! lower bound of min_p h_min / (c_p + |v̄_p|) for the points' carried velocities v̄_p.
+//! The step is therefore taken after stage 2.
 //!
 //! Everything a step computes goes into scratch buffers reused from step to step; the
 //! model is changed only when the whole step has succeeded, so a failed step (a point
