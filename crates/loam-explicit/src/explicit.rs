@@ -1,10 +1,10 @@
 //! The explicit analysis: one time step as described in the crate docs.
 
 use crate::{ExplicitError, ExplicitSettings, TimeStep, UpdateScheme};
-use loam_grid::{ActiveNodes, AxisBasis, BasisError, Connectivity, PointBasisError, INACTIVE};
+use loam_grid::{ActiveNodes, AxisBasis, BasisError, PointBasisError};
 use loam_kernels::{
-    advance_deformation, check_constraints, connect, embed, internal_force, update_point_stress, BandScatter,
-    Committed, ConnectError, LoadSupports, RunError,
+    advance_deformation, check_constraints, embed, internal_force, update_point_stress, BandScatter, Committed,
+    ConnectError, LoadSupports, RunError,
 };
 use loam_model::{Kinematics, LoadLevel, Model, ModelError, ModelState, StateFields};
 use nalgebra::{Matrix3, SMatrix, SVector};
@@ -93,12 +93,12 @@ struct NodalScratch {
     internal: Vec<f64>,
     /// v_I^{n+1} (D per node).
     velocity: Vec<f64>,
-    /// a_I = f_I / m_I (D per node).
+    /// The FLIP acceleration (v_I^{n+1} − p_I / m_I) / Δt (D per node, `nodal_update`).
     acceleration: Vec<f64>,
-    /// Nodal velocity that drives the strain update for USF (p_I / m_I) and MUSL
-    /// (re-mapped); USL uses `velocity`.
+    /// First the carried velocity p_I / m_I, which the critical step reads and USF's strain
+    /// update uses; then, for MUSL, the re-mapped velocity (D per node). USL uses `velocity`.
     strain_velocity: Vec<f64>,
-    /// The loads on surfaces and at points (D per node; empty without them).
+    /// The loads on surfaces and at points (D per node with mass; empty without loads).
     loads: Vec<f64>,
 }
 
@@ -205,10 +205,8 @@ impl<const D: usize> Explicit<D> {
         tracing::info!(scheme = ?settings.scheme, flip = settings.flip, time_step = ?settings.time_step,
             damping = settings.damping, duration = settings.duration, "explicit analysis");
         let p_wave = model.materials().iter().map(|m| m.p_wave_modulus()).collect();
-        let n = model.grid().num_nodes() as u32;
-        let every_node = ActiveNodes { grid_to_active: (0..n).collect(), active_to_grid: (0..n).collect() };
         let mut constrained = Vec::new();
-        model.constrained_dofs(&every_node, &mut constrained);
+        model.constrained_dofs(&ActiveNodes::all(model.grid().num_nodes()), &mut constrained);
         Ok(Self {
             basis: AxisBasis::new(model.basis()),
             model,
@@ -271,19 +269,18 @@ impl<const D: usize> Explicit<D> {
     }
 
     /// Check what can only be checked against the connectivity: every point's basis lies in
-    /// the grid and every constraint holds at least one active node (the rule of
-    /// `QuasiStatic::check`); and that the next time step is long enough for the run to
+    /// the grid, every load is on the material, and every constraint holds at least one
+    /// node with mass (the rule of `QuasiStatic::check`); and that the next time step is long enough for the run to
     /// reach its end (a fixed step above the critical one is the caller's to judge). Scene
     /// validation calls this before the first step.
     pub fn check(&mut self) -> Result<(), ExplicitError> {
         let step = self.steps + 1;
-        let mut conn = Connectivity::new(self.model.basis());
-        connect(&self.model, &mut conn, &mut Vec::new(), step)?;
-        self.loads.connect(&self.model, conn.active_nodes(), step)?;
-        check_constraints(&self.model, &conn)?;
         self.connect(step)?;
         self.size_buffers();
         let m_min = self.map_to_grid(step)?;
+        let gathered = &self.nodes.gathered;
+        self.loaded.fill_from(self.model.grid().num_nodes(), |g| gathered[g * (1 + 2 * D)] > m_min);
+        check_constraints(&self.model, &self.loaded)?;
         let critical = self.carried_critical_step(m_min);
         let dt = match self.time_step(step, critical) {
             Err(ExplicitError::AboveCritical { dt, .. }) => dt,
@@ -445,28 +442,23 @@ impl<const D: usize> Explicit<D> {
     fn map_to_grid(&mut self, step: usize) -> Result<f64, ExplicitError> {
         let usf = self.settings.scheme == UpdateScheme::Usf;
         scatter_grid(&self.model, &self.basis, &self.bands, !usf, &mut self.nodes.gathered);
-        self.active_nodes = self.nodes.gathered.par_chunks(1 + 2 * D).filter(|g| g[0] > 0.0).count();
-        self.add_loads(step)?;
-        Ok(empty_node_mass::<D>(&self.nodes.gathered))
+        let m_min = empty_node_mass::<D>(&self.nodes.gathered);
+        self.active_nodes = self.nodes.gathered.par_chunks(1 + 2 * D).filter(|g| g[0] > m_min).count();
+        self.add_loads(step, m_min)?;
+        Ok(m_min)
     }
 
     /// The loads on surfaces and at points at the step's start time, added to the nodal
-    /// forces; their vertices are connected to the nodes with mass (a share on a node with
-    /// none goes to the vertex's other nodes, `LoadSupports`).
-    fn add_loads(&mut self, step: usize) -> Result<(), ExplicitError> {
+    /// forces; their vertices are connected to the nodes with mass above `m_min`, those the
+    /// grid update moves (a share on any other node goes to the vertex's other nodes,
+    /// `LoadSupports`).
+    fn add_loads(&mut self, step: usize, m_min: f64) -> Result<(), ExplicitError> {
         if self.model.loads().is_empty() {
             return Ok(());
         }
         let stride = 1 + 2 * D;
-        let loaded = &mut self.loaded;
-        loaded.grid_to_active.clear();
-        loaded.active_to_grid.clear();
-        for (g, m) in self.nodes.gathered.chunks(stride).map(|g| g[0]).enumerate() {
-            loaded.grid_to_active.push(if m > 0.0 { loaded.active_to_grid.len() as u32 } else { INACTIVE });
-            if m > 0.0 {
-                loaded.active_to_grid.push(g as u32);
-            }
-        }
+        let gathered = &self.nodes.gathered;
+        self.loaded.fill_from(self.model.grid().num_nodes(), |g| gathered[g * stride] > m_min);
         self.loads.connect(&self.model, &self.loaded, step)?;
         let level = LoadLevel::Time(self.time);
         let f = &mut self.nodes.loads;

@@ -10,10 +10,11 @@
 //!    (`loam_kernels::BandScatter`):
 //!    m_I = Σ_p N_I m_p, p_I = Σ_p N_I m_p v_p, f_I = Σ_p N_I f_ext,p − Σ_p v_p σ_p ∇N_I.
 //!    Nodes with m_I ≤ 1e-12 · max m_I are empty (zero velocity and acceleration);
-//!    constrained dofs get zero momentum and force.
+//!    constrained dofs get zero velocity, their momentum kept for the FLIP update (5).
 //! 3. Local non-viscous damping (Cundall 1987; Itasca FLAC/PFC "local damping"):
 //!    f_I ← f_I − α |f_I| sign(v_I), per component.
-//! 4. Grid momentum update v_I^{n+1} = (p_I + Δt f_I) / m_I, a_I = f_I / m_I.
+//! 4. Grid momentum update v_I^{n+1} = (p_I + Δt f_I) / m_I, a_I = f_I / m_I at a free
+//!    dof; at a held one v_I^{n+1} = 0 and a_I = −p_I / (m_I Δt).
 //! 5. Grid → point: v_p ← flip (v_p + Δt Σ N_I a_I) + (1 − flip) Σ N_I v_I^{n+1}
 //!    (FLIP of Brackbill & Ruppel 1986 blended with PIC), x_p ← x_p + Δt Σ N_I v_I^{n+1},
 //!    with Δt a_I = v_I^{n+1} − p_I / m_I the node's change of velocity: at a held dof

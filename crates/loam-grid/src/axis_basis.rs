@@ -4,7 +4,8 @@
 //! Every basis of a uniform grid (linear, GIMP, quadratic B-spline, docs/theory.md §4) is a
 //! tensor product N_I(x) = Π_a φ_a(x_a), so a point's D × (at most 4) factors give all of
 //! its (at most 4^D) node values and gradients. Storing the factors instead of the
-//! products is a third of the memory traffic in 2D and a ninth in 3D; the products are
+//! products and their node numbers (`Connectivity`) takes 138 instead of 292 bytes per
+//! point in 2D and 207 instead of 1 084 in 3D (2 points per cell); the products are
 //! formed where a transfer uses them ([`AxisBasis::for_each_node`]), in the order and with
 //! the operations of [`BasisKind::evaluate`], so the values and gradients are the same to
 //! the last bit. The explicit step reads the basis three times a step and gains most.

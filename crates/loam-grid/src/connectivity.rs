@@ -24,6 +24,27 @@ pub struct ActiveNodes {
 }
 
 impl ActiveNodes {
+    /// Every one of `n` nodes active, numbered as they are.
+    pub fn all(n: usize) -> Self {
+        let n = u32::try_from(n).expect("grid node indices are u32");
+        Self { grid_to_active: (0..n).collect(), active_to_grid: (0..n).collect() }
+    }
+
+    /// Renumber to the nodes `0..n` for which `active(node)` holds, ascending; the buffers
+    /// are reused.
+    pub fn fill_from(&mut self, n: usize, active: impl Fn(usize) -> bool) {
+        self.grid_to_active.clear();
+        self.active_to_grid.clear();
+        for g in 0..n {
+            if active(g) {
+                self.grid_to_active.push(self.active_to_grid.len() as u32);
+                self.active_to_grid.push(g as u32);
+            } else {
+                self.grid_to_active.push(INACTIVE);
+            }
+        }
+    }
+
     pub fn len(&self) -> usize {
         self.active_to_grid.len()
     }

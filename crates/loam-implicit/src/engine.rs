@@ -256,7 +256,7 @@ impl<const D: usize> Engine<D> {
     /// Before a first step: the points connect, and every constraint holds a node.
     pub fn check(&mut self, step: usize) -> Result<(), StepError> {
         self.connect(step)?;
-        Ok(check_constraints(&self.model, &self.conn)?)
+        Ok(check_constraints(&self.model, self.conn.active_nodes())?)
     }
 
     /// The bodies with rigid-body motions no constraint holds on the active nodes.

@@ -1,7 +1,7 @@
 //! Stage 1 of every step: connect the points to the background.
 
 use crate::ConnectError;
-use loam_grid::Connectivity;
+use loam_grid::{ActiveNodes, Connectivity};
 use loam_model::Model;
 
 /// Connect the points of `model` at the configuration the mechanics is written on to its
@@ -21,10 +21,10 @@ pub fn connect<const D: usize>(
     Ok(())
 }
 
-/// Every constraint must hold at least one active node: one that holds none would
+/// Every constraint must hold at least one of the `active` nodes: one that holds none would
 /// silently constrain nothing.
-pub fn check_constraints<const D: usize>(model: &Model<D>, conn: &Connectivity<D>) -> Result<(), ConnectError> {
-    match model.constraint_without_nodes(conn.active_nodes()) {
+pub fn check_constraints<const D: usize>(model: &Model<D>, active: &ActiveNodes) -> Result<(), ConnectError> {
+    match model.constraint_without_nodes(active) {
         Some((index, c)) => Err(ConnectError::ConstraintTouchesNoNode { index, axis: c.axis, plane: c.plane }),
         None => Ok(()),
     }

@@ -50,19 +50,20 @@ impl NodeWindow<'_> {
 
 impl BandScatter {
     /// Group the points of `basis` (computed on `grid`) by band; points are at most 2³²
-    /// (the point indices of the connectivity are `u32`).
+    /// (a key holds the band above the point index's 32 bits).
     pub fn group<const D: usize>(&mut self, grid: &Grid<D>, basis: &AxisBasis<D>) {
         let nodes = grid.nodes_per_axis();
         self.rows = nodes[D - 1];
         self.row_len = nodes[..D - 1].iter().product();
         let n = basis.num_points();
+        assert!(n as u64 <= 1 << 32, "a point index fits the key's low 32 bits");
         self.keys.resize(n, 0);
         self.keys.par_iter_mut().enumerate().for_each(|(p, key)| {
             let band = basis.first(p)[D - 1] as usize / ROWS_PER_BAND;
             *key = (band as u64) << 32 | p as u64;
         });
-        // The keys are distinct, so the order is unique; points that keep their band keep
-        // the keys sorted, which the sort detects in one pass.
+        // The keys are distinct, so the order is unique. Points numbered in band order that
+        // keep their bands keep the keys sorted, which the sort detects in one pass.
         self.keys.par_sort_unstable();
         let bands = self.rows.div_ceil(ROWS_PER_BAND);
         self.starts.clear();

@@ -1,7 +1,8 @@
 //! V8, the collapse of a granular column onto a rough base (docs/verification.md §V8):
 //! a column of cohesionless soil (Mohr–Coulomb, c = 0, φ = 20°, ψ = 0) of width L₀ and
 //! height H₀ = a L₀, a = ½, standing against a smooth wall, released under gravity and
-//! followed until it has come to rest; explicit MPM only.
+//! followed for 1.5 s, when the collapse is long over (its loose front still creeps);
+//! explicit MPM only.
 //!
 //! What it is compared against:
 //! - the deposit's height: for a ≲ 0.65–0.7 the top of the column is not reached by the
@@ -66,7 +67,7 @@ impl GranularColumn {
     }
 
     /// The model at `cells` cells across H₀: 2×2 points per cell, GIMP, finite strain;
-    /// a smooth wall at x = 0 (x held), a rough base (x and y held), one spare cell above.
+    /// a smooth wall at x = 0 (x held), a rough base (x and y held), two spare cells above.
     pub fn model(&self, cells: usize) -> Model<2> {
         let h = self.height / cells as f64;
         let nx = (self.domain_widths * self.width / h).round() as usize;

@@ -163,7 +163,7 @@ impl LoadedScene {
                 let critical = e.critical_time_step().map_err(|err| self.error(&[], err.to_string()))?;
                 if dt > critical {
                     return Err(self.error(&analysis_key("time_step"), format!(
-                        "the fixed time step {dt:e} is above the critical step {critical:e} (h / (c_p + |v|)): the explicit run would blow up; use Cfl(0.5), a step ≤ {critical:e}, or allow_above_critical: true"
+                        "the fixed time step {dt:e} is above the critical step {critical:e} (h / (max c_p + max |v_I|)): the explicit run would blow up; use Cfl(0.5), a step ≤ {critical:e}, or allow_above_critical: true"
                     )));
                 }
             }

@@ -18,8 +18,8 @@ fn bytes_per_point(dimension: usize, explicit: bool) -> u64 {
     match (dimension, explicit) {
         // The 48³ elastic block, multigrid CG: 3.62 GB for 884 736 points.
         (3, false) => 4100,
-        // The 3D slope at 1 m cells, explicit, 2 and 3 points per cell and axis.
-        (3, true) => 1800,
+        // The 3D run-out example, 1 057 760 points: 1.23 GB at its peak.
+        (3, true) => 1200,
         // The run-out slope, one quasi-static step, 4 and 8 points per cell and axis.
         (_, false) => 1800,
         // The same, explicit.
@@ -27,9 +27,16 @@ fn bytes_per_point(dimension: usize, explicit: bool) -> u64 {
     }
 }
 
-/// Bytes per node of the whole background grid, active or not: the connectivity's map
-/// from grid node to active node (`u32`). A 20 000² grid takes 1.6 GB for it.
-const BYTES_PER_GRID_NODE: u64 = 4;
+/// Bytes per node of the whole background grid, active or not: the implicit
+/// connectivity's map from grid node to active node (`u32`; a 20 000² grid takes 1.6 GB
+/// for it), and the explicit step's dense nodal fields, 1 + 6D values and D held flags.
+fn bytes_per_grid_node(dimension: usize, explicit: bool) -> u64 {
+    if explicit {
+        8 * (1 + 6 * dimension as u64) + dimension as u64
+    } else {
+        4
+    }
+}
 
 /// The limit when neither the user nor the machine says: 16 GiB.
 const FALLBACK_LIMIT: u64 = 16 << 30;
@@ -59,7 +66,16 @@ pub fn default_memory_limit() -> (u64, &'static str) {
 impl LoadedScene {
     /// Peak bytes per material point of this scene's analysis in `D` dimensions.
     fn bytes_per_point<const D: usize>(&self) -> u64 {
-        bytes_per_point(D, matches!(self.scene.analysis, AnalysisSpec::Explicit { .. }))
+        bytes_per_point(D, self.is_explicit())
+    }
+
+    /// Bytes per background node of this scene's analysis in `D` dimensions.
+    fn bytes_per_grid_node<const D: usize>(&self) -> u64 {
+        bytes_per_grid_node(D, self.is_explicit())
+    }
+
+    fn is_explicit(&self) -> bool {
+        matches!(self.scene.analysis, AnalysisSpec::Explicit { .. })
     }
 
     /// The memory the scene will take on `grid`: with `exact_up_to` the points of each body
@@ -90,7 +106,7 @@ impl LoadedScene {
         let grid_nodes = grid.num_nodes() as u64;
         let bytes = points
             .saturating_mul(self.bytes_per_point::<D>())
-            .saturating_add(grid_nodes.saturating_mul(BYTES_PER_GRID_NODE));
+            .saturating_add(grid_nodes.saturating_mul(self.bytes_per_grid_node::<D>()));
         Ok(MemoryEstimate { points, grid_nodes, bytes })
     }
 
