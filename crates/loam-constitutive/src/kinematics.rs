@@ -118,6 +118,10 @@ pub struct FiniteStrainStress {
 /// [`finite_strain_update`] without the spatial tangent, for an analysis that has no use
 /// for it (explicit MPM): the same stress and b^e to the last bit, at a fraction of the
 /// cost (the tangent's two 9 × 9 products and the derivative of the logarithm).
+// Inline (with the trial's constructor, its stress and `spectral`): the explicit step calls
+// it per point from another crate, and inlined, its 200-byte results are built in place
+// instead of copied through three calls (2D explicit block +20 %, 3D +7 %, same bits).
+#[inline]
 pub fn finite_strain_stress(
     law: &dyn ConstitutiveLaw,
     delta_f: &Matrix3<f64>,
@@ -140,6 +144,7 @@ struct FiniteStrainTrial {
 }
 
 impl FiniteStrainTrial {
+    #[inline]
     fn new(
         law: &dyn ConstitutiveLaw,
         delta_f: &Matrix3<f64>,
@@ -175,6 +180,7 @@ impl FiniteStrainTrial {
     }
 
     /// σ = τ / J and b^e from the law's Kirchhoff stress `tau` and elastic strain `eps_e`.
+    #[inline]
     fn stress(&self, tau: &Matrix3<f64>, eps_e: &Matrix3<f64>) -> Result<FiniteStrainStress, ConstitutiveError> {
         check_finite(tau, "stress returned by the law")?;
         check_finite(eps_e, "elastic strain returned by the law")?;
@@ -186,6 +192,7 @@ impl FiniteStrainTrial {
 /// `b^e = exp(2 ε^e)`, avoiding a second eigen-decomposition in the common cases: an
 /// elastic step (ε^e is ε_tr, so b^e is b_tr) and an isotropic return (ε^e coaxial with
 /// b_tr, so the trial eigenvectors diagonalise it).
+#[inline]
 fn elastic_b(
     eps_e: &Matrix3<f64>,
     eps_tr: &Matrix3<f64>,

@@ -97,6 +97,7 @@ impl Spectral {
 /// coupling between the plane and z) is decomposed in closed form: z is an eigenvector and
 /// the in-plane block has the eigenvalues m ± r, m = (a + c)/2, r = √(((a − c)/2)² + b²);
 /// 3D tensors by nalgebra's symmetric QR.
+#[inline]
 pub fn spectral(m: &Matrix3<f64>) -> Result<Spectral, ConstitutiveError> {
     crate::check_finite(m, "spectral decomposition input")?;
     let s = (m + m.transpose()) * 0.5;
@@ -112,6 +113,7 @@ pub fn spectral(m: &Matrix3<f64>) -> Result<Spectral, ConstitutiveError> {
 /// The spectral decomposition of a symmetric `s` whose z axis is an eigenvector: the
 /// in-plane eigenvector of m + r is (λ₁ − c, b) or (b, λ₁ − a), whichever is the longer
 /// (both are exact, the longer is the better conditioned), the other one perpendicular.
+#[inline]
 fn plane_spectral(s: &Matrix3<f64>) -> Spectral {
     let (a, b, c) = (s[(0, 0)], s[(0, 1)], s[(1, 1)]);
     // An off-diagonal within round-off of the diagonal is zero, as the QR deflates it: a
