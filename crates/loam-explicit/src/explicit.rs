@@ -43,9 +43,10 @@ pub struct ExplicitStepReport {
 /// a step is slow (`cargo xtask bench`).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct StepPhases {
-    /// Stage 1 and the critical time step.
+    /// Stage 1.
     pub connectivity: Duration,
-    /// Stage 2, points to grid (and USF's stress update and internal force).
+    /// Stage 2, points to grid, the critical time step (and USF's stress update and
+    /// internal force).
     pub to_grid: Duration,
     /// Stages 3–4.
     pub grid_update: Duration,
@@ -165,7 +166,7 @@ pub struct Explicit<const D: usize> {
     /// The constrained dofs of every grid node (D per node): the constraints of an explicit
     /// run hold still, so they are marked once.
     constrained: Vec<bool>,
-    /// The nodes with mass of the step, numbered for the loads (kept empty without loads).
+    /// The nodes with mass of the step, numbered for the loads and the constraint check.
     loaded: ActiveNodes,
     /// The load vertices on the nodes of `loaded`.
     loads: LoadSupports,
@@ -270,16 +271,15 @@ impl<const D: usize> Explicit<D> {
 
     /// Check what can only be checked against the connectivity: every point's basis lies in
     /// the grid, every load is on the material, and every constraint holds at least one
-    /// node with mass (the rule of `QuasiStatic::check`); and that the next time step is long enough for the run to
-    /// reach its end (a fixed step above the critical one is the caller's to judge). Scene
-    /// validation calls this before the first step.
+    /// node with mass (the rule of `QuasiStatic::check`); and that the next time step is
+    /// long enough for the run to reach its end (a fixed step above the critical one is the
+    /// caller's to judge). Scene validation calls this before the first step.
     pub fn check(&mut self) -> Result<(), ExplicitError> {
         let step = self.steps + 1;
         self.connect(step)?;
         self.size_buffers();
         let m_min = self.map_to_grid(step)?;
-        let gathered = &self.nodes.gathered;
-        self.loaded.fill_from(self.model.grid().num_nodes(), |g| gathered[g * (1 + 2 * D)] > m_min);
+        self.number_nodes_with_mass(m_min);
         check_constraints(&self.model, &self.loaded)?;
         let critical = self.carried_critical_step(m_min);
         let dt = match self.time_step(step, critical) {
@@ -457,8 +457,7 @@ impl<const D: usize> Explicit<D> {
             return Ok(());
         }
         let stride = 1 + 2 * D;
-        let gathered = &self.nodes.gathered;
-        self.loaded.fill_from(self.model.grid().num_nodes(), |g| gathered[g * stride] > m_min);
+        self.number_nodes_with_mass(m_min);
         self.loads.connect(&self.model, &self.loaded, step)?;
         let level = LoadLevel::Time(self.time);
         let f = &mut self.nodes.loads;
@@ -473,6 +472,13 @@ impl<const D: usize> Explicit<D> {
             }
         }
         Ok(())
+    }
+
+    /// Number the nodes whose scattered mass is above `m_min`, those the grid update moves,
+    /// into `loaded`.
+    fn number_nodes_with_mass(&mut self, m_min: f64) {
+        let gathered = &self.nodes.gathered;
+        self.loaded.fill_from(self.model.grid().num_nodes(), |g| gathered[g * (1 + 2 * D)] > m_min);
     }
 
     /// USF: the stress updated from the start-of-step nodal velocity p_I / m_I (the carried
