@@ -106,12 +106,10 @@ struct NodalScratch {
 /// Per-point trial state of one step, committed only when the whole step succeeded.
 #[derive(Debug, Default)]
 struct PointScratch<const D: usize> {
-    /// New position, velocity, stress, elastic strain and history, exchanged with the
-    /// model's at the commit; the history `max(history_stride, 1)` per point so that every
-    /// point has its own chunk.
+    /// New position, velocity, deformation gradient, volume, half-lengths, stress, elastic
+    /// strain and history, exchanged with the model's at the commit; the history
+    /// `max(history_stride, 1)` per point so that every point has its own chunk.
     fields: StateFields<D>,
-    delta_f: Vec<Matrix3<f64>>,
-    volume: Vec<f64>,
 }
 
 impl<const D: usize> PointScratch<D> {
@@ -119,11 +117,12 @@ impl<const D: usize> PointScratch<D> {
         let f = &mut self.fields;
         f.position.resize(n, SVector::zeros());
         f.velocity.resize(n, SVector::zeros());
+        f.deformation_gradient.resize(n, Matrix3::identity());
+        f.volume.resize(n, 0.0);
+        f.half_length.resize(n, SVector::zeros());
         f.stress.resize(n, Matrix3::zeros());
         f.elastic_strain.resize(n, Matrix3::zeros());
         f.history.resize(n * history_stride.max(1), 0.0);
-        self.delta_f.resize(n, Matrix3::identity());
-        self.volume.resize(n, 0.0);
     }
 }
 
@@ -537,25 +536,11 @@ impl<const D: usize> Explicit<D> {
         }
     }
 
-    /// Commit the trial state of a successful step (docs/theory.md §1): F ← ΔF F,
-    /// v_p ← det ΔF v_p, half-lengths stretched with F (iGIMP), and the rest copied in; the
-    /// load vertices follow their carrier points.
+    /// Commit the trial state of a successful step (docs/theory.md §1) by exchange: the
+    /// stress update computed every point's F ← ΔF F, v_p ← det ΔF v_p and half-lengths
+    /// stretched with F (iGIMP) beside its stress; the load vertices follow their carrier
+    /// points.
     fn commit(&mut self) {
-        let sc = &self.points;
-        let pts = self.model.points_mut();
-        (
-            pts.deformation_gradient.par_iter_mut(),
-            pts.volume.par_iter_mut(),
-            pts.half_length.par_iter_mut(),
-            pts.half_length0.par_iter(),
-            sc.delta_f.par_iter(),
-            sc.volume.par_iter(),
-        )
-            .into_par_iter()
-            .for_each(|(f, v, l, l0, df, v_new)| {
-                advance_deformation(df, f, l, l0);
-                *v = *v_new;
-            });
         self.model.swap_state(&mut self.points.fields);
         self.model.update_load_vertices();
     }
@@ -701,7 +686,7 @@ fn negative_internal_force<const D: usize>(
     let finite = model.kinematics() == Kinematics::FiniteStrain;
     let pts = model.points();
     bands.scatter(D, out, |p, window| {
-        let v = if finite { sc.volume[p] } else { pts.volume[p] };
+        let v = if finite { sc.fields.volume[p] } else { pts.volume[p] };
         basis.for_each_node(p, |node, _, grad| {
             let f = -internal_force(v, &sc.fields.stress[p], &grad, None);
             let o = window.node(node);
@@ -829,7 +814,10 @@ fn grid_to_points<const D: usize>(
     failure.map_or(Ok(()), Err)
 }
 
-/// Stress update of every point from the nodal velocities `velocity` into the scratch.
+/// Stress update of every point from the nodal velocities `velocity` into the scratch,
+/// with the rest of its new state the commit exchanges: F ← ΔF F, the volume det ΔF v_p
+/// and the half-lengths stretched with the new F (iGIMP) — in the same pass over the points
+/// that reads their committed F, instead of a second one at the commit.
 fn update_stress<const D: usize>(
     model: &Model<D>,
     basis: &AxisBasis<D>,
@@ -839,20 +827,24 @@ fn update_stress<const D: usize>(
 ) -> PointResult {
     let pts = model.points();
     let hs = pts.history_stride();
+    let f = &mut sc.fields;
     let failure = (
-        sc.delta_f.par_iter_mut(),
-        sc.volume.par_iter_mut(),
-        sc.fields.stress.par_iter_mut(),
-        sc.fields.elastic_strain.par_iter_mut(),
+        f.deformation_gradient.par_iter_mut(),
+        f.volume.par_iter_mut(),
+        f.half_length.par_iter_mut(),
+        f.stress.par_iter_mut(),
+        f.elastic_strain.par_iter_mut(),
     )
         .into_par_iter()
-        .zip(sc.fields.history.par_chunks_mut(hs.max(1)))
+        .zip(f.history.par_chunks_mut(hs.max(1)))
         .enumerate()
-        .filter_map(|(p, ((delta_f, volume, stress, elastic), h_out))| {
+        .filter_map(|(p, ((f_new, volume, half_length, stress, elastic), h_out))| {
             match point_stress(model, basis, velocity, dt, p, &mut h_out[..hs]) {
                 Ok(state) => {
-                    (*delta_f, *stress, *elastic) = (state.delta_f, state.stress, state.elastic_strain);
+                    (*stress, *elastic) = (state.stress, state.elastic_strain);
                     *volume = state.det * pts.volume[p];
+                    *f_new = pts.deformation_gradient[p];
+                    advance_deformation(&state.delta_f, f_new, half_length, &pts.half_length0[p]);
                     None
                 }
                 Err(reason) => Some((p, PointFailure::Unstable(reason))),
@@ -874,6 +866,7 @@ struct PointState {
 /// Point `p`'s update from the nodal velocities: ΔF = I + Δt Σ_I v_I ⊗ ∇N_I, checked for
 /// a blow-up (non-finite, inverted or torn apart within the step), then the shared point
 /// kernel; or why the point became unstable.
+#[inline]
 fn point_stress<const D: usize>(
     model: &Model<D>,
     basis: &AxisBasis<D>,

@@ -31,7 +31,9 @@
 //!    - MUSL (Sulsky, Zhou & Schreyer 1995): v_I re-mapped from the updated point
 //!      velocities, p_I = Σ N_I m_p v_p^{n+1} (constrained dofs zeroed), v_I = p_I / m_I.
 //! 7. Commit: F ← ΔF F, v_p ← det ΔF v_p, iGIMP half-lengths stretched with F, stress,
-//!    elastic strain, history, velocity, position.
+//!    elastic strain, history, velocity, position — each computed into scratch by the
+//!    stage that has the point in hand (F, volume and half-lengths by the stress update of
+//!    6), and exchanged with the model's at once.
 //!
 //! The algorithm is that of Sulsky, Chen & Schreyer (1994), "A particle method for
 //! history-dependent materials", Comput. Methods Appl. Mech. Engrg. 118. The time step is

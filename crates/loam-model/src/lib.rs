@@ -486,17 +486,29 @@ impl<const D: usize> Model<D> {
         self.background.displace(active, du);
     }
 
-    /// Exchange the points' position, velocity, stress, elastic strain and (where the laws
-    /// keep one) history with `fields`, each holding one value per point (the history in the
-    /// laws' layout). O(1), and the model's invariants hold: a field of another length is
-    /// a bug of the analysis, and panics.
+    /// Exchange the points' position, velocity, deformation gradient, volume, GIMP
+    /// half-lengths, stress, elastic strain and (where the laws keep one) history with
+    /// `fields`, each holding one value per point (the history in the laws' layout). O(1),
+    /// and the model's invariants hold: a field of another length is a bug of the analysis,
+    /// and panics.
     pub fn swap_state(&mut self, fields: &mut StateFields<D>) {
         let n = self.points.len();
         let pts = &mut self.points;
-        let lengths = [fields.position.len(), fields.velocity.len(), fields.stress.len(), fields.elastic_strain.len()];
+        let lengths = [
+            fields.position.len(),
+            fields.velocity.len(),
+            fields.deformation_gradient.len(),
+            fields.volume.len(),
+            fields.half_length.len(),
+            fields.stress.len(),
+            fields.elastic_strain.len(),
+        ];
         assert!(lengths.iter().all(|&l| l == n), "swap_state: fields of {lengths:?} values for {n} points");
         std::mem::swap(&mut pts.position, &mut fields.position);
         std::mem::swap(&mut pts.velocity, &mut fields.velocity);
+        std::mem::swap(&mut pts.deformation_gradient, &mut fields.deformation_gradient);
+        std::mem::swap(&mut pts.volume, &mut fields.volume);
+        std::mem::swap(&mut pts.half_length, &mut fields.half_length);
         std::mem::swap(&mut pts.stress, &mut fields.stress);
         std::mem::swap(&mut pts.elastic_strain, &mut fields.elastic_strain);
         if pts.history_stride() > 0 {

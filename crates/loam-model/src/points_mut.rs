@@ -31,6 +31,9 @@ pub struct PointsMut<'a, const D: usize> {
 pub struct StateFields<const D: usize> {
     pub position: Vec<SVector<f64, D>>,
     pub velocity: Vec<SVector<f64, D>>,
+    pub deformation_gradient: Vec<Matrix3<f64>>,
+    pub volume: Vec<f64>,
+    pub half_length: Vec<SVector<f64, D>>,
     pub stress: Vec<Matrix3<f64>>,
     pub elastic_strain: Vec<Matrix3<f64>>,
     /// The laws' history values per point, or anything (not exchanged) where the laws keep
