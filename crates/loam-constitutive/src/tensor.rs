@@ -123,13 +123,26 @@ fn plane_spectral(s: &Matrix3<f64>) -> Spectral {
         return Spectral { values: Vector3::new(a, c, s[(2, 2)]), vectors: Matrix3::identity() };
     }
     let (m, half) = (0.5 * (a + c), 0.5 * (a - c));
-    let r = half.hypot(b);
+    let r = hypot(half, b);
     let (x, y) = if half >= 0.0 { (half + r, b) } else { (b, r - half) };
-    let norm = x.hypot(y);
+    let norm = hypot(x, y);
     let (x, y) = if norm > 0.0 { (x / norm, y / norm) } else { (1.0, 0.0) };
     Spectral {
         values: Vector3::new(m + r, m - r, s[(2, 2)]),
         vectors: Matrix3::new(x, -y, 0.0, y, x, 0.0, 0.0, 0.0, 1.0),
+    }
+}
+
+/// √(x² + y²) by the plain formula where its square neither overflows nor underflows to a
+/// subnormal (to within an ulp of `f64::hypot`, at a fraction of its cost), by `f64::hypot`
+/// elsewhere.
+#[inline]
+fn hypot(x: f64, y: f64) -> f64 {
+    let sq = x * x + y * y;
+    if sq.is_finite() && sq >= f64::MIN_POSITIVE {
+        sq.sqrt()
+    } else {
+        x.hypot(y)
     }
 }
 
