@@ -110,9 +110,53 @@ impl<const D: usize> AxisBasis<D> {
     }
 
     /// Call `f(node, value, gradient)` for every node of point `p`'s support, nodes
-    /// ascending (axis 0 fastest): the products of [`BasisKind::evaluate`], bit for bit.
+    /// ascending (axis 0 fastest): the products of [`BasisKind::evaluate`], bit for bit
+    /// (value (w₀w₁)w₂; gradient component a the derivative along a times the other
+    /// factors in ascending order). In 2D and 3D by loops nested over the axes, the factors
+    /// of the outer axes and the row's first node hoisted out of the inner loop.
     #[inline]
     pub fn for_each_node(&self, p: usize, mut f: impl FnMut(usize, f64, SVector<f64, D>)) {
+        let (first, count) = (self.first[p], self.count[p]);
+        let w = &self.values[p * D * WIDTH..(p + 1) * D * WIDTH];
+        let dw = &self.derivatives[p * D * WIDTH..(p + 1) * D * WIDTH];
+        let axis = |a: usize| {
+            let n = (count[a] as usize).min(WIDTH);
+            (&w[a * WIDTH..a * WIDTH + n], &dw[a * WIDTH..a * WIDTH + n])
+        };
+        let row = self.nodes_per_axis[0];
+        if D == 2 {
+            let ((wx, dx), (wy, dy)) = (axis(0), axis(1));
+            let mut start = first[1] as usize * row + first[0] as usize;
+            for (&wj, &dj) in wy.iter().zip(dy) {
+                for (i, (&wi, &di)) in wx.iter().zip(dx).enumerate() {
+                    let grad = [di * wj, dj * wi];
+                    f(start + i, wi * wj, SVector::from_fn(|a, _| grad[a]));
+                }
+                start += row;
+            }
+        } else if D == 3 {
+            let ((wx, dx), (wy, dy), (wz, dz)) = (axis(0), axis(1), axis(2));
+            let plane = row * self.nodes_per_axis[1];
+            let mut layer = first[2] as usize * plane + first[1] as usize * row + first[0] as usize;
+            for (&wk, &dk) in wz.iter().zip(dz) {
+                let mut start = layer;
+                for (&wj, &dj) in wy.iter().zip(dy) {
+                    for (i, (&wi, &di)) in wx.iter().zip(dx).enumerate() {
+                        let grad = [di * wj * wk, dj * wi * wk, dk * wi * wj];
+                        f(start + i, wi * wj * wk, SVector::from_fn(|a, _| grad[a]));
+                    }
+                    start += row;
+                }
+                layer += plane;
+            }
+        } else {
+            self.for_each_node_any(p, f);
+        }
+    }
+
+    /// [`Self::for_each_node`] in any dimension, by an odometer over the axes.
+    #[inline]
+    fn for_each_node_any(&self, p: usize, mut f: impl FnMut(usize, f64, SVector<f64, D>)) {
         let (first, count) = (self.first[p], self.count[p]);
         let w = &self.values[p * D * WIDTH..(p + 1) * D * WIDTH];
         let dw = &self.derivatives[p * D * WIDTH..(p + 1) * D * WIDTH];
@@ -187,6 +231,10 @@ mod tests {
         let x3 = [Vector3::new(2.3, 1.1, 3.9), Vector3::new(0.1, 2.9, 7.95)];
         let l3 = [Vector3::new(0.25, 0.125, 0.5), Vector3::new(0.6, 0.2, 0.01)];
         check(&g3, &x3, &l3);
+        // 1D takes the odometer of any dimension.
+        let g1 = Grid::new(SVector::<f64, 1>::new(0.5), SVector::<f64, 1>::new(0.25), [6]).unwrap();
+        let x1 = [SVector::<f64, 1>::new(0.6), SVector::<f64, 1>::new(1.93)];
+        check(&g1, &x1, &[SVector::<f64, 1>::new(0.1), SVector::<f64, 1>::new(0.0)]);
     }
 
     /// A point outside the grid is named; of two, the lower index.
