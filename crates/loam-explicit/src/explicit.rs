@@ -620,14 +620,22 @@ fn carried<const D: usize>(basis: &AxisBasis<D>, velocity: &[f64], p: usize) -> 
 /// nothing.
 fn critical_step<const D: usize>(model: &Model<D>, p_wave: &[f64], velocity: &[f64]) -> f64 {
     let (pts, h) = (model.points(), model.grid().cell_size().min());
-    let c_max = (0..pts.len()).into_par_iter().map(|p| wave_speed(pts, p_wave, p)).reduce(|| 0.0, f64::max);
-    let v_max = velocity.par_chunks(D).map(|v| v.iter().map(|c| c * c).sum::<f64>().sqrt()).reduce(|| 0.0, f64::max);
-    h / (c_max + v_max)
+    // max √x = √(max x) exactly (the root is correctly rounded and monotonic): one root for
+    // the body instead of one per point and one per node.
+    let c2_max = (0..pts.len()).into_par_iter().map(|p| squared_wave_speed(pts, p_wave, p)).reduce(|| 0.0, f64::max);
+    let v2_max = velocity.par_chunks(D).map(|v| v.iter().map(|c| c * c).sum::<f64>()).reduce(|| 0.0, f64::max);
+    h / (c2_max.sqrt() + v2_max.sqrt())
 }
 
 /// The P-wave speed c_p = √(M / ρ_p) of point `p`, ρ_p = m_p / v_p (docs/theory.md §10).
 fn wave_speed<const D: usize>(pts: &loam_points::PointStore<D>, p_wave: &[f64], p: usize) -> f64 {
-    (p_wave[pts.material[p] as usize] / (pts.mass[p] / pts.volume[p])).sqrt()
+    squared_wave_speed(pts, p_wave, p).sqrt()
+}
+
+/// c_p² = M / ρ_p of point `p`.
+#[inline]
+fn squared_wave_speed<const D: usize>(pts: &loam_points::PointStore<D>, p_wave: &[f64], p: usize) -> f64 {
+    p_wave[pts.material[p] as usize] / (pts.mass[p] / pts.volume[p])
 }
 
 /// Sign with sign(0) = 0 (`f64::signum` gives ±1 at zero).
