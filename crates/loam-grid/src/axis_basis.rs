@@ -127,8 +127,10 @@ impl<const D: usize> AxisBasis<D> {
         if D == 2 {
             let ((wx, dx), (wy, dy)) = (axis(0), axis(1));
             let mut start = first[1] as usize * row + first[0] as usize;
-            for (&wj, &dj) in wy.iter().zip(dy) {
-                for (i, (&wi, &di)) in wx.iter().zip(dx).enumerate() {
+            for j in 0..wy.len() {
+                let (wj, dj) = (wy[j], dy[j]);
+                for i in 0..wx.len() {
+                    let (wi, di) = (wx[i], dx[i]);
                     let grad = [di * wj, dj * wi];
                     f(start + i, wi * wj, SVector::from_fn(|a, _| grad[a]));
                 }
@@ -138,10 +140,13 @@ impl<const D: usize> AxisBasis<D> {
             let ((wx, dx), (wy, dy), (wz, dz)) = (axis(0), axis(1), axis(2));
             let plane = row * self.nodes_per_axis[1];
             let mut layer = first[2] as usize * plane + first[1] as usize * row + first[0] as usize;
-            for (&wk, &dk) in wz.iter().zip(dz) {
+            for k in 0..wz.len() {
+                let (wk, dk) = (wz[k], dz[k]);
                 let mut start = layer;
-                for (&wj, &dj) in wy.iter().zip(dy) {
-                    for (i, (&wi, &di)) in wx.iter().zip(dx).enumerate() {
+                for j in 0..wy.len() {
+                    let (wj, dj) = (wy[j], dy[j]);
+                    for i in 0..wx.len() {
+                        let (wi, di) = (wx[i], dx[i]);
                         let grad = [di * wj * wk, dj * wi * wk, dk * wi * wj];
                         f(start + i, wi * wj * wk, SVector::from_fn(|a, _| grad[a]));
                     }
