@@ -549,14 +549,22 @@ mod tests {
         }
     }
 
-    /// The closed-form diagonal of U = √(FᵀF) is that of the eigen-decomposition of FᵀF
-    /// (nalgebra's symmetric QR, the reference) to 1e-13 relative to U's largest stretch: for
-    /// rotated stretches with distinct, pairwise equal, all equal and widely spread principal
-    /// stretches, a near-identity F, simple shears and a compression to 1 % of the volume.
-    /// (Relative to the largest stretch, since a diagonal entry of U is a weighted mean of
-    /// the principal stretches and its absolute error is that of the largest; 1e-13 is a few
-    /// hundred ε, the round-off of either method's dozens of operations: the worst case of
-    /// these measured 2.1e-14.)
+    /// The closed-form diagonal of U = √(FᵀF) against that of the eigen-decomposition of FᵀF
+    /// (nalgebra's symmetric QR, the reference), to 1e-13 relative to U's largest stretch (a
+    /// diagonal entry of U is a weighted mean of the principal stretches and its absolute
+    /// error is that of the largest; 1e-13 is a few hundred ε, the round-off of either
+    /// method's dozens of operations: the worst of 2 000 random F measured 2.1e-14).
+    fn assert_closed_form_stretch(f: &Matrix3<f64>) {
+        let (u, largest) = reference_stretch(f);
+        let got = right_stretch_diagonal(f);
+        for i in 0..3 {
+            assert!((got[i] - u[i]).abs() <= 1e-13 * largest, "{f}: {got:?} vs {u}");
+        }
+    }
+
+    /// Rotated stretches with distinct, pairwise equal, all equal and widely spread
+    /// principal stretches, a near-identity F, simple shears and a compression to 1 % of
+    /// the volume (random F: the property test below).
     #[test]
     fn the_closed_form_stretch_is_that_of_the_eigen_decomposition() {
         let rotation = |a: f64, b: f64, c: f64| nalgebra::Rotation3::from_euler_angles(a, b, c).into_inner();
@@ -569,36 +577,25 @@ mod tests {
             [40.0, 0.05, 1.0],
             [0.2, 0.25, 0.2],
         ];
-        let mut cases = Vec::new();
         for (k, st) in stretches.iter().enumerate() {
             let (r, q) = (rotation(0.3 * k as f64, -0.7, 1.1), rotation(0.2, 0.5 * k as f64, -0.4));
             // F = R V Q with V diagonal: C = Qᵀ V² Q, principal stretches V.
-            cases.push(r * Matrix3::from_diagonal(&Vector3::from(*st)) * q);
-            cases.push(Matrix3::from_diagonal(&Vector3::from(*st)));
+            assert_closed_form_stretch(&(r * Matrix3::from_diagonal(&Vector3::from(*st)) * q));
+            assert_closed_form_stretch(&Matrix3::from_diagonal(&Vector3::from(*st)));
         }
-        cases.push(Matrix3::new(1.0, 0.7, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0));
-        cases.push(Matrix3::new(1.0, 0.1, -0.3, 0.0, 1.0, 0.2, 0.0, 0.0, 1.0));
-        cases.push(Matrix3::identity() + Matrix3::new(1e-7, -2e-8, 3e-8, 1e-8, -5e-8, 0.0, 2e-9, 4e-8, 1e-8));
-        // And 2 000 pseudo-random F = 1 + A, A's entries uniform in (−1, 1), det F > 0.01.
-        let mut seed = 0x2545_f491_4f6c_dd1d_u64;
-        let mut uniform = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-        };
-        while cases.len() < 2_000 {
-            let f = Matrix3::identity() + Matrix3::from_fn(|_, _| uniform());
-            if f.determinant() > 0.01 {
-                cases.push(f);
-            }
-        }
-        for f in cases {
-            let (u, largest) = reference_stretch(&f);
-            let got = right_stretch_diagonal(&f);
-            for i in 0..3 {
-                assert!((got[i] - u[i]).abs() <= 1e-13 * largest, "{f}: {got:?} vs {u}");
-            }
+        assert_closed_form_stretch(&Matrix3::new(1.0, 0.7, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0));
+        assert_closed_form_stretch(&Matrix3::new(1.0, 0.1, -0.3, 0.0, 1.0, 0.2, 0.0, 0.0, 1.0));
+        let near_identity = Matrix3::new(1e-7, -2e-8, 3e-8, 1e-8, -5e-8, 0.0, 2e-9, 4e-8, 1e-8);
+        assert_closed_form_stretch(&(Matrix3::identity() + near_identity));
+    }
+
+    proptest::proptest! {
+        /// F = 1 + A, A's entries in (−1, 1), det F > 0.01.
+        #[test]
+        fn the_closed_form_stretch_of_any_f(a in proptest::array::uniform9(-1.0f64..1.0)) {
+            let f = Matrix3::identity() + Matrix3::from_row_slice(&a);
+            proptest::prop_assume!(f.determinant() > 0.01);
+            assert_closed_form_stretch(&f);
         }
     }
     use approx::assert_relative_eq;
