@@ -191,12 +191,11 @@ impl BasisKind {
 
 /// Tent function in cell units on the cell owning `xi` (half-open rule).
 fn linear_1d(xi: f64, n_cells: usize, idx: &mut [usize; 4], w: &mut [f64; 4], dw: &mut [f64; 4]) -> Option<usize> {
-    let cell = xi.floor();
-    if cell < 0.0 || cell >= n_cells as f64 {
+    if !(0.0..n_cells as f64).contains(&xi) {
         return None;
     }
-    let i = cell as usize;
-    let f = xi - cell;
+    let i = floor_int(xi) as usize;
+    let f = xi - i as f64;
     idx[0] = i;
     idx[1] = i + 1;
     w[0] = 1.0 - f;
@@ -240,7 +239,7 @@ fn bspline_1d(xi: f64, n_cells: usize, idx: &mut [usize; 4], w: &mut [f64; 4], d
         return None;
     }
     // Span k ∈ [2, n]: t_k ≤ xi < t_{k+1}.
-    let k = if xi < 1.5 { 2 } else { ((xi + 1.5).floor() as usize).min(n) };
+    let k = if xi < 1.5 { 2 } else { (floor_int(xi + 1.5) as usize).min(n) };
     let t = |j: usize| bspline_knot(j, n);
     // Degree 1 on the span: N_{k−1,1} and N_{k,1}.
     let (t_km1, t_k, t_k1, t_k2) = (t(k - 1), t(k), t(k + 1), t(k + 2));
@@ -312,13 +311,20 @@ fn gimp_weight(d: f64, l: f64, inv_2l: f64) -> (f64, f64) {
     (s * inv_2l, (rise - fall) * inv_2l)
 }
 
-/// ⌊x⌋ and ⌈x⌉ of a finite |x| < 2⁵³ as integers, by truncation: without SSE4.1 in the
-/// default target, `f64::floor` is a library call.
+/// ⌊x⌋ of a finite |x| < 2⁵³ as an integer, by truncation: without SSE4.1 in the default
+/// target, `f64::floor` is a library call. Every 1D basis finds its nodes with it, each
+/// for a coordinate already checked to lie within a few cells of its grid.
 #[inline]
-fn floor_ceil(x: f64) -> (i64, i64) {
+fn floor_int(x: f64) -> i64 {
     let t = x as i64;
-    let tf = t as f64;
-    (t - i64::from(tf > x), t + i64::from(tf < x))
+    t - i64::from(t as f64 > x)
+}
+
+/// ⌈x⌉ of a finite |x| < 2⁵³ as an integer ([`floor_int`]).
+#[inline]
+fn ceil_int(x: f64) -> i64 {
+    let t = x as i64;
+    t + i64::from((t as f64) < x)
 }
 
 /// GIMP in cell units: nodes i with |xi − i| < 1 + l. A node beyond the grid that would
@@ -338,9 +344,9 @@ fn gimp_1d(
 ) -> Option<usize> {
     let reach = 1.0 + l - SUPPORT_EPS;
     let inv_2l = 0.5 / l;
-    let mut first = floor_ceil(xi - reach).1;
+    let mut first = ceil_int(xi - reach);
     first += i64::from(xi - first as f64 >= reach);
-    let mut last = floor_ceil(xi + reach).0;
+    let mut last = floor_int(xi + reach);
     last -= i64::from(last as f64 - xi >= reach);
     if first < 0 || last > n_cells as i64 {
         return None;
