@@ -51,13 +51,14 @@ pub fn stretched_half_length<const D: usize>(l0: &SVector<f64, D>, f: &Matrix3<f
 pub fn right_stretch_diagonal(f: &Matrix3<f64>) -> [f64; 3] {
     let c = f.transpose() * f;
     let i_c = f.norm_squared();
-    let cofactor = |i: usize, j: usize| {
+    let cofactor = Matrix3::from_fn(|i, j| {
         let (r0, r1) = ((i + 1) % 3, (i + 2) % 3);
         let (c0, c1) = ((j + 1) % 3, (j + 2) % 3);
         f[(r0, c0)] * f[(r1, c1)] - f[(r0, c1)] * f[(r1, c0)]
-    };
-    let ii_c: f64 = (0..9).map(|k| cofactor(k / 3, k % 3).powi(2)).sum();
-    let det = f.determinant().abs();
+    });
+    let ii_c = cofactor.norm_squared();
+    // det F by the cofactors of its first row, already formed for II_C.
+    let det = f.row(0).dot(&cofactor.row(0)).abs();
     let q = i_c / 3.0;
     let off = c[(0, 1)] * c[(0, 1)] + c[(0, 2)] * c[(0, 2)] + c[(1, 2)] * c[(1, 2)];
     let dev = |i: usize| c[(i, i)] - q;
