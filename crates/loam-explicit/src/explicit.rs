@@ -3,10 +3,11 @@
 use crate::{ExplicitError, ExplicitSettings, TimeStep, UpdateScheme};
 use loam_grid::{ActiveNodes, AxisBasis, BasisError, PointBasisError};
 use loam_kernels::{
-    advance_deformation, check_constraints, embed, internal_force, update_point_stress, BandScatter, Committed,
-    ConnectError, LoadSupports, RunError,
+    check_constraints, embed, internal_force, update_point_stress, BandScatter, Committed, ConnectError, LoadSupports,
+    RunError,
 };
 use loam_model::{Kinematics, LoadLevel, Model, ModelError, ModelState, StateFields};
+use loam_points::stretched_half_length;
 use nalgebra::{Matrix3, SMatrix, SVector};
 use rayon::prelude::*;
 use std::time::{Duration, Instant};
@@ -824,8 +825,9 @@ fn grid_to_points<const D: usize>(
 
 /// Stress update of every point from the nodal velocities `velocity` into the scratch,
 /// with the rest of its new state the commit exchanges: F ← ΔF F, the volume det ΔF v_p
-/// and the half-lengths stretched with the new F (iGIMP) — in the same pass over the points
-/// that reads their committed F, instead of a second one at the commit.
+/// and the half-lengths stretched with the new F (iGIMP, `stretched_half_length`) — in the
+/// same pass over the points that reads their committed F, instead of a second one at the
+/// commit.
 fn update_stress<const D: usize>(
     model: &Model<D>,
     basis: &AxisBasis<D>,
@@ -858,8 +860,13 @@ fn update_stress<const D: usize>(
                 };
                 (stress[k], elastic[k]) = (state.stress, state.elastic_strain);
                 volume[k] = state.det * pts.volume[p];
-                f_new[k] = pts.deformation_gradient[p];
-                advance_deformation(&state.delta_f, &mut f_new[k], &mut half_length[k], &pts.half_length0[p]);
+                f_new[k] = state.delta_f * pts.deformation_gradient[p];
+            }
+            // In a loop of its own: the closed-form stretch is a chain of roots, a division
+            // and an arc cosine, which the next points' stretches overlap here but not when
+            // a whole stress update lies between them (3D block: the step 3-4 % faster).
+            for (k, (l, f)) in half_length.iter_mut().zip(f_new.iter()).enumerate() {
+                *l = stretched_half_length(&pts.half_length0[block * POINT_BLOCK + k], f);
             }
             None
         })
