@@ -159,17 +159,9 @@ fn jacobi_rotate(a: &mut Matrix3<f64>, v: &mut Matrix3<f64>, p: usize, q: usize)
         // θ so large that θ² would overflow: t = 1/(2θ).
         apq / h
     } else {
-        let theta = 0.5 * h / apq;
-        let t = 1.0 / (theta.abs() + (theta * theta + 1.0).sqrt());
-        if theta < 0.0 {
-            -t
-        } else {
-            t
-        }
+        jacobi_tangent(0.5 * h / apq)
     };
-    let c = 1.0 / (t * t + 1.0).sqrt();
-    let sn = t * c;
-    let tau = sn / (1.0 + c);
+    let (sn, tau) = jacobi_sine_and_tau(t);
     a[(p, p)] = app - t * apq;
     a[(q, q)] = aqq + t * apq;
     a[(p, q)] = 0.0;
@@ -185,6 +177,32 @@ fn jacobi_rotate(a: &mut Matrix3<f64>, v: &mut Matrix3<f64>, p: usize, q: usize)
         v[(k, p)] = vkp - sn * (vkq + vkp * tau);
         v[(k, q)] = vkq + sn * (vkp - vkq * tau);
     }
+}
+
+/// The rotation's t = sgn θ / (|θ| + √(θ² + 1)). Where θ² + 1 rounds to θ², √(θ² + 1) is
+/// |θ| exactly and t is 0.5/|θ| to the last bit: the root is skipped (most rotations of a
+/// second sweep, whose angles are below 1e-8).
+#[inline]
+fn jacobi_tangent(theta: f64) -> f64 {
+    let square = theta * theta;
+    let t = if square + 1.0 == square { 0.5 / theta.abs() } else { 1.0 / (theta.abs() + (square + 1.0).sqrt()) };
+    if theta < 0.0 {
+        -t
+    } else {
+        t
+    }
+}
+
+/// The rotation's s = t c and τ = s / (1 + c), c = 1/√(t² + 1). Where t² + 1 rounds to 1,
+/// c is 1, s is t and τ is t/2, each to the last bit: a root and two divisions skipped.
+#[inline]
+fn jacobi_sine_and_tau(t: f64) -> (f64, f64) {
+    if t * t + 1.0 == 1.0 {
+        return (t, 0.5 * t);
+    }
+    let c = 1.0 / (t * t + 1.0).sqrt();
+    let sn = t * c;
+    (sn, sn / (1.0 + c))
 }
 
 /// The spectral decomposition of a symmetric `s` whose z axis is an eigenvector: the
@@ -421,6 +439,30 @@ mod tests {
             Matrix3::new(0.3, -1.2, 0.8, -1.2, -0.4, 0.1, 0.8, 0.1, -2.0),
         ] {
             assert_jacobi_agrees_with_the_qr(&m);
+        }
+    }
+
+    /// The rotation's t, s and τ from the full formulas, roots and all.
+    fn full_rotation(theta: f64) -> (f64, f64, f64) {
+        let t = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
+        let c = 1.0 / (t * t + 1.0).sqrt();
+        (t, t * c, t * c / (1.0 + c))
+    }
+
+    /// The shortcuts of small angles give the full formulas' t, s and τ to the last bit: θ
+    /// from 1e-3 to 1e150 on both sides of where θ² + 1 rounds to θ² (2^26.5) and t² + 1
+    /// rounds to 1, and either sign.
+    #[test]
+    fn small_angle_shortcuts_are_the_full_formulas() {
+        let mut theta = 1e-3;
+        while theta < 1e150 {
+            for th in [theta, -theta, theta * (1.0 + f64::EPSILON), theta * (1.0 - f64::EPSILON)] {
+                let t = jacobi_tangent(th);
+                let (sn, tau) = jacobi_sine_and_tau(t);
+                let bits = |x: (f64, f64, f64)| [x.0.to_bits(), x.1.to_bits(), x.2.to_bits()];
+                assert_eq!(bits((t, sn, tau)), bits(full_rotation(th)), "θ = {th:e}");
+            }
+            theta *= 1.01;
         }
     }
 
