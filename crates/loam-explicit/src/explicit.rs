@@ -7,7 +7,7 @@ use loam_kernels::{
     RunError,
 };
 use loam_model::{Kinematics, LoadLevel, Model, ModelError, ModelState, StateFields};
-use loam_points::stretched_half_length;
+use loam_points::{stretched_half_length, stretched_half_lengths};
 use nalgebra::{Matrix3, SMatrix, SVector};
 use rayon::prelude::*;
 use std::time::{Duration, Instant};
@@ -862,11 +862,21 @@ fn update_stress<const D: usize>(
                 volume[k] = state.det * pts.volume[p];
                 f_new[k] = state.delta_f * pts.deformation_gradient[p];
             }
-            // In a loop of its own: the closed-form stretch is a chain of roots, a division
-            // and an arc cosine, which the next points' stretches overlap here but not when
-            // a whole stress update lies between them (3D block: the step 3-4 % faster).
-            for (k, (l, f)) in half_length.iter_mut().zip(f_new.iter()).enumerate() {
-                *l = stretched_half_length(&pts.half_length0[block * POINT_BLOCK + k], f);
+            // In a loop of its own, eight points at a time: the closed-form stretch is a chain
+            // of roots, a division and an arc cosine, which the next points' stretches
+            // overlap here but not when a whole stress update lies between them (3D block:
+            // the step 3-4 % faster), and more when computed stage by stage together (2 %).
+            let l0 = &pts.half_length0[block * POINT_BLOCK..][..f_new.len()];
+            let lanes = f_new.len() - f_new.len() % STRETCH_LANES;
+            for k in (0..lanes).step_by(STRETCH_LANES) {
+                let l = stretched_half_lengths::<D, STRETCH_LANES>(
+                    std::array::from_fn(|j| &l0[k + j]),
+                    std::array::from_fn(|j| &f_new[k + j]),
+                );
+                half_length[k..k + STRETCH_LANES].copy_from_slice(&l);
+            }
+            for k in lanes..f_new.len() {
+                half_length[k] = stretched_half_length(&l0[k], &f_new[k]);
             }
             None
         })
@@ -876,6 +886,9 @@ fn update_stress<const D: usize>(
 
 /// Points per block of a pass that zips several per-point fields.
 const POINT_BLOCK: usize = 256;
+
+/// Points whose iGIMP stretches are computed together (`stretched_half_lengths`).
+const STRETCH_LANES: usize = 8;
 
 /// What the explicit step keeps of a point's update (it has no use for the tangent).
 struct PointState {

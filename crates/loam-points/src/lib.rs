@@ -33,6 +33,20 @@ pub fn stretched_half_length<const D: usize>(l0: &SVector<f64, D>, f: &Matrix3<f
     SVector::from_fn(|i, _| l0[i] * u[i])
 }
 
+/// [`stretched_half_length`] of `N` points at once, each bit for bit its own: in 3D the
+/// stretches in lanes ([`right_stretch_diagonals`]), whose chains overlap.
+#[inline]
+pub fn stretched_half_lengths<const D: usize, const N: usize>(
+    l0: [&SVector<f64, D>; N],
+    f: [&Matrix3<f64>; N],
+) -> [SVector<f64, D>; N] {
+    if D == 2 {
+        return std::array::from_fn(|k| stretched_half_length(l0[k], f[k]));
+    }
+    let u = right_stretch_diagonals(f);
+    std::array::from_fn(|k| SVector::from_fn(|i, _| l0[k][i] * u[k][i]))
+}
+
 /// The diagonal of the right stretch U = √C, C = FᵀF, of a 3 × 3 F, in closed form. By
 /// Cayley–Hamilton for U, U³ − I U² + II U − III 1 = 0, so U (C + II 1) = I C + III 1 and
 /// U = (C + II 1)⁻¹ (I C + III 1) (Hoger & Carlson 1984), I, II, III the invariants of U.
@@ -49,42 +63,64 @@ pub fn stretched_half_length<const D: usize>(l0: &SVector<f64, D>, f: &Matrix3<f
 /// iterations, which were a quarter of the 3D explicit step.
 #[inline]
 pub fn right_stretch_diagonal(f: &Matrix3<f64>) -> [f64; 3] {
-    let c = f.transpose() * f;
-    let i_c = f.norm_squared();
-    let cofactor = Matrix3::from_fn(|i, j| {
-        let (r0, r1) = ((i + 1) % 3, (i + 2) % 3);
-        let (c0, c1) = ((j + 1) % 3, (j + 2) % 3);
-        f[(r0, c0)] * f[(r1, c1)] - f[(r0, c1)] * f[(r1, c0)]
+    right_stretch_diagonals([f])[0]
+}
+
+/// [`right_stretch_diagonal`] of `N` deformation gradients at once, each lane bit for bit
+/// the one-lane result (the one-lane case *is* that function). Every stage is computed for
+/// all lanes before the next, so that the lanes' chains of roots, divisions, arc cosine and
+/// cosine overlap: one stretch alone leaves the processor waiting on each link.
+#[inline]
+pub fn right_stretch_diagonals<const N: usize>(f: [&Matrix3<f64>; N]) -> [[f64; 3]; N] {
+    let c: [Matrix3<f64>; N] = std::array::from_fn(|k| f[k].transpose() * f[k]);
+    let i_c = lanes::<N>(|k| f[k].norm_squared());
+    let cofactor: [Matrix3<f64>; N] = std::array::from_fn(|k| {
+        Matrix3::from_fn(|i, j| {
+            let (r0, r1) = ((i + 1) % 3, (i + 2) % 3);
+            let (c0, c1) = ((j + 1) % 3, (j + 2) % 3);
+            f[k][(r0, c0)] * f[k][(r1, c1)] - f[k][(r0, c1)] * f[k][(r1, c0)]
+        })
     });
-    let ii_c = cofactor.norm_squared();
+    let ii_c = lanes::<N>(|k| cofactor[k].norm_squared());
     // det F by the cofactors of its first row, already formed for II_C.
-    let det = f.row(0).dot(&cofactor.row(0)).abs();
-    let q = i_c / 3.0;
-    let off = c[(0, 1)] * c[(0, 1)] + c[(0, 2)] * c[(0, 2)] + c[(1, 2)] * c[(1, 2)];
-    let dev = |i: usize| c[(i, i)] - q;
-    let p = ((dev(0) * dev(0) + dev(1) * dev(1) + dev(2) * dev(2) + 2.0 * off) / 6.0).sqrt();
-    let l1 = if p > 0.0 {
-        let b = (c - Matrix3::from_diagonal_element(q)) * (1.0 / p);
-        q + 2.0 * p * ((0.5 * b.determinant()).clamp(-1.0, 1.0).acos() / 3.0).cos()
-    } else {
-        q
-    };
-    // λ₁ = 0 only for F = 0, which no valid state reaches: U's diagonal is then 0 (as the
-    // plane form takes it).
-    if l1 <= 0.0 {
-        return [0.0; 3];
-    }
-    let product = det * det / l1;
-    let sum = ((ii_c - product) / l1).max(0.0);
-    let (s1, s23) = (l1.sqrt(), product.sqrt());
-    let s2_plus_s3 = (sum + 2.0 * s23).sqrt();
-    let (i_u, ii_u) = (s1 + s2_plus_s3, s1 * s2_plus_s3 + s23);
-    // C + II 1 is singular only for II = 0, F of rank ≤ 1 (as above).
-    let Some(inverse) = (c + Matrix3::from_diagonal_element(ii_u)).try_inverse() else {
-        return [0.0; 3];
-    };
-    let n = c * i_u + Matrix3::from_diagonal_element(det);
-    std::array::from_fn(|i| inverse.row(i).dot(&n.column(i).transpose()))
+    let det = lanes::<N>(|k| f[k].row(0).dot(&cofactor[k].row(0)).abs());
+    let q = lanes::<N>(|k| i_c[k] / 3.0);
+    let p = lanes::<N>(|k| {
+        let c = &c[k];
+        let off = c[(0, 1)] * c[(0, 1)] + c[(0, 2)] * c[(0, 2)] + c[(1, 2)] * c[(1, 2)];
+        let dev = |i: usize| c[(i, i)] - q[k];
+        ((dev(0) * dev(0) + dev(1) * dev(1) + dev(2) * dev(2) + 2.0 * off) / 6.0).sqrt()
+    });
+    let half_det_b = lanes::<N>(|k| {
+        let b = (c[k] - Matrix3::from_diagonal_element(q[k])) * (1.0 / p[k]);
+        (0.5 * b.determinant()).clamp(-1.0, 1.0)
+    });
+    let angle = lanes::<N>(|k| half_det_b[k].acos() / 3.0);
+    let l1 = lanes::<N>(|k| if p[k] > 0.0 { q[k] + 2.0 * p[k] * angle[k].cos() } else { q[k] });
+    std::array::from_fn(|k| {
+        // λ₁ = 0 only for F = 0, which no valid state reaches: U's diagonal is then 0 (as
+        // the plane form takes it).
+        if l1[k] <= 0.0 {
+            return [0.0; 3];
+        }
+        let product = det[k] * det[k] / l1[k];
+        let sum = ((ii_c[k] - product) / l1[k]).max(0.0);
+        let (s1, s23) = (l1[k].sqrt(), product.sqrt());
+        let s2_plus_s3 = (sum + 2.0 * s23).sqrt();
+        let (i_u, ii_u) = (s1 + s2_plus_s3, s1 * s2_plus_s3 + s23);
+        // C + II 1 is singular only for II = 0, F of rank ≤ 1 (as above).
+        let Some(inverse) = (c[k] + Matrix3::from_diagonal_element(ii_u)).try_inverse() else {
+            return [0.0; 3];
+        };
+        let n = c[k] * i_u + Matrix3::from_diagonal_element(det[k]);
+        std::array::from_fn(|i| inverse.row(i).dot(&n.column(i).transpose()))
+    })
+}
+
+/// One number per lane.
+#[inline(always)]
+fn lanes<const N: usize>(value: impl FnMut(usize) -> f64) -> [f64; N] {
+    std::array::from_fn(value)
 }
 
 /// Errors in generating points.
@@ -588,6 +624,38 @@ mod tests {
         assert_closed_form_stretch(&Matrix3::new(1.0, 0.1, -0.3, 0.0, 1.0, 0.2, 0.0, 0.0, 1.0));
         let near_identity = Matrix3::new(1e-7, -2e-8, 3e-8, 1e-8, -5e-8, 0.0, 2e-9, 4e-8, 1e-8);
         assert_closed_form_stretch(&(Matrix3::identity() + near_identity));
+    }
+
+    /// Eight stretches computed together are each the one computed alone, to the last bit,
+    /// whatever the other lanes hold: distinct, repeated (p = 0, which skips the arc
+    /// cosine) and zero F, sheared and compressed ones; and the half-lengths likewise, in
+    /// 3D and in plane strain.
+    #[test]
+    fn stretches_in_lanes_are_each_the_one_alone() {
+        let lanes: [Matrix3<f64>; 8] = [
+            Matrix3::new(1.2, 0.1, -0.3, 0.05, 0.9, 0.2, 0.0, -0.1, 1.05),
+            Matrix3::identity() * 2.0,
+            Matrix3::zeros(),
+            Matrix3::new(1.0, 0.7, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0),
+            Matrix3::from_diagonal(&Vector3::new(40.0, 0.05, 1.0)),
+            Matrix3::identity() + Matrix3::new(1e-7, -2e-8, 3e-8, 1e-8, -5e-8, 0.0, 2e-9, 4e-8, 1e-8),
+            Matrix3::new(0.3, -0.2, 0.1, 0.4, 0.6, -0.5, 0.2, 0.1, 0.9),
+            Matrix3::new(0.9, 0.3, 0.0, -0.2, 1.1, 0.0, 0.0, 0.0, 1.0),
+        ];
+        let together = right_stretch_diagonals::<8>(std::array::from_fn(|k| &lanes[k]));
+        for (k, f) in lanes.iter().enumerate() {
+            assert_eq!(together[k].map(f64::to_bits), right_stretch_diagonal(f).map(f64::to_bits), "lane {k}");
+        }
+        let l3: [Vector3<f64>; 8] = std::array::from_fn(|k| Vector3::new(0.25, 0.125 * (k + 1) as f64, 0.5));
+        let got = stretched_half_lengths::<3, 8>(std::array::from_fn(|k| &l3[k]), std::array::from_fn(|k| &lanes[k]));
+        for k in 0..8 {
+            assert_eq!(got[k], stretched_half_length(&l3[k], &lanes[k]), "3D lane {k}");
+        }
+        let l2: [Vector2<f64>; 8] = std::array::from_fn(|k| Vector2::new(0.25, 0.1 * (k + 1) as f64));
+        let got = stretched_half_lengths::<2, 8>(std::array::from_fn(|k| &l2[k]), std::array::from_fn(|k| &lanes[k]));
+        for k in 0..8 {
+            assert_eq!(got[k], stretched_half_length(&l2[k], &lanes[k]), "2D lane {k}");
+        }
     }
 
     proptest::proptest! {
