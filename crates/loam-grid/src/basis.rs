@@ -189,6 +189,44 @@ impl BasisKind {
     }
 }
 
+/// GIMP along axis `a` for `N` points at once, each lane bit for bit what
+/// [`BasisKind::evaluate_axis`] gives it: every stage (the point in cell units, its
+/// clipped half-length, the reciprocal, the first and last node, the weights) for all lanes
+/// before the next, so that the lanes' chains of divisions and conversions overlap. Writes
+/// the values and derivatives (per unit length) of the first nodes into `w`, `dw` and
+/// returns each lane's first node and count; `None` for a lane off GIMP's common path (not
+/// finite, in the linear limit, at or beyond the grid's faces), which `evaluate_axis`
+/// itself must take. Slots past a lane's count hold weights of no use.
+pub(crate) fn gimp_axis_lanes<const D: usize, const N: usize>(
+    grid: &Grid<D>,
+    x: [&SVector<f64, D>; N],
+    half_length: [&SVector<f64, D>; N],
+    a: usize,
+    w: &mut [[f64; 4]; N],
+    dw: &mut [[f64; 4]; N],
+) -> [Option<(usize, usize)>; N] {
+    let (h, n_cells) = (grid.cell_size()[a], grid.cells()[a]);
+    let n = n_cells as f64;
+    let xi: [f64; N] = std::array::from_fn(|k| (x[k][a] - grid.origin()[a]) / h);
+    let l: [f64; N] = std::array::from_fn(|k| half_length[k][a] / h);
+    let common: [bool; N] = std::array::from_fn(|k| {
+        let clipped = l[k].min(xi[k]).min(n - xi[k]);
+        xi[k].is_finite() && l[k].is_finite() && !(clipped < MIN_HALF_LENGTH || xi[k] < 0.0 || xi[k] >= n)
+    });
+    // Off the common path a lane computes from a harmless stand-in and is not used.
+    let l: [f64; N] =
+        std::array::from_fn(|k| if common[k] { l[k].min(xi[k]).min(n - xi[k]).min(MAX_HALF_LENGTH) } else { 0.5 });
+    let xi: [f64; N] = std::array::from_fn(|k| if common[k] { xi[k] } else { 0.5 });
+    let lanes = gimp_1d_lanes(xi, l, n_cells, w, dw);
+    let inv_h = 1.0 / h;
+    for (dw, lane) in dw.iter_mut().zip(&lanes) {
+        for v in &mut dw[..lane.map_or(0, |(_, count)| count)] {
+            *v *= inv_h;
+        }
+    }
+    std::array::from_fn(|k| lanes[k].filter(|_| common[k]))
+}
+
 /// Tent function in cell units on the cell owning `xi` (half-open rule).
 fn linear_1d(xi: f64, n_cells: usize, idx: &mut [usize; 4], w: &mut [f64; 4], dw: &mut [f64; 4]) -> Option<usize> {
     if !(0.0..n_cells as f64).contains(&xi) {
@@ -328,11 +366,8 @@ fn ceil_int(x: f64) -> i64 {
 }
 
 /// GIMP in cell units: nodes i with |xi − i| < 1 + l. A node beyond the grid that would
-/// carry weight means the point's domain leaves the grid.
-///
-/// The nodes are the integers from ⌈xi − reach⌉ to ⌊xi + reach⌋ less an end lying exactly
-/// at the reach (xi − i is exact for the integers near xi, so only the ends can): no test
-/// per node.
+/// carry weight means the point's domain leaves the grid. The one-lane case of
+/// [`gimp_1d_lanes`].
 #[inline]
 fn gimp_1d(
     xi: f64,
@@ -342,22 +377,47 @@ fn gimp_1d(
     w: &mut [f64; 4],
     dw: &mut [f64; 4],
 ) -> Option<usize> {
-    let reach = 1.0 + l - SUPPORT_EPS;
-    let inv_2l = 0.5 / l;
-    let mut first = ceil_int(xi - reach);
-    first += i64::from(xi - first as f64 >= reach);
-    let mut last = floor_int(xi + reach);
-    last -= i64::from(last as f64 - xi >= reach);
-    if first < 0 || last > n_cells as i64 {
-        return None;
-    }
-    let count = (last - first + 1) as usize;
-    for k in 0..count {
-        let i = first + k as i64;
-        idx[k] = i as usize;
-        (w[k], dw[k]) = gimp_weight(xi - i as f64, l, inv_2l);
+    let [lane] = gimp_1d_lanes([xi], [l], n_cells, std::array::from_mut(w), std::array::from_mut(dw));
+    let (first, count) = lane?;
+    for (k, i) in idx[..count].iter_mut().enumerate() {
+        *i = first + k;
     }
     Some(count)
+}
+
+/// [`gimp_1d`] for `N` points at once, each lane's nodes and weights computed stage by
+/// stage beside the others' ([`gimp_axis_lanes`]): each lane's first node and count, `None`
+/// where its domain leaves the grid; slots past a lane's count hold weights of no use.
+///
+/// The nodes are the integers from ⌈xi − reach⌉ to ⌊xi + reach⌋ less an end lying exactly
+/// at the reach (xi − i is exact for the integers near xi, so only the ends can): no test
+/// per node.
+#[inline]
+fn gimp_1d_lanes<const N: usize>(
+    xi: [f64; N],
+    l: [f64; N],
+    n_cells: usize,
+    w: &mut [[f64; 4]; N],
+    dw: &mut [[f64; 4]; N],
+) -> [Option<(usize, usize)>; N] {
+    let reach: [f64; N] = std::array::from_fn(|k| 1.0 + l[k] - SUPPORT_EPS);
+    let inv_2l: [f64; N] = std::array::from_fn(|k| 0.5 / l[k]);
+    let first: [i64; N] = std::array::from_fn(|k| {
+        let first = ceil_int(xi[k] - reach[k]);
+        first + i64::from(xi[k] - first as f64 >= reach[k])
+    });
+    let last: [i64; N] = std::array::from_fn(|k| {
+        let last = floor_int(xi[k] + reach[k]);
+        last - i64::from(last as f64 - xi[k] >= reach[k])
+    });
+    let count: [usize; N] = std::array::from_fn(|k| (last[k] - first[k] + 1).clamp(0, 4) as usize);
+    let widest = count.iter().copied().max().unwrap_or(0);
+    for j in 0..widest {
+        for k in 0..N {
+            (w[k][j], dw[k][j]) = gimp_weight(xi[k] - (first[k] + j as i64) as f64, l[k], inv_2l[k]);
+        }
+    }
+    std::array::from_fn(|k| (first[k] >= 0 && last[k] <= n_cells as i64).then(|| (first[k] as usize, count[k])))
 }
 
 #[cfg(test)]
