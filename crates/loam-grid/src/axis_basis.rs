@@ -274,9 +274,6 @@ mod tests {
     use super::*;
     use nalgebra::{Vector2, Vector3};
 
-    /// The factors' products are [`BasisKind::evaluate`]'s nodes, values and gradients to
-    /// the last bit, for every basis, in 2D and 3D, including stretched GIMP domains and
-    /// points next to the grid's faces.
     /// Every basis of the points `x` with half-lengths `l` by [`AxisBasis`] is that of
     /// [`BasisKind::evaluate`] to the last bit.
     fn products_match_evaluate<const D: usize>(grid: &Grid<D>, x: &[SVector<f64, D>], l: &[SVector<f64, D>]) {
@@ -295,6 +292,9 @@ mod tests {
         }
     }
 
+    /// The factors' products are [`BasisKind::evaluate`]'s nodes, values and gradients to
+    /// the last bit, for every basis, in 2D and 3D, including stretched GIMP domains and
+    /// points next to the grid's faces.
     #[test]
     fn products_are_the_evaluated_basis() {
         let g2 = Grid::new(Vector2::new(-1.0, 0.5), Vector2::new(0.5, 0.25), [7, 9]).unwrap();
