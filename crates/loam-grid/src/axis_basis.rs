@@ -328,13 +328,29 @@ mod tests {
             x3.push(Vector3::new(5.0 * u, 3.0 * (2.3 * t).fract(), 8.0 * t));
             l3.push(Vector3::new(0.1 + 0.8 * u, 0.05 + 0.4 * t, 0.5 * (1.7 * t).fract()));
         }
-        // Off the common path: on the lower face, a vanishing domain, a domain past the face.
-        (x2[3], l2[5], x2[9], l2[9]) =
-            (Vector2::new(-1.0, 0.5), Vector2::new(1e-12, 0.1), Vector2::new(2.4, 2.7), Vector2::new(0.4, 0.2));
-        (x3[2], l3[4], x3[10], l3[10]) =
-            (Vector3::zeros(), Vector3::new(0.3, 1e-12, 0.5), Vector3::new(4.9, 2.9, 7.9), Vector3::new(0.6, 0.2, 1.5));
+        // Off the common path, in the first and a later chunk: on the lower face, vanishing
+        // domains (the linear limit) along one axis; on it, domains clipped by the upper face.
+        (x2[3], l2[5], l2[14], x2[9], l2[9]) = (
+            Vector2::new(-1.0, 0.5),
+            Vector2::new(1e-12, 0.1),
+            Vector2::new(0.2, 1e-12),
+            Vector2::new(2.4, 2.7),
+            Vector2::new(0.4, 0.2),
+        );
+        (x3[2], l3[4], l3[13], x3[10], l3[10]) = (
+            Vector3::zeros(),
+            Vector3::new(0.3, 1e-12, 0.5),
+            Vector3::new(0.3, 0.2, 1e-12),
+            Vector3::new(4.9, 2.9, 7.9),
+            Vector3::new(0.6, 0.2, 1.5),
+        );
         products_match_evaluate(&g2, &x2, &l2);
         products_match_evaluate(&g3, &x3, &l3);
+        // One dimension takes the lanes too (nine points: a chunk and one more).
+        let g1 = Grid::new(SVector::<f64, 1>::new(0.5), SVector::<f64, 1>::new(0.25), [6]).unwrap();
+        let x1: Vec<_> = (0..9).map(|i| SVector::<f64, 1>::new(0.55 + 0.16 * i as f64)).collect();
+        let l1: Vec<_> = (0..9).map(|i| SVector::<f64, 1>::new(0.02 + 0.01 * i as f64)).collect();
+        products_match_evaluate(&g1, &x1, &l1);
     }
 
     /// Among points in lanes, the lowest one outside the grid is named.
@@ -342,10 +358,13 @@ mod tests {
     fn the_first_point_outside_is_named_among_lanes() {
         let grid = Grid::new(Vector2::zeros(), Vector2::new(1.0, 1.0), [4, 4]).unwrap();
         let mut x = vec![Vector2::new(1.5, 1.5); 20];
-        (x[13], x[11], x[17]) = (Vector2::new(5.0, 1.0), Vector2::new(1.0, -0.5), Vector2::new(f64::NAN, 1.0));
+        // Point 11 fails along both axes: its error is that of axis 0.
+        (x[13], x[11], x[17]) = (Vector2::new(5.0, 1.0), Vector2::new(-1.0, -0.5), Vector2::new(f64::NAN, 1.0));
         let mut axis = AxisBasis::new(BasisKind::Gimp);
         let e = axis.compute(&grid, &x, &[Vector2::repeat(0.25); 20]).unwrap_err();
         assert_eq!(e.point, 11);
+        assert!(matches!(e.source, crate::BasisError::OutsideGrid { axis: 0, .. }), "{:?}", e.source);
+        assert_eq!(e.position, vec![-1.0, -0.5]);
     }
 
     /// A point outside the grid is named; of two, the lower index.
