@@ -164,7 +164,7 @@ impl BasisKind {
         // point resting on a constrained grid face would otherwise need a node outside it
         // after any rounding of its stretched domain. GIMP remains a partition of unity for
         // any half-length, so clipping costs no consistency.
-        let l = l.min(xi).min(n_cells as f64 - xi);
+        let l = clipped_half_length(xi, l, n_cells as f64);
         let outside = || BasisError::OutsideGrid {
             axis: a,
             coordinate: x[a],
@@ -175,9 +175,7 @@ impl BasisKind {
             BasisKind::Linear => linear_1d(xi, n_cells, idx, w, dw),
             BasisKind::QuadraticBSpline if n_cells == 1 => linear_1d(xi, n_cells, idx, w, dw),
             BasisKind::QuadraticBSpline => bspline_1d(xi, n_cells, idx, w, dw),
-            BasisKind::Gimp if l < MIN_HALF_LENGTH || xi < 0.0 || xi >= n_cells as f64 => {
-                linear_1d(xi, n_cells, idx, w, dw)
-            }
+            BasisKind::Gimp if !gimp_on_common_path(xi, l, n_cells as f64) => linear_1d(xi, n_cells, idx, w, dw),
             BasisKind::Gimp => gimp_1d(xi, l.min(MAX_HALF_LENGTH), n_cells, idx, w, dw),
         }
         .ok_or_else(outside)?;
@@ -209,13 +207,11 @@ pub(crate) fn gimp_axis_lanes<const D: usize, const N: usize>(
     let n = n_cells as f64;
     let xi: [f64; N] = std::array::from_fn(|k| (x[k][a] - grid.origin()[a]) / h);
     let l: [f64; N] = std::array::from_fn(|k| half_length[k][a] / h);
-    let common: [bool; N] = std::array::from_fn(|k| {
-        let clipped = l[k].min(xi[k]).min(n - xi[k]);
-        xi[k].is_finite() && l[k].is_finite() && !(clipped < MIN_HALF_LENGTH || xi[k] < 0.0 || xi[k] >= n)
-    });
+    let clipped: [f64; N] = std::array::from_fn(|k| clipped_half_length(xi[k], l[k], n));
+    let common: [bool; N] =
+        std::array::from_fn(|k| xi[k].is_finite() && l[k].is_finite() && gimp_on_common_path(xi[k], clipped[k], n));
     // Off the common path a lane computes from a harmless stand-in and is not used.
-    let l: [f64; N] =
-        std::array::from_fn(|k| if common[k] { l[k].min(xi[k]).min(n - xi[k]).min(MAX_HALF_LENGTH) } else { 0.5 });
+    let l: [f64; N] = std::array::from_fn(|k| if common[k] { clipped[k].min(MAX_HALF_LENGTH) } else { 0.5 });
     let xi: [f64; N] = std::array::from_fn(|k| if common[k] { xi[k] } else { 0.5 });
     let lanes = gimp_1d_lanes(xi, l, n_cells, w, dw);
     let inv_h = 1.0 / h;
@@ -225,6 +221,20 @@ pub(crate) fn gimp_axis_lanes<const D: usize, const N: usize>(
         }
     }
     std::array::from_fn(|k| lanes[k].filter(|_| common[k]))
+}
+
+/// A domain's half-length `l` at `xi` on an axis of `n` cells (all in cells), clipped at the
+/// grid's faces ([`BasisKind::evaluate_axis`] says why).
+#[inline]
+fn clipped_half_length(xi: f64, l: f64, n: f64) -> f64 {
+    l.min(xi).min(n - xi)
+}
+
+/// Whether GIMP takes its own functions at `xi` for the clipped half-length `l` on an axis
+/// of `n` cells: not in the linear limit, not on or beyond a face, where the tent serves.
+#[inline]
+fn gimp_on_common_path(xi: f64, l: f64, n: f64) -> bool {
+    !(l < MIN_HALF_LENGTH || xi < 0.0 || xi >= n)
 }
 
 /// Tent function in cell units on the cell owning `xi` (half-open rule).
