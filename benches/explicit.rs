@@ -72,9 +72,14 @@ fn bench_block<const D: usize>(c: &mut Criterion, name: &str, n: usize, basis: B
 }
 
 fn explicit(c: &mut Criterion) {
-    bench_block::<2>(c, "block_2d_256_gimp", 256, BasisKind::Gimp);
-    // Cost linear in the points: 65 536 and 1 048 576 points beside the 262 144.
+    // Cost linear in the points: 65 536 and 1 048 576 points beside the 262 144, smallest
+    // first. After a larger block is dropped, glibc serves a smaller one's buffers from its
+    // heap rather than fresh mappings (its mmap threshold rises to the largest block
+    // freed), and the 65 536-point block measured after the 262 144 one ran 5.8-6.2 M
+    // point-steps/s against 6.8-7.2 M with the threshold held (`MALLOC_MMAP_THRESHOLD_`)
+    // and 7 M in a process of its own (docs/verification.md, Explicit speed).
     bench_block::<2>(c, "block_2d_128_gimp", 128, BasisKind::Gimp);
+    bench_block::<2>(c, "block_2d_256_gimp", 256, BasisKind::Gimp);
     bench_block::<2>(c, "block_2d_512_gimp", 512, BasisKind::Gimp);
     bench_block::<2>(c, "block_2d_256_bspline", 256, BasisKind::QuadraticBSpline);
     bench_block::<3>(c, "block_3d_32_gimp", 32, BasisKind::Gimp);
