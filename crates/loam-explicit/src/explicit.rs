@@ -663,8 +663,10 @@ fn scatter_grid<const D: usize>(
     let pts = model.points();
     bands.scatter(1 + 2 * D, out, |p, window| {
         let (m, v, load) = (pts.mass[p], &pts.velocity[p], model.point_load(p));
+        let (volume, stress) = (pts.volume[p], &pts.stress[p]);
         basis.for_each_node(p, |node, n, grad| {
-            let o = window.node(node);
+            // Of the width the field has: its entries then need no check each.
+            let o = &mut window.node(node)[..1 + 2 * D];
             let nm = n * m;
             o[0] += nm;
             for i in 0..D {
@@ -673,7 +675,7 @@ fn scatter_grid<const D: usize>(
             }
             if with_internal {
                 // f_ext − f_int, point by point in one sum.
-                let f = internal_force(pts.volume[p], &pts.stress[p], &grad, None);
+                let f = internal_force(volume, stress, &grad, None);
                 for i in 0..D {
                     o[1 + D + i] -= f[i];
                 }
@@ -696,9 +698,10 @@ fn negative_internal_force<const D: usize>(
     let pts = model.points();
     bands.scatter(D, out, |p, window| {
         let v = if finite { sc.fields.volume[p] } else { pts.volume[p] };
+        let stress = &sc.fields.stress[p];
         basis.for_each_node(p, |node, _, grad| {
-            let f = -internal_force(v, &sc.fields.stress[p], &grad, None);
-            let o = window.node(node);
+            let f = -internal_force(v, stress, &grad, None);
+            let o = &mut window.node(node)[..D];
             for i in 0..D {
                 o[i] += f[i];
             }
@@ -716,11 +719,12 @@ fn remap_momentum<const D: usize>(
 ) {
     let mass = &model.points().mass;
     bands.scatter(D, out, |p, window| {
+        let (m, v) = (mass[p], &velocity[p]);
         basis.for_each_node(p, |node, n, _| {
-            let nm = n * mass[p];
-            let o = window.node(node);
+            let nm = n * m;
+            let o = &mut window.node(node)[..D];
             for i in 0..D {
-                o[i] += nm * velocity[p][i];
+                o[i] += nm * v[i];
             }
         });
     });
