@@ -73,11 +73,12 @@ fn bench_block<const D: usize>(c: &mut Criterion, name: &str, n: usize, basis: B
 
 fn explicit(c: &mut Criterion) {
     // Cost linear in the points: 65 536 and 1 048 576 points beside the 262 144, smallest
-    // first. After a larger block is dropped, glibc serves a smaller one's buffers from its
-    // heap rather than fresh mappings (its mmap threshold rises to the largest block
-    // freed), and the 65 536-point block measured after the 262 144 one ran 5.8-6.2 M
-    // point-steps/s against 6.8-7.2 M with the threshold held (`MALLOC_MMAP_THRESHOLD_`)
-    // and 7 M in a process of its own (docs/verification.md, Explicit speed).
+    // first. Measured after the 262 144-point block had been dropped, the 65 536-point one
+    // ran 5.9–6.2 M point-steps/s, against 6.8–7.2 M with glibc's mmap threshold held
+    // (`MALLOC_MMAP_THRESHOLD_`: glibc raises it, up to 32 MiB, to a freed block's size, and
+    // serves the later, smaller buffers from its heap) and 7 M in a process of its own; run
+    // first it ran 6.8–7.1 M, and the 262 144-point block after it as fast as when first
+    // (docs/verification.md, Explicit speed).
     bench_block::<2>(c, "block_2d_128_gimp", 128, BasisKind::Gimp);
     bench_block::<2>(c, "block_2d_256_gimp", 256, BasisKind::Gimp);
     bench_block::<2>(c, "block_2d_512_gimp", 512, BasisKind::Gimp);

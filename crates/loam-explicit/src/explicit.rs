@@ -538,7 +538,7 @@ impl<const D: usize> Explicit<D> {
     }
 
     /// Commit the trial state of a successful step (docs/theory.md §1) by exchange: the
-    /// stress update computed every point's F ← ΔF F, v_p ← det ΔF v_p and half-lengths
+    /// stress update computed every point's F ← ΔF F, V_p ← det ΔF V_p and half-lengths
     /// stretched with F (iGIMP) beside its stress; the load vertices follow their carrier
     /// points.
     fn commit(&mut self) {
@@ -661,12 +661,14 @@ fn scatter_grid<const D: usize>(
     out: &mut [f64],
 ) {
     let pts = model.points();
-    bands.scatter(1 + 2 * D, out, |p, window| {
+    let width = 1 + 2 * D;
+    bands.scatter(width, out, |p, window| {
         let (m, v, load) = (pts.mass[p], &pts.velocity[p], model.point_load(p));
         let (volume, stress) = (pts.volume[p], &pts.stress[p]);
         basis.for_each_node(p, |node, n, grad| {
-            // Of the width the field has: its entries then need no check each.
-            let o = &mut window.node(node)[..1 + 2 * D];
+            // Cut to the field's width, which D fixes: the indexing below then needs one
+            // bounds check, not one per entry.
+            let o = &mut window.node(node)[..width];
             let nm = n * m;
             o[0] += nm;
             for i in 0..D {
@@ -701,7 +703,7 @@ fn negative_internal_force<const D: usize>(
         let stress = &sc.fields.stress[p];
         basis.for_each_node(p, |node, _, grad| {
             let f = -internal_force(v, stress, &grad, None);
-            let o = &mut window.node(node)[..D];
+            let o = &mut window.node(node)[..D]; // of the field's width (`scatter_grid`)
             for i in 0..D {
                 o[i] += f[i];
             }
@@ -722,7 +724,7 @@ fn remap_momentum<const D: usize>(
         let (m, v) = (mass[p], &velocity[p]);
         basis.for_each_node(p, |node, n, _| {
             let nm = n * m;
-            let o = &mut window.node(node)[..D];
+            let o = &mut window.node(node)[..D]; // of the field's width (`scatter_grid`)
             for i in 0..D {
                 o[i] += nm * v[i];
             }
@@ -858,7 +860,7 @@ fn update_stress<const D: usize>(
             for k in 0..f_new.len() {
                 let p = block * POINT_BLOCK + k;
                 let out = PointOut {
-                    f: &mut f_new[k],
+                    deformation_gradient: &mut f_new[k],
                     volume: &mut volume[k],
                     stress: &mut stress[k],
                     elastic_strain: &mut elastic[k],
@@ -898,7 +900,7 @@ const STRETCH_LANES: usize = 8;
 
 /// Where a point's update goes: its new F, volume, stress, elastic strain and history.
 struct PointOut<'a> {
-    f: &'a mut Matrix3<f64>,
+    deformation_gradient: &'a mut Matrix3<f64>,
     volume: &'a mut f64,
     stress: &'a mut Matrix3<f64>,
     elastic_strain: &'a mut Matrix3<f64>,
@@ -907,7 +909,7 @@ struct PointOut<'a> {
 
 /// Point `p`'s update from the nodal velocities: ΔF = I + Δt Σ_I v_I ⊗ ∇N_I, checked for
 /// a blow-up (non-finite, inverted or torn apart within the step), then the shared point
-/// kernel, written into `out` (F ← ΔF F, v_p ← det ΔF v_p, σ, b^e or ε^e, history); or
+/// kernel, written into `out` (F ← ΔF F, V_p ← det ΔF V_p, σ, b^e or ε^e, history); or
 /// why the point became unstable.
 #[inline]
 fn point_stress<const D: usize>(
@@ -934,8 +936,9 @@ fn point_stress<const D: usize>(
     }
     let pts = model.points();
     let committed = Committed::of(pts, p);
-    // Borrowed, not moved out of the Result: a move (or `map_err`) copies the update's
-    // three tensors once more (3.7 % of the 2D block's step, measured: docs/verification.md).
+    // Borrowed, not moved out of the Result: each move (or `map_err`) copies the update's
+    // three tensors (such copies were 3.7 % of the 2D block's step: docs/verification.md,
+    // Explicit speed).
     let updated = update_point_stress(model.kinematics(), model.law(p), &grad_du, committed, out.history);
     let u = match &updated {
         Ok(u) => u,
@@ -947,7 +950,7 @@ fn point_stress<const D: usize>(
     *out.stress = u.stress;
     *out.elastic_strain = u.elastic_strain;
     *out.volume = det * pts.volume[p];
-    *out.f = u.delta_f * pts.deformation_gradient[p];
+    *out.deformation_gradient = u.delta_f * pts.deformation_gradient[p];
     Ok(())
 }
 
