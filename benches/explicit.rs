@@ -3,8 +3,11 @@
 //! 2 points per cell and axis (262 144 points each), E = 1e7, ν = 0.3, ρ = 2000, g = 10
 //! (the block of the Taichi scripts in `scripts/peers/`; `scripts/bench_explicit.sh` runs
 //! them side by side), MUSL, FLIP, CFL step 0.5, finite strain — with GIMP and with the
-//! quadratic B-spline; and the 2D block at 128² and 512² cells (65 536 and 1 048 576
-//! points), whose figures beside the 256² one show how the cost scales with the points.
+//! quadratic B-spline, each stepped on from rest as the peer's scripts do; and how the cost
+//! scales with the points: the 2D GIMP block at 128², 256² and 512² cells (65 536, 262 144
+//! and 1 048 576 points), each timed over one and the same step, taken when a P wave has
+//! crossed a quarter of it (`SCALING_CROSSING`), so that the three are measured in the same
+//! state of motion.
 //! Before each, one line gives the step's split by stage (`StepPhases`) and the memory per
 //! point (growth of the resident set from before the model is built to after its first
 //! steps; Linux). Criterion's throughput is in elements (points) per second of one step:
@@ -14,9 +17,10 @@ use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use loam::explicit::{Explicit, ExplicitSettings, StepPhases};
 use loam::grid::BasisKind;
 use loam::implicit::Kinematics;
+use loam::model::ModelState;
 use loam_verification::elastic_block;
 use std::hint::black_box;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 /// The resident set in bytes (0 where /proc is not there).
 fn resident_bytes() -> u64 {
@@ -71,20 +75,58 @@ fn bench_block<const D: usize>(c: &mut Criterion, name: &str, n: usize, basis: B
     g.finish();
 }
 
+/// How far into its motion a scaling block is timed: after the time a P wave takes to cross
+/// this share of the block (n/2 steps of the CFL step 0.5 at n cells), about where the 256²
+/// block is measured in its own bench (some 150 steps from rest).
+const SCALING_CROSSING: f64 = 0.25;
+
+/// The 2D GIMP block of `n` cells per side stepped from rest to [`SCALING_CROSSING`] of a
+/// P wave's crossing, then its next step timed again and again from that state, restored
+/// before each (untimed). Stepped on instead, as criterion repeats the step as often as fits
+/// its time, a block is measured further into its motion the fewer its points (about 600,
+/// 150 and 40 steps at 128², 256², 512², against a crossing of 2n steps), where the points'
+/// updates cost more: the blocks would not be compared like for like (docs/verification.md,
+/// Explicit speed).
+fn bench_scaling(c: &mut Criterion, name: &str, n: usize) {
+    let mut ex = profile::<2>(name, n, BasisKind::Gimp);
+    // h / c_p: the critical step less its velocity term, small against c_p under gravity.
+    let crossing = n as f64 * ex.critical_time_step().unwrap();
+    while ex.time() < SCALING_CROSSING * crossing {
+        ex.step().unwrap();
+    }
+    let (state, points) = (ex.state(), ex.model().points().clone());
+    let mut g = c.benchmark_group("explicit");
+    g.throughput(Throughput::Elements(points.len() as u64));
+    g.sample_size(10);
+    g.bench_function(name, |b| {
+        b.iter_custom(|iters| {
+            let mut timed = Duration::ZERO;
+            for _ in 0..iters {
+                let saved = ModelState { points: points.clone(), load_vertices: Vec::new(), mesh_nodes: None };
+                ex.resume(state, saved).unwrap();
+                let start = Instant::now();
+                black_box(ex.step().unwrap());
+                timed += start.elapsed();
+            }
+            timed
+        })
+    });
+    g.finish();
+}
+
 fn explicit(c: &mut Criterion) {
-    // Cost linear in the points: 65 536 and 1 048 576 points beside the 262 144, smallest
-    // first. Measured after the 262 144-point block had been dropped, the 65 536-point one
-    // ran 5.9–6.2 M point-steps/s, against 6.8–7.2 M with glibc's mmap threshold held
-    // (`MALLOC_MMAP_THRESHOLD_`: glibc raises it, up to 32 MiB, to a freed block's size, and
-    // serves the later, smaller buffers from its heap) and 7 M in a process of its own; run
-    // first it ran 6.8–7.1 M, and the 262 144-point block after it as fast as when first
-    // (docs/verification.md, Explicit speed).
-    bench_block::<2>(c, "block_2d_128_gimp", 128, BasisKind::Gimp);
     bench_block::<2>(c, "block_2d_256_gimp", 256, BasisKind::Gimp);
-    bench_block::<2>(c, "block_2d_512_gimp", 512, BasisKind::Gimp);
     bench_block::<2>(c, "block_2d_256_bspline", 256, BasisKind::QuadraticBSpline);
     bench_block::<3>(c, "block_3d_32_gimp", 32, BasisKind::Gimp);
     bench_block::<3>(c, "block_3d_32_bspline", 32, BasisKind::QuadraticBSpline);
+    // Cost linear in the points. Stepped on from rest (before the scaling blocks were timed
+    // from a restored state), the 65 536-point block also ran slower when built after a
+    // larger one had been dropped (5.9–6.2 against 6.8–7.1 M point-steps/s first in its
+    // process; docs/verification.md, Explicit speed); restored before each timed step, it
+    // runs as fast here, after the blocks above, as the larger ones.
+    bench_scaling(c, "scaling_2d_128_gimp", 128);
+    bench_scaling(c, "scaling_2d_256_gimp", 256);
+    bench_scaling(c, "scaling_2d_512_gimp", 512);
 }
 
 criterion_group!(benches, explicit);

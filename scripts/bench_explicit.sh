@@ -36,8 +36,11 @@ for line in (out / "taichi.txt").read_text().splitlines():
 rows = ["| block | loam (M point-steps/s) | Taichi | loam / Taichi |", "|---|---:|---:|---:|"]
 for name, v in sorted(loam.items()):
     dim = "3d" if "_3d_" in name else "2d"
-    p = peer.get(dim) if ("_256_" in name or "_32_" in name) else None  # the peer's blocks
+    p = peer.get(dim) if name.startswith("block_") else None  # the peer's blocks, from rest
     rows.append(f"| {name} | {v:.2f} | {p:.2f} | {v / p:.2f} |" if p else f"| {name} | {v:.2f} | — | — |")
+scaling = [v for name, v in loam.items() if name.startswith("scaling_2d_")]
+if len(scaling) > 1:
+    rows.append(f"\nscaling (2D GIMP, same state of motion): the slowest {100 * (1 - min(scaling) / max(scaling)):.1f} % below the fastest")
 table = "\n".join(rows)
 (out / "ratio.md").write_text(table + "\n")
 print(table)
