@@ -7,7 +7,7 @@ use loam_implicit::StrengthTrial;
 use loam_io::checkpoint::Checkpoint;
 use loam_io::{
     checkpoint_interval, checkpoint_scene, resume_scene, run_scene_with, CheckpointEvery, CheckpointWritten,
-    LoadedScene, Progress, RunEvent, RunOptions, CHECKPOINT_FILE,
+    LoadedScene, Progress, RunEvent, RunOptions, RunSummary, CHECKPOINT_FILE,
 };
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
@@ -271,8 +271,15 @@ fn run_command(
     };
     bar.finish_and_clear();
     let summary = result.with_context(|| format!("running {}", scene.display()))?;
+    print_summary(scene, &summary);
+    Ok(())
+}
+
+/// The lines a finished run ends with: a warning if its plots could not be drawn, the
+/// factor of safety of a strength reduction, and what the run did.
+fn print_summary(scene: &Path, summary: &RunSummary) {
     if let Err(e) = &summary.plots {
-        eprintln!("warning: the plots of {} could not be drawn: {e}", out.display());
+        eprintln!("warning: the plots of {} could not be drawn: {e}", summary.output_dir.display());
     }
     if let Some(fos) = &summary.factor_of_safety {
         println!(
@@ -297,7 +304,6 @@ fn run_command(
         summary.wall_time.as_secs_f64(),
         summary.output_dir.display()
     );
-    Ok(())
 }
 
 /// A size in bytes: a number with an optional unit K, M, G, T (powers of 1000, also KB ...)

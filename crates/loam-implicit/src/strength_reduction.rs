@@ -98,28 +98,8 @@ impl StrengthReduction {
         done: &[StrengthTrial],
         mut on_trial: impl FnMut(&StrengthTrial),
     ) -> Result<FactorOfSafety, StrengthReductionError> {
+        self.validate()?;
         let (lo, hi) = self.bracket;
-        if !(lo.is_finite() && lo > 0.0) {
-            return Err(StrengthReductionError::InvalidSettings(InvalidSetting {
-                field: "bracket.0",
-                value: lo,
-                valid: "a positive number",
-            }));
-        }
-        if !(hi.is_finite() && hi > lo) {
-            return Err(StrengthReductionError::InvalidSettings(InvalidSetting {
-                field: "bracket.1",
-                value: hi,
-                valid: "a number above the lower factor",
-            }));
-        }
-        if !(self.tolerance.is_finite() && self.tolerance > 0.0) {
-            return Err(StrengthReductionError::InvalidSettings(InvalidSetting {
-                field: "tolerance",
-                value: self.tolerance,
-                valid: "a positive number",
-            }));
-        }
         let mut trials: Vec<StrengthTrial> = Vec::new();
         let mut run = |factor: f64| -> Result<bool, StrengthReductionError> {
             let t = match done.get(trials.len()) {
@@ -162,6 +142,33 @@ impl StrengthReduction {
             }
         }
         Ok(FactorOfSafety { stable, failed, trials })
+    }
+
+    /// Refuse a bracket that is not 0 < lower < upper or a tolerance that is not positive.
+    fn validate(&self) -> Result<(), StrengthReductionError> {
+        let (lo, hi) = self.bracket;
+        if !(lo.is_finite() && lo > 0.0) {
+            return Err(StrengthReductionError::InvalidSettings(InvalidSetting {
+                field: "bracket.0",
+                value: lo,
+                valid: "a positive number",
+            }));
+        }
+        if !(hi.is_finite() && hi > lo) {
+            return Err(StrengthReductionError::InvalidSettings(InvalidSetting {
+                field: "bracket.1",
+                value: hi,
+                valid: "a number above the lower factor",
+            }));
+        }
+        if !(self.tolerance.is_finite() && self.tolerance > 0.0) {
+            return Err(StrengthReductionError::InvalidSettings(InvalidSetting {
+                field: "tolerance",
+                value: self.tolerance,
+                valid: "a positive number",
+            }));
+        }
+        Ok(())
     }
 
     /// Apply the full load to the model reduced by `factor`.
