@@ -122,8 +122,8 @@ fn explicit(c: &mut Criterion) {
     // Cost linear in the points. Stepped on from rest (before the scaling blocks were timed
     // from a restored state), the 65 536-point block also ran slower when built after a
     // larger one had been dropped (5.9–6.2 against 6.8–7.1 M point-steps/s first in its
-    // process; docs/verification.md, Explicit speed); restored before each timed step, it
-    // runs as fast here, after the blocks above, as the larger ones.
+    // process); restored before each timed step, it is not the slowest by habit here, after
+    // the blocks above (docs/verification.md, Explicit speed).
     bench_scaling(c, "scaling_2d_128_gimp", 128);
     bench_scaling(c, "scaling_2d_256_gimp", 256);
     bench_scaling(c, "scaling_2d_512_gimp", 512);
