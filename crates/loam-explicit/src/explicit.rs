@@ -368,6 +368,10 @@ impl<const D: usize> Explicit<D> {
     /// stage as the crate docs number them. On error the committed state is that of the last
     /// successful step.
     pub fn step(&mut self) -> Result<ExplicitStepReport, ExplicitError> {
+        if rayon::current_thread_index().is_none() {
+            // One hop onto rayon's pool a step, not one a parallel pass (docs/theory.md §7).
+            return rayon::scope(|_| self.step());
+        }
         if self.is_finished() {
             return Err(ExplicitError::Finished(self.steps));
         }

@@ -236,6 +236,10 @@ impl<const D: usize> Dynamic<D> {
     /// the equilibrium acceleration; then connect and attempt the step, a failed attempt
     /// retried from the committed state with half the time step.
     pub fn step(&mut self) -> Result<StepReport, StepError> {
+        if rayon::current_thread_index().is_none() {
+            // One hop onto rayon's pool a step, not one a parallel pass (docs/theory.md §7).
+            return rayon::scope(|_| self.step());
+        }
         if self.is_finished() {
             return Err(StepError::Finished(self.step));
         }

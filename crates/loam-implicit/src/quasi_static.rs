@@ -171,6 +171,10 @@ impl<const D: usize> QuasiStatic<D> {
     /// Advance one load step, cutting back as needed: connect, then attempt the increment;
     /// a failed attempt is retried from the committed state with half the increment.
     pub fn step(&mut self) -> Result<StepReport, StepError> {
+        if rayon::current_thread_index().is_none() {
+            // One hop onto rayon's pool a step, not one a parallel pass (docs/theory.md §7).
+            return rayon::scope(|_| self.step());
+        }
         if self.is_finished() {
             return Err(StepError::Finished(self.settings.load_steps));
         }
