@@ -710,6 +710,35 @@ impl MohrCoulomb {
         h_n: &[f64],
         h_out: &mut [f64],
     ) -> Result<(StressUpdate, MohrCoulombReturn), ConstitutiveError> {
+        let (step, info) = self.returned(eps_trial, h_n, h_out)?;
+        let update = match step {
+            // Exactly the elastic law's update of the input (not of its symmetrised copy).
+            None => StressUpdate {
+                stress: self.elastic.stress(eps_trial),
+                elastic_strain: *eps_trial,
+                tangent: self.elastic.stiffness(),
+            },
+            Some(Returned { n, e, eps, c }) => {
+                let (stress, elastic_strain) = full_space(&n, &eps, &c)?;
+                let tangent = assemble(&n, &e, &c.sig, &c.jp, c.region.tied());
+                if !tangent.iter().all(|v| v.is_finite()) {
+                    return Err(ConstitutiveError::NonFinite { what: "Mohr-Coulomb tangent" });
+                }
+                StressUpdate { stress, elastic_strain, tangent }
+            }
+        };
+        Ok((update, info))
+    }
+
+    /// The trial state in principal space, then either an elastic step (`None`) or the
+    /// return the regions admit, with the new history in `h_out`: all of an update but its
+    /// writing in the full space.
+    fn returned(
+        &self,
+        eps_trial: &Matrix3<f64>,
+        h_n: &[f64],
+        h_out: &mut [f64],
+    ) -> Result<(Option<Returned>, MohrCoulombReturn), ConstitutiveError> {
         let (kappa_n, evp_n) = check_inputs(eps_trial, h_n, h_out)?;
         let eps = (eps_trial + eps_trial.transpose()) * 0.5;
         let (tr, n) = self.principal_trial(&eps, kappa_n)?;
@@ -718,28 +747,21 @@ impl MohrCoulomb {
         if f_tr <= ELASTIC_TOL * tr.scale && ft_tr <= ELASTIC_TOL * tr.scale {
             h_out[0] = kappa_n;
             h_out[1] = evp_n;
-            return Ok((
-                // Exactly the elastic law's update of the input (not of its symmetrised copy).
-                StressUpdate {
-                    stress: self.elastic.stress(eps_trial),
-                    elastic_strain: *eps_trial,
-                    tangent: self.elastic.stiffness(),
-                },
-                MohrCoulombReturn {
-                    region: R::Elastic,
-                    fallback: false,
-                    residual_branch: branch_n == Branch::Residual,
-                },
-            ));
+            let info = MohrCoulombReturn {
+                region: R::Elastic,
+                fallback: false,
+                residual_branch: branch_n == Branch::Residual,
+            };
+            return Ok((None, info));
         }
         let Some((mut c, fallback)) = self.select_return(&tr)? else {
             return Err(ConstitutiveError::ReturnMappingFailed { law: "mohr-coulomb", iterations: 0, residual: f_tr });
         };
         tie_equalities(&mut c);
-        let update = full_space(&n, &tr.e, &eps, &c)?;
         h_out[0] = c.kappa;
         h_out[1] = evp_n + c.deps_p.sum();
-        Ok((update, MohrCoulombReturn { region: c.region, fallback, residual_branch: c.branch == Branch::Residual }))
+        let info = MohrCoulombReturn { region: c.region, fallback, residual_branch: c.branch == Branch::Residual };
+        Ok((Some(Returned { n, e: tr.e, eps, c }), info))
     }
 
     /// The trial state in principal space, principal values descending (σ₁ ≥ σ₂ ≥ σ₃
@@ -836,24 +858,28 @@ fn tie_equalities(c: &mut Candidate) {
     }
 }
 
+/// A plastic update before it is written in the full space: the return `c` from the
+/// principal trial (principal strains `e`, directions `n`) of the symmetrised strain `eps`.
+struct Returned {
+    n: Matrix3<f64>,
+    e: Vector3<f64>,
+    eps: Matrix3<f64>,
+    c: Candidate,
+}
+
 /// The returned state in the full space: stress and plastic strain rotated back from the
-/// principal directions `n`, the elastic strain, and the consistent tangent.
+/// principal directions `n`, and the elastic strain.
 fn full_space(
     n: &Matrix3<f64>,
-    e: &Vector3<f64>,
     eps: &Matrix3<f64>,
     c: &Candidate,
-) -> Result<StressUpdate, ConstitutiveError> {
+) -> Result<(Matrix3<f64>, Matrix3<f64>), ConstitutiveError> {
     let stress = n * Matrix3::from_diagonal(&c.sig) * n.transpose();
     let stress = (stress + stress.transpose()) * 0.5;
     let eps_p = n * Matrix3::from_diagonal(&c.deps_p) * n.transpose();
     let elastic_strain = eps - (eps_p + eps_p.transpose()) * 0.5;
-    let tangent = assemble(n, e, &c.sig, &c.jp, c.region.tied());
     check_finite(&stress, "Mohr-Coulomb stress")?;
-    if !tangent.iter().all(|v| v.is_finite()) {
-        return Err(ConstitutiveError::NonFinite { what: "Mohr-Coulomb tangent" });
-    }
-    Ok(StressUpdate { stress, elastic_strain, tangent })
+    Ok((stress, elastic_strain))
 }
 
 /// Full tangent from the principal one (de Souza Neto Appendix A.5), see module docs.
@@ -1013,6 +1039,21 @@ impl ConstitutiveLaw for MohrCoulomb {
         h_out: &mut [f64],
     ) -> Result<StressUpdate, ConstitutiveError> {
         self.update_with_info(eps_trial, h_n, h_out).map(|(u, _)| u)
+    }
+
+    /// [`MohrCoulomb::update_with_info`]'s stress and elastic strain without assembling the
+    /// consistent tangent (a 9 × 9 sum of outer products), which an explicit step has no
+    /// use for.
+    fn update_stress(
+        &self,
+        eps_trial: &Matrix3<f64>,
+        h_n: &[f64],
+        h_out: &mut [f64],
+    ) -> Result<(Matrix3<f64>, Matrix3<f64>), ConstitutiveError> {
+        match self.returned(eps_trial, h_n, h_out)?.0 {
+            None => Ok((self.elastic.stress(eps_trial), *eps_trial)),
+            Some(Returned { n, eps, c, .. }) => full_space(&n, &eps, &c),
+        }
     }
 
     fn p_wave_modulus(&self) -> f64 {

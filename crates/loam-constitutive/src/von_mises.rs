@@ -76,6 +76,22 @@ impl VonMises {
         h_n: &[f64],
         h_out: &mut [f64],
     ) -> Result<(StressUpdate, VonMisesRegion), ConstitutiveError> {
+        let (r, region) = self.returned(eps_trial, h_n, h_out)?;
+        let tangent = match &r.flow {
+            None => self.elastic.stiffness(),
+            Some(flow) => flow.tangent(),
+        };
+        Ok((StressUpdate { stress: r.stress, elastic_strain: r.elastic_strain, tangent }, region))
+    }
+
+    /// The stress, elastic strain and history of an update (radial return, de Souza Neto
+    /// et al. 2008, Box 7.4), with what its consistent tangent needs where it flowed.
+    fn returned(
+        &self,
+        eps_trial: &Matrix3<f64>,
+        h_n: &[f64],
+        h_out: &mut [f64],
+    ) -> Result<(Returned, VonMisesRegion), ConstitutiveError> {
         let eqps_n = check_inputs(eps_trial, h_n, h_out)?;
         let eps = (eps_trial + eps_trial.transpose()) * 0.5;
         let (lambda, mu) = self.elastic.lame();
@@ -95,15 +111,9 @@ impl VonMises {
 
         if f_tr <= YIELD_TOL * sy_n.max(self.yield_stress) {
             h_out[0] = eqps_n;
-            return Ok((
-                // Exactly the elastic law's update of the input (not of its symmetrised copy).
-                StressUpdate {
-                    stress: self.elastic.stress(eps_trial),
-                    elastic_strain: *eps_trial,
-                    tangent: self.elastic.stiffness(),
-                },
-                VonMisesRegion::Elastic,
-            ));
+            // Exactly the elastic law's update of the input (not of its symmetrised copy).
+            let r = Returned { stress: self.elastic.stress(eps_trial), elastic_strain: *eps_trial, flow: None };
+            return Ok((r, VonMisesRegion::Elastic));
         }
 
         let (dgamma, h_eff, region) = self.multiplier(q_tr, f_tr, g, eqps_n);
@@ -114,18 +124,10 @@ impl VonMises {
         let stress = s + Matrix3::identity() * (bulk * vol);
         // ε^e = ε_tr − Δγ √(3/2) N̂ (flow vector ∂Φ/∂σ = √(3/2) N̂).
         let elastic_strain = eps - n_hat * (dgamma * (1.5f64).sqrt());
-
-        // eq. 7.120: D = 2G(1 − 3GΔγ/q_tr) I_d + 6G²(Δγ/q_tr − 1/(3G+H)) N̂⊗N̂ + K I⊗I.
-        let i_dyad = identity_dyad();
-        let i_dev = sym_identity() - i_dyad / 3.0;
-        let nf = flatten(&n_hat);
-        let tangent: Tensor4 = i_dev * (2.0 * g * factor)
-            + nf * nf.transpose() * (6.0 * g * g * (dgamma / q_tr - 1.0 / (3.0 * g + h_eff)))
-            + i_dyad * bulk;
-
         check_finite(&stress, "von Mises stress")?;
         h_out[0] = eqps_n + dgamma;
-        Ok((StressUpdate { stress, elastic_strain, tangent }, region))
+        let flow = Flow { g, bulk, factor, n_hat, dgamma, q_tr, h_eff };
+        Ok((Returned { stress, elastic_strain, flow: Some(flow) }, region))
     }
 
     /// The plastic multiplier Δγ of a return from q_tr with the yield excess f_tr, the
@@ -145,6 +147,39 @@ impl VonMises {
             return ((q_tr - floor) / (3.0 * g), 0.0, VonMisesRegion::Residual);
         }
         (dgamma, h, VonMisesRegion::Plastic)
+    }
+}
+
+/// An update's stress and elastic strain, and its return where it flowed.
+struct Returned {
+    stress: Matrix3<f64>,
+    elastic_strain: Matrix3<f64>,
+    flow: Option<Flow>,
+}
+
+/// A radial return: shear and bulk moduli, the deviatoric scaling 1 − 3GΔγ/q_tr, the flow
+/// direction N̂, the multiplier, the trial q and the hardening modulus it ended on.
+struct Flow {
+    g: f64,
+    bulk: f64,
+    factor: f64,
+    n_hat: Matrix3<f64>,
+    dgamma: f64,
+    q_tr: f64,
+    h_eff: f64,
+}
+
+impl Flow {
+    /// The consistent tangent, de Souza Neto et al. 2008, eq. 7.120:
+    /// D = 2G(1 − 3GΔγ/q_tr) I_d + 6G²(Δγ/q_tr − 1/(3G+H)) N̂⊗N̂ + K I⊗I.
+    fn tangent(&self) -> Tensor4 {
+        let Flow { g, bulk, factor, n_hat, dgamma, q_tr, h_eff } = *self;
+        let i_dyad = identity_dyad();
+        let i_dev = sym_identity() - i_dyad / 3.0;
+        let nf = flatten(&n_hat);
+        i_dev * (2.0 * g * factor)
+            + nf * nf.transpose() * (6.0 * g * g * (dgamma / q_tr - 1.0 / (3.0 * g + h_eff)))
+            + i_dyad * bulk
     }
 }
 
@@ -217,6 +252,18 @@ impl ConstitutiveLaw for VonMises {
         h_out: &mut [f64],
     ) -> Result<StressUpdate, ConstitutiveError> {
         self.update_with_region(eps_trial, h_n, h_out).map(|(u, _)| u)
+    }
+
+    /// [`VonMises::update_with_region`]'s stress and elastic strain without the consistent
+    /// tangent (two 9 × 9 tensors built and summed), which an explicit step has no use for.
+    fn update_stress(
+        &self,
+        eps_trial: &Matrix3<f64>,
+        h_n: &[f64],
+        h_out: &mut [f64],
+    ) -> Result<(Matrix3<f64>, Matrix3<f64>), ConstitutiveError> {
+        let (r, _) = self.returned(eps_trial, h_n, h_out)?;
+        Ok((r.stress, r.elastic_strain))
     }
 
     fn p_wave_modulus(&self) -> f64 {

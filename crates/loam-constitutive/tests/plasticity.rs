@@ -796,6 +796,11 @@ proptest! {
         let mut h = [0.0; 2];
         let (up, info) = law.update_with_info(&eps, &h_n, &mut h).unwrap();
         prop_assert!(finite(&up));
+        // Without the tangent (the explicit step's update): the same stress, elastic strain
+        // and history to the last bit.
+        let mut h_stress = [0.0; 2];
+        let only = law.update_stress(&eps, &h_n, &mut h_stress).unwrap();
+        prop_assert_eq!((only, h_stress), ((up.stress, up.elastic_strain), h));
         let scale = f_scale(&law, &s);
         let (f, ft) = law.yield_function(&up.stress, h[0]).unwrap();
         // F_TOL on both surfaces.
@@ -886,6 +891,11 @@ proptest! {
         let mut h = [0.0];
         let (up, region) = law.update_with_region(&eps, &[eqps_n], &mut h).unwrap();
         prop_assert!(finite(&up));
+        // Without the tangent (the explicit step's update): the same stress, elastic strain
+        // and history to the last bit.
+        let mut h_stress = [0.0];
+        let only = law.update_stress(&eps, &[eqps_n], &mut h_stress).unwrap();
+        prop_assert_eq!((only, h_stress), ((up.stress, up.elastic_strain), h));
         let dev = up.stress - Matrix3::identity() * (up.stress.trace() / 3.0);
         let q = 1.5f64.sqrt() * dev.norm();
         let sy = law.current_yield_stress(h[0]);
