@@ -553,7 +553,7 @@ impl MohrCoulomb {
             let conv = rf <= NEWTON_TOL * tr.scale && r[3].abs() <= NEWTON_TOL * kappa.abs().max(sys.eps_p.norm());
             // Singular local system: Hadamard ratio |det| / Π ‖row‖.
             let hadamard: f64 = jm.row_iter().map(|row| row.norm()).product();
-            let det = jm.determinant();
+            let det = determinant4(jm);
             // (jm is finite here, so det and hadamard are not NaN.)
             if det.abs() <= 1e-12 * hadamard {
                 return Ok(None);
@@ -841,6 +841,17 @@ fn check_inputs(eps_trial: &Matrix3<f64>, h_n: &[f64], h_out: &[f64]) -> Result<
     Ok((kappa_n, evp_n))
 }
 
+/// det m of a 4 × 4 by its 2 × 2 minors (Laplace along the first two rows): where nalgebra's
+/// `determinant` factors a 4 × 4 by LU, a tenth of an explicit Mohr–Coulomb run (V8). Used
+/// only to tell a singular local system, so its round-off need not match the LU's.
+fn determinant4(m: &Matrix4<f64>) -> f64 {
+    let low = |i: usize, j: usize| m[(0, i)] * m[(1, j)] - m[(0, j)] * m[(1, i)];
+    let high = |i: usize, j: usize| m[(2, i)] * m[(3, j)] - m[(2, j)] * m[(3, i)];
+    low(0, 1) * high(2, 3) - low(0, 2) * high(1, 3) + low(0, 3) * high(1, 2) + low(1, 2) * high(0, 3)
+        - low(1, 3) * high(0, 2)
+        + low(2, 3) * high(0, 1)
+}
+
 /// Enforce the equalities of principal stresses the return region implies exactly (they
 /// hold to round-off).
 fn tie_equalities(c: &mut Candidate) {
@@ -1069,6 +1080,28 @@ impl ConstitutiveLaw for MohrCoulomb {
 mod tests {
     use super::*;
     use crate::tensor::idx;
+
+    /// The minors' determinant against nalgebra's LU on matrices with an exact determinant
+    /// (integers: every product and sum exact) and on a general one (round-off, 1e-13
+    /// relative to the product of the row norms, Hadamard's bound).
+    #[test]
+    fn determinant4_agrees_with_the_lu() {
+        let cases = [
+            Matrix4::identity(),
+            Matrix4::new(2.0, 0.0, 1.0, 3.0, 1.0, -1.0, 4.0, 0.0, 0.0, 5.0, -2.0, 1.0, 3.0, 1.0, 0.0, -4.0),
+            Matrix4::new(1.0, 2.0, 3.0, 4.0, 2.0, 4.0, 6.0, 8.0, 0.0, 1.0, 0.0, 1.0, 7.0, 0.0, 2.0, 1.0),
+            Matrix4::from_fn(|i, j| if (i + j) % 2 == 0 { 1.0 } else { -2.0 } * (1.0 + i as f64) / (1.0 + j as f64)),
+            Matrix4::from_fn(|i, j| ((i * 7 + j * 3) as f64).sin() + if i == j { 3.0 } else { 0.0 }),
+        ];
+        for m in cases {
+            let (ours, lu) = (determinant4(&m), m.determinant());
+            let hadamard: f64 = m.row_iter().map(|r| r.norm()).product();
+            assert!((ours - lu).abs() <= 1e-13 * hadamard, "{m}: {ours} against {lu}");
+        }
+        // An exact cofactor expansion in integers, computed apart from this code: 284.
+        assert_eq!(determinant4(&cases[1]), 284.0);
+        assert_eq!(determinant4(&cases[2]), 0.0);
+    }
 
     fn el() -> Elastic {
         Elastic::new(1.0e4, 0.3).unwrap()
