@@ -554,8 +554,9 @@ impl MohrCoulomb {
             // Singular local system: Hadamard ratio |det| / Π ‖row‖.
             let hadamard: f64 = jm.row_iter().map(|row| row.norm()).product();
             let det = determinant4(jm);
-            // (jm is finite here, so det and hadamard are not NaN.)
-            if det.abs() <= 1e-12 * hadamard {
+            // jm is finite here, but its minors may overflow and make det NaN, which
+            // counts as singular.
+            if det.is_nan() || det.abs() <= 1e-12 * hadamard {
                 return Ok(None);
             }
             let Some(jinv) = jm.try_inverse() else {
@@ -732,7 +733,8 @@ impl MohrCoulomb {
 
     /// The trial state in principal space, then either an elastic step (`None`) or the
     /// return the regions admit, with the new history in `h_out`: all of an update but its
-    /// writing in the full space.
+    /// writing in the full space. (`h_out` is written even where that writing then fails on
+    /// a non-finite stress; a caller drops the history of a failed update.)
     fn returned(
         &self,
         eps_trial: &Matrix3<f64>,
@@ -1054,7 +1056,7 @@ impl ConstitutiveLaw for MohrCoulomb {
 
     /// [`MohrCoulomb::update_with_info`]'s stress and elastic strain without assembling the
     /// consistent tangent (a 9 × 9 sum of outer products), which an explicit step has no
-    /// use for.
+    /// use for — nor, then, refusing a non-finite tangent, as `update` does.
     fn update_stress(
         &self,
         eps_trial: &Matrix3<f64>,

@@ -305,23 +305,24 @@ fn local_damping_settles_the_column_to_the_static_answer() {
 
 /// (5) One and two threads give bitwise identical results: every point → node transfer
 /// sums each node's contributions in a fixed order (the scatter's bands) and the point
-/// loops are independent.
+/// loops are independent; and so does a step that hops onto the pool from outside it.
 #[test]
 fn one_or_two_threads_give_bitwise_identical_results() {
     for scheme in SCHEMES {
-        let run = |threads| {
-            rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap().install(|| {
-                // Through the impact (t ≈ 1.6-2), so that stresses are far from zero.
-                let settings = ExplicitSettings { scheme, flip: 0.95, damping: 0.05, ..settings(2.5) };
-                let mut ex = Explicit::new(colliding_disks(32, BasisKind::Gimp), settings).unwrap();
-                run_to_end(&mut ex, |_, _| {});
-                ex.into_model()
-            })
+        // Through the impact (t ≈ 1.6-2), so that stresses are far from zero.
+        let disks = || {
+            let settings = ExplicitSettings { scheme, flip: 0.95, damping: 0.05, ..settings(2.5) };
+            let mut ex = Explicit::new(colliding_disks(32, BasisKind::Gimp), settings).unwrap();
+            run_to_end(&mut ex, |_, _| {});
+            ex.into_model()
         };
+        let run = |threads| rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap().install(disks);
         let one = run(1);
         let smax = one.points().stress.iter().map(|s| s.amax()).fold(0.0, f64::max);
         assert!(smax > 1.0, "{scheme:?}: the disks never met (max |σ| = {smax})");
         assert_same_state(&one, &run(2));
+        // Stepped from this thread, outside any pool: each step hops onto the global pool.
+        assert_same_state(&one, &disks());
     }
 }
 
