@@ -3,8 +3,8 @@
 use crate::{ExplicitError, ExplicitSettings, TimeStep, UpdateScheme};
 use loam_grid::{ActiveNodes, AxisBasis, BasisError, PointBasisError};
 use loam_kernels::{
-    check_constraints, embed, internal_force, update_point_stress, BandScatter, Committed, ConnectError, LoadSupports,
-    RunError,
+    check_constraints, embed, internal_force, on_pool, update_point_stress, BandScatter, Committed, ConnectError,
+    LoadSupports, RunError,
 };
 use loam_model::{Kinematics, LoadLevel, Model, ModelError, ModelState, StateFields};
 use loam_points::{stretched_half_length, stretched_half_lengths};
@@ -368,9 +368,8 @@ impl<const D: usize> Explicit<D> {
     /// stage as the crate docs number them. On error the committed state is that of the last
     /// successful step.
     pub fn step(&mut self) -> Result<ExplicitStepReport, ExplicitError> {
-        if rayon::current_thread_index().is_none() {
-            // One hop onto rayon's pool a step, not one a parallel pass (docs/theory.md §7).
-            return rayon::scope(|_| self.step());
+        if let Some(report) = on_pool(|| self.step()) {
+            return report;
         }
         if self.is_finished() {
             return Err(ExplicitError::Finished(self.steps));

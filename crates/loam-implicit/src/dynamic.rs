@@ -24,7 +24,7 @@ use crate::inertia::Inertia;
 use crate::points::PointUpdateError;
 use crate::{StepError, StepReport};
 use loam_kernels::{
-    gather_internal_force, gather_nodal, internal_force, interpolate, interpolate_pair, InvalidSetting,
+    gather_internal_force, gather_nodal, internal_force, interpolate, interpolate_pair, on_pool, InvalidSetting,
 };
 use loam_model::{LoadLevel, Model, ModelError, ModelState};
 use loam_solve::{LinearSolverChoice, LinearSolverKind, NewtonError, NewtonReport, NewtonSettings};
@@ -236,9 +236,8 @@ impl<const D: usize> Dynamic<D> {
     /// the equilibrium acceleration; then connect and attempt the step, a failed attempt
     /// retried from the committed state with half the time step.
     pub fn step(&mut self) -> Result<StepReport, StepError> {
-        if rayon::current_thread_index().is_none() {
-            // One hop onto rayon's pool a step, not one a parallel pass (docs/theory.md §7).
-            return rayon::scope(|_| self.step());
+        if let Some(report) = on_pool(|| self.step()) {
+            return report;
         }
         if self.is_finished() {
             return Err(StepError::Finished(self.step));

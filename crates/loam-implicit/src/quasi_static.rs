@@ -8,7 +8,7 @@ use crate::cutback::{CutBack, StepScale};
 use crate::engine::Engine;
 use crate::points::PointUpdateError;
 use crate::{IterationProfile, StepError, StepReport};
-use loam_kernels::RunError;
+use loam_kernels::{on_pool, RunError};
 use loam_model::{LoadLevel, Model, ModelError, ModelState};
 use loam_solve::{
     BlockPattern, LinearSolver, LinearSolverChoice, LinearSolverKind, LinearSolverTimings, NewtonError, NewtonReport,
@@ -171,9 +171,8 @@ impl<const D: usize> QuasiStatic<D> {
     /// Advance one load step, cutting back as needed: connect, then attempt the increment;
     /// a failed attempt is retried from the committed state with half the increment.
     pub fn step(&mut self) -> Result<StepReport, StepError> {
-        if rayon::current_thread_index().is_none() {
-            // One hop onto rayon's pool a step, not one a parallel pass (docs/theory.md §7).
-            return rayon::scope(|_| self.step());
+        if let Some(report) = on_pool(|| self.step()) {
+            return report;
         }
         if self.is_finished() {
             return Err(StepError::Finished(self.settings.load_steps));

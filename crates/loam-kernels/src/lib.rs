@@ -16,12 +16,14 @@
 //! - [`LoadSupports`]: the load vertices on the active nodes, their forces spread to the
 //!   nodes, and the displacement that moves them.
 //! - [`ConnectError`], [`InvalidSetting`] and [`RunError`]: what the analyses' errors share.
+//! - [`on_pool`]: a step handed to rayon's pool once, not each of its parallel passes.
 
 mod connect;
 mod error;
 mod force;
 mod load;
 mod point;
+mod pool;
 mod scatter;
 mod transfer;
 
@@ -30,5 +32,6 @@ pub use error::{ConnectError, InvalidSetting, RunError};
 pub use force::{gather_internal_force, internal_force};
 pub use load::{trial_vertices, LoadSupports};
 pub use point::{advance_deformation, embed, update_point, update_point_stress, Committed, PointStress, PointUpdate};
+pub use pool::on_pool;
 pub use scatter::{BandScatter, NodeWindow, ROWS_PER_BAND};
 pub use transfer::{gather_nodal, interpolate, interpolate_add, interpolate_pair};
