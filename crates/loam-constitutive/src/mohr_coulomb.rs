@@ -711,36 +711,24 @@ impl MohrCoulomb {
         h_n: &[f64],
         h_out: &mut [f64],
     ) -> Result<(StressUpdate, MohrCoulombReturn), ConstitutiveError> {
-        let (step, info) = self.returned(eps_trial, h_n, h_out)?;
-        let update = match step {
-            // Exactly the elastic law's update of the input (not of its symmetrised copy).
-            None => StressUpdate {
-                stress: self.elastic.stress(eps_trial),
-                elastic_strain: *eps_trial,
-                tangent: self.elastic.stiffness(),
-            },
-            Some(Returned { n, e, eps, c }) => {
-                let (stress, elastic_strain) = full_space(&n, &eps, &c)?;
-                let tangent = assemble(&n, &e, &c.sig, &c.jp, c.region.tied());
-                if !tangent.iter().all(|v| v.is_finite()) {
-                    return Err(ConstitutiveError::NonFinite { what: "Mohr-Coulomb tangent" });
-                }
-                StressUpdate { stress, elastic_strain, tangent }
-            }
+        let (r, info) = self.returned(eps_trial, h_n, h_out)?;
+        let tangent = match &r.flow {
+            None => self.elastic.stiffness(),
+            Some(flow) => flow.tangent()?,
         };
-        Ok((update, info))
+        Ok((StressUpdate { stress: r.stress, elastic_strain: r.elastic_strain, tangent }, info))
     }
 
-    /// The trial state in principal space, then either an elastic step (`None`) or the
-    /// return the regions admit, with the new history in `h_out`: all of an update but its
-    /// writing in the full space. (`h_out` is written even where that writing then fails on
-    /// a non-finite stress; a caller drops the history of a failed update.)
+    /// The trial state in principal space, then either the elastic update or the return the
+    /// regions admit, rotated back to the full space, with the new history in `h_out`: all
+    /// of an update but its tangent. (`update_with_info` checks the tangent after `h_out` is
+    /// written; a caller drops the history of a failed update.)
     fn returned(
         &self,
         eps_trial: &Matrix3<f64>,
         h_n: &[f64],
         h_out: &mut [f64],
-    ) -> Result<(Option<Returned>, MohrCoulombReturn), ConstitutiveError> {
+    ) -> Result<(Returned, MohrCoulombReturn), ConstitutiveError> {
         let (kappa_n, evp_n) = check_inputs(eps_trial, h_n, h_out)?;
         let eps = (eps_trial + eps_trial.transpose()) * 0.5;
         let (tr, n) = self.principal_trial(&eps, kappa_n)?;
@@ -754,16 +742,19 @@ impl MohrCoulomb {
                 fallback: false,
                 residual_branch: branch_n == Branch::Residual,
             };
-            return Ok((None, info));
+            // Exactly the elastic law's update of the input (not of its symmetrised copy).
+            let r = Returned { stress: self.elastic.stress(eps_trial), elastic_strain: *eps_trial, flow: None };
+            return Ok((r, info));
         }
         let Some((mut c, fallback)) = self.select_return(&tr)? else {
             return Err(ConstitutiveError::ReturnMappingFailed { law: "mohr-coulomb", iterations: 0, residual: f_tr });
         };
         tie_equalities(&mut c);
+        let (stress, elastic_strain) = full_space(&n, &eps, &c)?;
         h_out[0] = c.kappa;
         h_out[1] = evp_n + c.deps_p.sum();
         let info = MohrCoulombReturn { region: c.region, fallback, residual_branch: c.branch == Branch::Residual };
-        Ok((Some(Returned { n, e: tr.e, eps, c }), info))
+        Ok((Returned { stress, elastic_strain, flow: Some(PrincipalReturn { n, e: tr.e, c }) }, info))
     }
 
     /// The trial state in principal space, principal values descending (σ₁ ≥ σ₂ ≥ σ₃
@@ -871,13 +862,31 @@ fn tie_equalities(c: &mut Candidate) {
     }
 }
 
-/// A plastic update before it is written in the full space: the return `c` from the
-/// principal trial (principal strains `e`, directions `n`) of the symmetrised strain `eps`.
+/// An update's stress and elastic strain, and its return where it flowed.
 struct Returned {
+    stress: Matrix3<f64>,
+    elastic_strain: Matrix3<f64>,
+    flow: Option<PrincipalReturn>,
+}
+
+/// A return `c` from the principal trial (principal strains `e`, directions `n`).
+struct PrincipalReturn {
     n: Matrix3<f64>,
     e: Vector3<f64>,
-    eps: Matrix3<f64>,
     c: Candidate,
+}
+
+impl PrincipalReturn {
+    /// The consistent tangent in the full space ([`assemble`]); an error where it is not
+    /// finite.
+    fn tangent(&self) -> Result<Tensor4, ConstitutiveError> {
+        let Self { n, e, c } = self;
+        let tangent = assemble(n, e, &c.sig, &c.jp, c.region.tied());
+        if !tangent.iter().all(|v| v.is_finite()) {
+            return Err(ConstitutiveError::NonFinite { what: "Mohr-Coulomb tangent" });
+        }
+        Ok(tangent)
+    }
 }
 
 /// The returned state in the full space: stress and plastic strain rotated back from the
@@ -1063,10 +1072,8 @@ impl ConstitutiveLaw for MohrCoulomb {
         h_n: &[f64],
         h_out: &mut [f64],
     ) -> Result<(Matrix3<f64>, Matrix3<f64>), ConstitutiveError> {
-        match self.returned(eps_trial, h_n, h_out)?.0 {
-            None => Ok((self.elastic.stress(eps_trial), *eps_trial)),
-            Some(Returned { n, eps, c, .. }) => full_space(&n, &eps, &c),
-        }
+        let (r, _) = self.returned(eps_trial, h_n, h_out)?;
+        Ok((r.stress, r.elastic_strain))
     }
 
     fn p_wave_modulus(&self) -> f64 {
