@@ -85,7 +85,7 @@ const SCALING_CROSSING: f64 = 0.25;
 /// before each (untimed). Stepped on instead, as criterion repeats the step as often as fits
 /// its time, a block is measured further into its motion the fewer its points (about 600,
 /// 150 and 40 steps at 128², 256², 512², against a crossing of 2n steps), where the points'
-/// updates cost more: the blocks would not be compared like for like (docs/verification.md,
+/// updates cost more: the blocks would not be compared like for like (CHANGELOG.md,
 /// Explicit speed).
 fn bench_scaling(c: &mut Criterion, name: &str, n: usize) {
     let mut ex = profile::<2>(name, n, BasisKind::Gimp);
@@ -123,7 +123,7 @@ fn explicit(c: &mut Criterion) {
     // from a restored state), the 65 536-point block also ran slower when built after a
     // larger one had been dropped (5.9–6.2 against 6.8–7.1 M point-steps/s first in its
     // process); restored before each timed step, it is not the slowest by habit here, after
-    // the blocks above (docs/verification.md, Explicit speed).
+    // the blocks above (CHANGELOG.md, Explicit speed).
     bench_scaling(c, "scaling_2d_128_gimp", 128);
     bench_scaling(c, "scaling_2d_256_gimp", 256);
     bench_scaling(c, "scaling_2d_512_gimp", 512);

@@ -26,7 +26,7 @@ fn main() {
     println!(
         "top settlement {:.4} m (closed form {:.4} m at the top point), stress error e_sigma = {:.2e}",
         e.top_displacement_value,
-        column.hencky_displacement(analysis.model().points().position0.iter().map(|x| x[1]).fold(0.0, f64::max)),
+        column.hencky_displacement(analysis.model().points().position0().iter().map(|x| x[1]).fold(0.0, f64::max)),
         e.stress
     );
 }

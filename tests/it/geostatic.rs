@@ -44,8 +44,8 @@ fn layered_ground_gets_the_weight_above_each_point() {
     let mut model = layered(Arc::new(Elastic::new(1e5, 0.3).unwrap()), Kinematics::SmallStrain);
     model.geostatic_stress(0.6).unwrap();
     for p in 0..model.points().len() {
-        let s = model.points().stress[p];
-        let exact = sigma_v(model.points().position[p][1]);
+        let s = model.points().stress()[p];
+        let exact = sigma_v(model.points().position()[p][1]);
         assert!((s[(1, 1)] / exact - 1.0).abs() < 1e-12, "point {p}: {} vs {exact}", s[(1, 1)]);
         assert!((s[(0, 0)] / (0.6 * exact) - 1.0).abs() < 1e-12 && (s[(2, 2)] / (0.6 * exact) - 1.0).abs() < 1e-12);
     }
@@ -65,7 +65,7 @@ fn geostatic_state_is_in_equilibrium() {
             qs.step().unwrap();
             model = qs.into_model();
             let u = (0..model.points().len())
-                .map(|p| (model.points().position[p] - model.points().position0[p]).norm())
+                .map(|p| (model.points().position()[p] - model.points().position0()[p]).norm())
                 .fold(0.0, f64::max);
             (u, model)
         };
@@ -76,7 +76,7 @@ fn geostatic_state_is_in_equilibrium() {
         println!("{kinematics:?}: gravity loading moves {u_gravity:.3e}, geostatic start {u_k0:.3e}");
         assert!(u_k0 < 1e-6 * u_gravity, "{u_k0} vs {u_gravity}");
         let p = 0;
-        let s = after.points().stress[p];
+        let s = after.points().stress()[p];
         assert!((s[(0, 0)] / s[(1, 1)] - 0.6).abs() < 1e-6, "K0 kept: {}", s[(0, 0)] / s[(1, 1)]);
     }
 }
@@ -134,8 +134,8 @@ fn sloping_ground_gets_the_weight_of_its_own_column() {
     let bound = rho * G * h * (1.0 + tan_beta) / 4.0;
     let mut worst: f64 = 0.0;
     for p in 0..model.points().len() {
-        let x = model.points().position[p];
-        let s = model.points().stress[p];
+        let x = model.points().position()[p];
+        let s = model.points().stress()[p];
         let continuum = -rho * G * (surface(x[0]) - x[1]);
         worst = worst.max((s[(1, 1)] - continuum).abs());
         assert!(

@@ -54,7 +54,7 @@ fn ghost_penalty_is_deterministic_across_threads() {
                 qs.step().unwrap();
             }
             let p = &qs.model().points();
-            (p.position.clone(), p.stress.clone())
+            (p.position().to_vec(), p.stress().to_vec())
         })
     };
     assert!(run(1) == run(2), "results differ between 1 and 2 threads");

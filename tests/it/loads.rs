@@ -41,7 +41,8 @@ fn a_surcharge_alone_gives_a_uniform_stress() {
     for (basis, kinematics, steps) in cases {
         let model = column_model::<2>(&WEIGHTLESS, 50.0 / 16.0, 16, 2, basis, kinematics);
         let model = run_quasi_static(model, steps);
-        let worst = model.points().stress.iter().map(|s| (s[(1, 1)] + WEIGHTLESS.surcharge).abs()).fold(0.0, f64::max);
+        let worst =
+            model.points().stress().iter().map(|s| (s[(1, 1)] + WEIGHTLESS.surcharge).abs()).fold(0.0, f64::max);
         assert!(worst <= 1e-9 * WEIGHTLESS.surcharge, "{basis:?} {kinematics:?}: |σ_yy + q| up to {worst:e}");
     }
 }
@@ -85,13 +86,13 @@ fn settlement_history(time: TimeFunction, cells: usize) -> Vec<(f64, f64)> {
     let settings = DynamicSettings::trapezoidal(PERIOD / 100.0, 2.25 * PERIOD);
     let mut dynamic = Dynamic::new(model.with_loads(vec![load]).unwrap(), settings).unwrap();
     let pts = dynamic.model().points();
-    let top_point = (0..pts.len()).max_by(|&a, &b| pts.position0[a][1].total_cmp(&pts.position0[b][1])).unwrap();
-    let static_settlement = WEIGHTLESS.surcharge * pts.position0[top_point][1] / column.young;
+    let top_point = (0..pts.len()).max_by(|&a, &b| pts.position0()[a][1].total_cmp(&pts.position0()[b][1])).unwrap();
+    let static_settlement = WEIGHTLESS.surcharge * pts.position0()[top_point][1] / column.young;
     let mut history = Vec::new();
     while !dynamic.is_finished() {
         let r = dynamic.step().unwrap();
         let p = dynamic.model().points();
-        history.push((r.time, (p.position0[top_point][1] - p.position[top_point][1]) / static_settlement));
+        history.push((r.time, (p.position0()[top_point][1] - p.position()[top_point][1]) / static_settlement));
     }
     history
 }
@@ -154,12 +155,12 @@ fn a_submerged_slope_is_the_dry_slope_with_the_buoyant_weight() {
     let water = Water::new(10.0, PhreaticLevel::Horizontal(21.0), wet.gravity()).unwrap();
     let wet = run_quasi_static(wet.with_water(water).unwrap(), 1);
     let (pd, pw) = (dry.points(), wet.points());
-    let scale = pd.stress.iter().map(|s| s.norm()).fold(0.0, f64::max);
+    let scale = pd.stress().iter().map(|s| s.norm()).fold(0.0, f64::max);
     for p in 0..pd.len() {
-        assert!((pd.stress[p] - pw.stress[p]).norm() <= 1e-9 * scale, "point {p}");
-        assert!((pd.position[p] - pw.position[p]).norm() <= 1e-9 * 10.0, "point {p}");
+        assert!((pd.stress()[p] - pw.stress()[p]).norm() <= 1e-9 * scale, "point {p}");
+        assert!((pd.position()[p] - pw.position()[p]).norm() <= 1e-9 * 10.0, "point {p}");
         // The total stress carries the pore pressure on top: σ = σ′ − p_w I.
-        let depth = 21.0 - pw.position[p][1];
+        let depth = 21.0 - pw.position()[p][1];
         assert!((wet.pore_pressure(p, 1.0) - 10.0 * depth).abs() <= 1e-9 * 210.0);
     }
 }
@@ -192,10 +193,10 @@ fn a_geostatic_stress_under_water_is_in_equilibrium() {
         Model::new(grid, BasisKind::Gimp, Kinematics::SmallStrain, points, vec![law], constraints, gravity).unwrap();
     let mut model = model.with_water(Water::new(10.0, PhreaticLevel::Horizontal(5.1), &gravity).unwrap()).unwrap();
     model.geostatic_stress(0.5).unwrap();
-    let before = model.points().position.clone();
-    let bottom = model.points().stress.iter().map(|s| s[(1, 1)]).fold(0.0, f64::min);
+    let before = model.points().position().to_vec();
+    let bottom = model.points().stress().iter().map(|s| s[(1, 1)]).fold(0.0, f64::min);
     assert!((bottom + 146.5).abs() < 1e-9, "σ′_v at the lowest point {bottom}");
     let after = run_quasi_static(model, 1);
-    let moved = after.points().position.iter().zip(&before).map(|(a, b)| (a - b).norm()).fold(0.0, f64::max);
+    let moved = after.points().position().iter().zip(&before).map(|(a, b)| (a - b).norm()).fold(0.0, f64::max);
     assert!(moved < 1e-9, "moved {moved}");
 }

@@ -5,6 +5,7 @@
 //! go to temporary folders), so there is no reason to split.
 
 mod docs;
+mod excavation;
 mod geostatic;
 mod ghost;
 mod implicit_dynamics;

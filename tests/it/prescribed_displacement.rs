@@ -56,7 +56,7 @@ fn pushed_block_carries_the_oedometric_stress() {
     let m = e * (1.0 - nu) / ((1.0 + nu) * (1.0 - 2.0 * nu));
     let sigma = -m * delta / 4.0;
     for p in 0..qs.model().points().len() {
-        let s = qs.model().points().stress[p][(1, 1)];
+        let s = qs.model().points().stress()[p][(1, 1)];
         assert!((s / sigma - 1.0).abs() < 1e-9, "point {p}: σ_yy {s} vs {sigma}");
     }
     // Reaction = f_int on the top nodes = σ_yy W (negative: the soil resists compression).
@@ -82,15 +82,15 @@ fn within_limits_the_constrained_nodes() {
     }
     let pts = &qs.model().points();
     let top_right = (0..pts.len())
-        .filter(|&p| pts.position0[p][0] > 1.5)
-        .max_by(|&a, &b| pts.position0[a][1].total_cmp(&pts.position0[b][1]))
+        .filter(|&p| pts.position0()[p][0] > 1.5)
+        .max_by(|&a, &b| pts.position0()[a][1].total_cmp(&pts.position0()[b][1]))
         .unwrap();
     let top_left = (0..pts.len())
-        .filter(|&p| pts.position0[p][0] < 0.5)
-        .max_by(|&a, &b| pts.position0[a][1].total_cmp(&pts.position0[b][1]))
+        .filter(|&p| pts.position0()[p][0] < 0.5)
+        .max_by(|&a, &b| pts.position0()[a][1].total_cmp(&pts.position0()[b][1]))
         .unwrap();
-    let u_right = pts.position[top_right][1] - pts.position0[top_right][1];
-    let u_left = pts.position[top_left][1] - pts.position0[top_left][1];
+    let u_right = pts.position()[top_right][1] - pts.position0()[top_right][1];
+    let u_left = pts.position()[top_left][1] - pts.position0()[top_left][1];
     assert!(u_left < u_right && u_right.abs() < 0.9 * u_left.abs(), "left {u_left}, right {u_right}");
 }
 
@@ -136,7 +136,7 @@ fn bbar_leaves_a_uniform_strain_exact() {
     let m = e * (1.0 - nu) / ((1.0 + nu) * (1.0 - 2.0 * nu));
     let sigma = -m * delta / 4.0;
     for p in 0..qs.model().points().len() {
-        let s = qs.model().points().stress[p][(1, 1)];
+        let s = qs.model().points().stress()[p][(1, 1)];
         assert!((s / sigma - 1.0).abs() < 1e-9, "point {p}: σ_yy {s} vs {sigma}");
     }
     assert!(r.iterations <= 2, "{} iterations", r.iterations);
@@ -162,7 +162,7 @@ fn extrapolated_start_converges_to_the_same_state() {
     let (zero_start, plain) = run(false);
     let (extrapolated, model) = run(true);
     for p in 0..model.points().len() {
-        let (a, b) = (model.points().stress[p][(1, 1)], plain.points().stress[p][(1, 1)]);
+        let (a, b) = (model.points().stress()[p][(1, 1)], plain.points().stress()[p][(1, 1)]);
         assert!((a / b - 1.0).abs() < 1e-9, "point {p}: {a} vs {b}");
     }
     println!("initial residuals: zero start {zero_start:?}, extrapolated {extrapolated:?}");

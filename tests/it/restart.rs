@@ -75,3 +75,14 @@ fn a_3d_run_resumes() {
     ];
     resumed_run_matches(&scene("slope_3d.ron", &steps), 2);
 }
+
+/// Points removed mid-run: an excavation stage after step 10, the run stopped after step
+/// 14 and resumed — the removal is in the checkpoint, not done again.
+#[test]
+fn a_run_resumes_after_an_excavation() {
+    let stage = [(
+        "analysis: QuasiStatic(load_steps: 40),",
+        "analysis: QuasiStatic(load_steps: 40),\n    excavation: [(after_step: 10, region: Box(min: [-1.0, 6.0], max: [2.0, 20.0]))],",
+    )];
+    resumed_run_matches(&scene("column.ron", &stage), 14);
+}

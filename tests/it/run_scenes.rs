@@ -153,6 +153,7 @@ fn slope_scene_finds_the_factor_of_safety() {
         }
         RunEvent::Step { .. } => steps += 1,
         RunEvent::Checkpoint(_) | RunEvent::Resumed { .. } => panic!("no checkpoint was asked for"),
+        RunEvent::Excavated { .. } => panic!("no excavation was asked for"),
     })
     .unwrap();
     let fos = summary.factor_of_safety.expect("a factor of safety");

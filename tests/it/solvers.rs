@@ -18,14 +18,14 @@ fn run(n: usize, solver: LinearSolverChoice) -> (LinearSolverKind, usize, Vec<na
     let settings = QuasiStaticSettings { load_steps: 1, linear_solver: solver, ..Default::default() };
     let mut qs = QuasiStatic::new(oedometric_block(n), settings);
     let report = qs.step().unwrap();
-    (qs.linear_solver_kind(), report.linear_iterations, qs.model().points().stress.clone())
+    (qs.linear_solver_kind(), report.linear_iterations, qs.model().points().stress().to_vec())
 }
 
 /// e_σ = ‖σ_h − σ‖ / ‖σ‖ over the points, σ_zz = −ρ g (H − z), σ_xx = σ_yy = ν/(1−ν) σ_zz.
 fn stress_error(n: usize, stress: &[nalgebra::Matrix3<f64>]) -> f64 {
     let model = oedometric_block(n);
     let (mut num, mut den) = (0.0, 0.0);
-    for (s, x) in stress.iter().zip(&model.points().position) {
+    for (s, x) in stress.iter().zip(model.points().position()) {
         let szz = -BLOCK_DENSITY * BLOCK_GRAVITY * (n as f64 - x[2]);
         let sxx = BLOCK_POISSON / (1.0 - BLOCK_POISSON) * szz;
         let exact = nalgebra::Matrix3::from_diagonal(&Vector3::new(sxx, sxx, szz));

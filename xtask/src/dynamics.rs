@@ -379,16 +379,16 @@ struct SuddenGravity {
 fn sudden_gravity(col: &Column, cells: usize, dt: f64, duration: f64) -> SuddenGravity {
     let model = column_model::<2>(col, col.height / cells as f64, cells, 2, BasisKind::Gimp, Kinematics::FiniteStrain);
     let top = (0..model.points().len())
-        .max_by(|&a, &b| model.points().position0[a][1].total_cmp(&model.points().position0[b][1]))
+        .max_by(|&a, &b| model.points().position0()[a][1].total_cmp(&model.points().position0()[b][1]))
         .unwrap();
     let mut mean_stress = vec![0.0; model.points().len()];
     let (mut n_samples, mut max_settlement, mut mean_top) = (0usize, 0.0f64, 0.0);
     let (run, mut last) = run_analysis(implicit(model, DynamicSettings::trapezoidal(dt, duration)), |_, m| {
         n_samples += 1;
-        for (s, sig) in mean_stress.iter_mut().zip(&m.points().stress) {
+        for (s, sig) in mean_stress.iter_mut().zip(m.points().stress()) {
             *s += sig[(1, 1)];
         }
-        let u = m.points().position[top][1] - m.points().position0[top][1];
+        let u = m.points().position()[top][1] - m.points().position0()[top][1];
         max_settlement = max_settlement.max(-u);
         mean_top += u;
     });
@@ -396,7 +396,7 @@ fn sudden_gravity(col: &Column, cells: usize, dt: f64, duration: f64) -> SuddenG
         s[(1, 1)] = m / n_samples as f64;
     }
     mean_top /= n_samples as f64;
-    let y_top = last.points().position0[top][1];
+    let y_top = last.points().position0()[top][1];
     let errors = column_errors(last.points(), col, 1, |y| col.hencky_displacement(y));
     let static_top = -col.hencky_displacement(y_top);
     SuddenGravity { run, errors, mean_ratio: -mean_top / static_top, amplification: max_settlement / static_top }

@@ -30,7 +30,7 @@ fn deposit(model: &Model<2>) -> Deposit {
     let nx = model.grid().cells()[0];
     let mut top = vec![0.0f64; nx];
     let mut farthest = 0.0f64;
-    for x in &model.points().position {
+    for x in model.points().position() {
         let i = ((x[0] / h).max(0.0) as usize).min(nx - 1);
         top[i] = top[i].max(x[1]);
         farthest = farthest.max(x[0]);
@@ -51,7 +51,9 @@ fn wave_step(model: &Model<2>) -> f64 {
     let pts = model.points();
     let h = model.grid().cell_size().min();
     let c_max = (0..pts.len())
-        .map(|p| (model.materials()[pts.material[p] as usize].p_wave_modulus() * pts.volume[p] / pts.mass[p]).sqrt())
+        .map(|p| {
+            (model.materials()[pts.material()[p] as usize].p_wave_modulus() * pts.volume()[p] / pts.mass()[p]).sqrt()
+        })
         .fold(0.0, f64::max);
     h / c_max
 }
@@ -69,7 +71,7 @@ pub(crate) fn verify(quick: bool, report: &mut Report) -> Result<()> {
     let (mut peak, mut last, mut steps) = (0.0f64, (0.0, 0.0), 0);
     while !ex.is_finished() {
         let r = ex.step()?;
-        let speed = ex.model().points().velocity.iter().map(|v| v.norm()).fold(0.0, f64::max);
+        let speed = ex.model().points().velocity().iter().map(|v| v.norm()).fold(0.0, f64::max);
         peak = peak.max(speed);
         (last, steps) = ((speed, r.critical_dt), r.step);
     }

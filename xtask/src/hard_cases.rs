@@ -67,16 +67,17 @@ fn softening(cells: usize, margin: f64) -> Softening {
         left_grid: false,
         kept_last_state: true,
     };
-    let mut last_state = qs.model().points().position.clone();
+    let mut last_state = qs.model().points().position().to_vec();
     while !qs.is_finished() {
         match qs.step() {
             Ok(r) => {
-                last_state.clone_from(&qs.model().points().position);
+                last_state.clear();
+                last_state.extend_from_slice(qs.model().points().position());
                 out.record(r);
             }
             Err(e) => {
                 out.left_grid = matches!(e, StepError::Connect(ConnectError::PointOutsideGrid { .. }));
-                out.kept_last_state = qs.model().points().position == last_state;
+                out.kept_last_state = qs.model().points().position() == last_state;
                 out.stop = e.to_string();
                 break;
             }

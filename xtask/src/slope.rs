@@ -73,9 +73,9 @@ fn undrained(cells: usize, anti_locking: AntiLocking) -> Result<Collapse> {
 fn crest_settlement(model: &Model<2>, g: &SlopeGeometry) -> f64 {
     let p = model.points();
     let (cx, cy) = ((g.toe + g.run) * g.height, (g.depth + 1.0) * g.height);
-    let distance = |a: usize| (p.position0[a][0] - cx).hypot(p.position0[a][1] - cy);
+    let distance = |a: usize| (p.position0()[a][0] - cx).hypot(p.position0()[a][1] - cy);
     let k = (0..p.len()).min_by(|&a, &b| distance(a).total_cmp(&distance(b))).unwrap_or(0);
-    p.position0[k][1] - p.position[k][1]
+    p.position0()[k][1] - p.position()[k][1]
 }
 
 /// The V4 sections: V4a, V4b and the V4c run-out.
@@ -181,7 +181,7 @@ fn profile(model: &Model<2>) -> Vec<f64> {
     let h = model.grid().cell_size()[0];
     let nx = model.grid().cells()[0];
     let mut top = vec![0.0f64; nx];
-    for x in &model.points().position {
+    for x in model.points().position() {
         let i = ((x[0] / h).max(0.0) as usize).min(nx - 1);
         top[i] = top[i].max(x[1]);
     }

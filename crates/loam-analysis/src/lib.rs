@@ -5,7 +5,7 @@
 use loam_explicit::{Explicit, ExplicitError, ExplicitState};
 use loam_implicit::{Dynamic, DynamicState, QuasiStatic, QuasiStaticState, StepError, StepReport};
 use loam_kernels::ConnectError;
-use loam_model::{LoadLevel, Model, ModelError, ModelState};
+use loam_model::{LoadLevel, Model, ModelError, ModelState, PointChange};
 use std::time::Duration;
 
 /// One of the three analyses.
@@ -208,6 +208,15 @@ impl<const D: usize> Analysis<D> {
             (Analysis::Dynamic(a), AnalysisState::Dynamic(s)) => a.resume(s, model),
             (Analysis::Explicit(a), AnalysisState::Explicit(s)) => a.resume(s, model),
             (a, _) => Err(ModelError::Restore(format!("the state is not of a {} analysis", a.name()))),
+        }
+    }
+
+    /// Add or remove points between steps ([`Model::change_points`]); returns how many.
+    pub fn change_points(&mut self, change: PointChange<D>) -> Result<usize, ModelError> {
+        match self {
+            Analysis::QuasiStatic(a) => a.change_points(change),
+            Analysis::Dynamic(a) => a.change_points(change),
+            Analysis::Explicit(a) => a.change_points(change),
         }
     }
 

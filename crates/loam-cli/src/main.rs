@@ -264,6 +264,9 @@ fn run_command(
             let at = if step > 0 { format!("after step {step}") } else { format!("after trial {done}") };
             show_line(&bar, &format!("resuming {} {at}", scene.display()), quiet);
         }
+        RunEvent::Excavated { stage, step, removed } => {
+            show_line(&bar, &format!("excavation {stage} after step {step}: {removed} points removed"), quiet)
+        }
     };
     let result = match checkpoint {
         Some(c) => resume_scene(&loaded, c, out, &run_options, &mut progress),

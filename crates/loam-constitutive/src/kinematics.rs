@@ -120,7 +120,7 @@ pub struct FiniteStrainStress {
 /// cost (the tangent's two 9 × 9 products and the derivative of the logarithm).
 // Inline (with the trial's constructor, its stress and `spectral`): the explicit step calls
 // it per point from another crate, and inlined, its 200-byte results are built in place
-// instead of copied through three calls (measured: docs/verification.md, Explicit speed).
+// instead of copied through three calls (measured: CHANGELOG.md, Explicit speed).
 #[inline]
 pub fn finite_strain_stress(
     law: &dyn ConstitutiveLaw,

@@ -23,7 +23,7 @@ impl<const D: usize> LeapfrogEnergy<D> {
         Self {
             leads: scheme == UpdateScheme::Usf,
             stored: initial.stored_energy(),
-            velocity: initial.points().velocity.clone(),
+            velocity: initial.points().velocity().to_vec(),
         }
     }
 
@@ -31,11 +31,12 @@ impl<const D: usize> LeapfrogEnergy<D> {
     /// (USF) or the previous step's (MUSL, USL).
     pub fn advance(&mut self, m: &Model<D>) -> f64 {
         let p = &m.points();
-        let kinetic = 0.5 * (0..p.len()).map(|i| p.mass[i] * self.velocity[i].dot(&p.velocity[i])).sum::<f64>();
+        let kinetic = 0.5 * (0..p.len()).map(|i| p.mass()[i] * self.velocity[i].dot(&p.velocity()[i])).sum::<f64>();
         let stored = m.stored_energy();
         let e = kinetic + if self.leads { stored } else { self.stored };
         self.stored = stored;
-        self.velocity.clone_from(&p.velocity);
+        self.velocity.clear();
+        self.velocity.extend_from_slice(p.velocity());
         e
     }
 }

@@ -6,7 +6,7 @@ use loam_kernels::{
     check_constraints, embed, internal_force, on_pool, update_point_stress, BandScatter, Committed, ConnectError,
     LoadSupports, RunError,
 };
-use loam_model::{Kinematics, LoadLevel, Model, ModelError, ModelState, StateFields};
+use loam_model::{Kinematics, LoadLevel, Model, ModelError, ModelState, PointChange, StateFields};
 use loam_points::{stretched_half_length, stretched_half_lengths};
 use nalgebra::{Matrix3, SMatrix, SVector};
 use rayon::prelude::*;
@@ -254,6 +254,12 @@ impl<const D: usize> Explicit<D> {
     /// nodal field is rebuilt from the points each step).
     pub fn state(&self) -> ExplicitState {
         ExplicitState { steps: self.steps, time: self.time }
+    }
+
+    /// Add or remove points between steps ([`Model::change_points`]); returns how many.
+    /// The next step connects the points anew.
+    pub fn change_points(&mut self, change: PointChange<D>) -> Result<usize, ModelError> {
+        self.model.change_points(change)
     }
 
     /// Go on from `state` and `model`, saved by an analysis of the same scene; a state that
@@ -583,7 +589,7 @@ fn locate<const D: usize>(
     step: usize,
 ) -> Result<(), ExplicitError> {
     let grid = model.grid();
-    let located = basis.compute(grid, model.configuration(), &model.points().half_length);
+    let located = basis.compute(grid, model.configuration(), model.points().half_length());
     located.map_err(|source| ConnectError::PointOutsideGrid { step, source })?;
     bands.group(grid, basis);
     Ok(())
@@ -639,7 +645,7 @@ fn wave_speed<const D: usize>(pts: &loam_points::PointStore<D>, p_wave: &[f64], 
 /// c_p² = M / ρ_p of point `p`.
 #[inline]
 fn squared_wave_speed<const D: usize>(pts: &loam_points::PointStore<D>, p_wave: &[f64], p: usize) -> f64 {
-    p_wave[pts.material[p] as usize] / (pts.mass[p] / pts.volume[p])
+    p_wave[pts.material()[p] as usize] / (pts.mass()[p] / pts.volume()[p])
 }
 
 /// Sign with sign(0) = 0 (`f64::signum` gives ±1 at zero).
@@ -666,8 +672,8 @@ fn scatter_grid<const D: usize>(
     let pts = model.points();
     let width = 1 + 2 * D;
     bands.scatter(width, out, |p, window| {
-        let (m, v, load) = (pts.mass[p], &pts.velocity[p], model.point_load(p));
-        let (volume, stress) = (pts.volume[p], &pts.stress[p]);
+        let (m, v, load) = (pts.mass()[p], &pts.velocity()[p], model.point_load(p));
+        let (volume, stress) = (pts.volume()[p], &pts.stress()[p]);
         basis.for_each_node(p, |node, n, grad| {
             // Cut to the field's width, which D fixes: the indexing below then needs one
             // bounds check, not one per entry.
@@ -702,7 +708,7 @@ fn negative_internal_force<const D: usize>(
     let finite = model.kinematics() == Kinematics::FiniteStrain;
     let pts = model.points();
     bands.scatter(D, out, |p, window| {
-        let v = if finite { sc.fields.volume[p] } else { pts.volume[p] };
+        let v = if finite { sc.fields.volume[p] } else { pts.volume()[p] };
         let stress = &sc.fields.stress[p];
         basis.for_each_node(p, |node, _, grad| {
             let f = -internal_force(v, stress, &grad, None);
@@ -722,7 +728,7 @@ fn remap_momentum<const D: usize>(
     velocity: &[SVector<f64, D>],
     out: &mut [f64],
 ) {
-    let mass = &model.points().mass;
+    let mass = model.points().mass();
     bands.scatter(D, out, |p, window| {
         let (m, v) = (mass[p], &velocity[p]);
         basis.for_each_node(p, |node, n, _| {
@@ -813,8 +819,8 @@ fn grid_to_points<const D: usize>(
                     ai[i] += n * acceleration[node * D + i];
                 }
             });
-            *v = (pts.velocity[p] + ai * dt) * flip + vi * (1.0 - flip);
-            *x = pts.position[p] + vi * dt;
+            *v = (pts.velocity()[p] + ai * dt) * flip + vi * (1.0 - flip);
+            *x = pts.position()[p] + vi * dt;
             if !(v.iter().all(|c| c.is_finite()) && x.iter().all(|c| c.is_finite())) {
                 let reason = format!(
                     "non-finite velocity {:?} or position {:?} after the grid update",
@@ -877,7 +883,7 @@ fn update_stress<const D: usize>(
             // of roots, a division and an arc cosine, which the next points' stretches
             // overlap here but not when a whole stress update lies between them (3D block:
             // the step 3-4 % faster), and more when computed stage by stage together (2 %).
-            let l0 = &pts.half_length0[block * POINT_BLOCK..][..f_new.len()];
+            let l0 = &pts.half_length0()[block * POINT_BLOCK..][..f_new.len()];
             let lanes = f_new.len() - f_new.len() % STRETCH_LANES;
             for k in (0..lanes).step_by(STRETCH_LANES) {
                 let l = stretched_half_lengths::<D, STRETCH_LANES>(
@@ -940,7 +946,7 @@ fn point_stress<const D: usize>(
     let pts = model.points();
     let committed = Committed::of(pts, p);
     // Borrowed, not moved out of the Result: each move (or `map_err`) copies the update's
-    // three tensors (such copies were 3.7 % of the 2D block's step: docs/verification.md,
+    // three tensors (such copies were 3.7 % of the 2D block's step: CHANGELOG.md,
     // Explicit speed).
     let updated = update_point_stress(model.kinematics(), model.law(p), &grad_du, committed, out.history);
     let u = match &updated {
@@ -952,8 +958,8 @@ fn point_stress<const D: usize>(
     }
     *out.stress = u.stress;
     *out.elastic_strain = u.elastic_strain;
-    *out.volume = det * pts.volume[p];
-    *out.deformation_gradient = u.delta_f * pts.deformation_gradient[p];
+    *out.volume = det * pts.volume()[p];
+    *out.deformation_gradient = u.delta_f * pts.deformation_gradient()[p];
     Ok(())
 }
 
@@ -978,7 +984,7 @@ mod tests {
         points
             .fill(&grid, &Shape::Box { min: Vector2::new(1.0, 1.0), max: Vector2::new(2.0, 2.0) }, 2, 800.0, 0)
             .unwrap();
-        points.velocity.iter_mut().for_each(|x| *x = v);
+        points.velocity_mut().iter_mut().for_each(|x| *x = v);
         let law = Elastic::new(2e5, 0.25).unwrap();
         Model::new(grid, BasisKind::Gimp, Kinematics::FiniteStrain, points, vec![Arc::new(law)], constraints, gravity)
             .unwrap()
@@ -1088,7 +1094,7 @@ mod tests {
             let expected = g * m * 0.02;
             assert!((p - expected).norm() <= 1e-12 * expected.norm(), "{scheme:?}: {p} vs {expected}");
             // Uniform acceleration produces no stress (rigid motion).
-            let smax = ex.model().points().stress.iter().map(|s| s.amax()).fold(0.0, f64::max);
+            let smax = ex.model().points().stress().iter().map(|s| s.amax()).fold(0.0, f64::max);
             assert!(smax < 1e-6, "{scheme:?}: stress {smax}");
         }
     }

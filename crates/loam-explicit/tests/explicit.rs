@@ -31,10 +31,10 @@ fn rigid_translation_is_exact_for_every_scheme() {
             let t = ex.time();
             let pts = &ex.model().points();
             let dx = (0..pts.len())
-                .map(|p| (pts.position[p] - (pts.position0[p] + v * t)).norm() / pts.position[p].norm())
+                .map(|p| (pts.position()[p] - (pts.position0()[p] + v * t)).norm() / pts.position()[p].norm())
                 .fold(0.0, f64::max);
             let dp = (pts.momentum() - p0).norm() / p0.norm();
-            let smax = pts.stress.iter().map(|s| s.amax()).fold(0.0, f64::max);
+            let smax = pts.stress().iter().map(|s| s.amax()).fold(0.0, f64::max);
             println!("rigid translation {basis:?} {scheme:?}: {} steps to t = {t}, max |Δx|/|x| = {dx:.1e}, |Δp|/|p| = {dp:.1e}, max |σ| = {smax:.1e}", ex.steps_done());
             assert_eq!(t, 5.0);
             assert!(dx < 1e-12, "{basis:?} {scheme:?}: position error {dx:e}");
@@ -318,7 +318,7 @@ fn one_or_two_threads_give_bitwise_identical_results() {
         };
         let run = |threads| rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap().install(disks);
         let one = run(1);
-        let smax = one.points().stress.iter().map(|s| s.amax()).fold(0.0, f64::max);
+        let smax = one.points().stress().iter().map(|s| s.amax()).fold(0.0, f64::max);
         assert!(smax > 1.0, "{scheme:?}: the disks never met (max |σ| = {smax})");
         assert_same_state(&one, &run(2));
         // Stepped from this thread, outside any pool: each step hops onto the global pool.
@@ -372,7 +372,7 @@ fn v5_colliding_disks_lose_little_energy_and_never_gain() {
     for basis in [BasisKind::Linear, BasisKind::Gimp] {
         let model = colliding_disks(sides, basis);
         let ke0 = model.points().kinetic_energy();
-        let area: f64 = model.points().volume.iter().sum();
+        let area: f64 = model.points().volume().iter().sum();
         let e0 = total_energy(&model);
         let mut ex = Explicit::new(model, settings(3.0)).unwrap();
         ex.check().unwrap();
@@ -415,7 +415,7 @@ fn v5_colliding_disks_lose_little_energy_and_never_gain() {
         let grid = loam_grid::Grid::new(Vector2::zeros(), Vector2::repeat(0.05), [20, 20]).unwrap();
         let mut pts = loam_points::PointStore::new();
         pts.fill(&grid, &disk(Vector2::new(0.2, 0.2), 0.2, sides), ppc, 1000.0, 0).unwrap();
-        let ratio = pts.volume.iter().sum::<f64>() / (std::f64::consts::PI * 0.04 * polygon_area_ratio(sides));
+        let ratio = pts.volume().iter().sum::<f64>() / (std::f64::consts::PI * 0.04 * polygon_area_ratio(sides));
         println!("V5 fill with {ppc}x{ppc} points per cell: point area / polygon area = {ratio:.4}");
         assert!((ratio - 1.0).abs() < 0.05);
     }
@@ -440,10 +440,10 @@ fn held_dofs_stop_the_points_they_hold() {
     let mut ex = Explicit::new(column_pushed_sideways(0.1), settings(1.0)).unwrap();
     ex.step().unwrap();
     let pts = ex.model().points();
-    let vx = pts.velocity.iter().map(|v| v[0].abs()).fold(0.0, f64::max);
+    let vx = pts.velocity().iter().map(|v| v[0].abs()).fold(0.0, f64::max);
     println!("sideways velocity after one step: {vx:.1e} of 0.1");
     assert!(vx <= 1e-14 * 0.1, "max |v_x| = {vx:e}");
-    let dx = (0..pts.len()).map(|p| (pts.position[p][0] - pts.position0[p][0]).abs()).fold(0.0, f64::max);
+    let dx = (0..pts.len()).map(|p| (pts.position()[p][0] - pts.position0()[p][0]).abs()).fold(0.0, f64::max);
     assert_eq!(dx, 0.0, "the rollers let a point move sideways");
 }
 
@@ -481,7 +481,7 @@ fn a_body_at_rest_on_its_base_comes_to_rest() {
     let elastic = ex.critical_time_step().unwrap();
     let (mut peak, mut last) = (0.0f64, (0.0, 0.0));
     run_to_end(&mut ex, |r, m| {
-        let speed = m.points().velocity.iter().map(|v| v.norm()).fold(0.0, f64::max);
+        let speed = m.points().velocity().iter().map(|v| v.norm()).fold(0.0, f64::max);
         peak = peak.max(speed);
         last = (speed, r.critical_dt);
     });

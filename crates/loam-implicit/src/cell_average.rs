@@ -62,7 +62,7 @@ pub(crate) fn cell_averaged_gradients<const D: usize>(
         sums.clear();
         let mut volume = 0.0;
         for &(_, p) in group {
-            let v = pts.volume[p];
+            let v = pts.volume()[p];
             volume += v;
             for (&node, g) in conn.support_nodes(p).iter().zip(conn.support_gradients(p)) {
                 match sums.iter_mut().find(|(m, _)| *m == node) {

@@ -26,7 +26,7 @@ use crate::{StepError, StepReport};
 use loam_kernels::{
     gather_internal_force, gather_nodal, internal_force, interpolate, interpolate_pair, on_pool, InvalidSetting,
 };
-use loam_model::{LoadLevel, Model, ModelError, ModelState};
+use loam_model::{LoadLevel, Model, ModelError, ModelState, PointChange};
 use loam_solve::{LinearSolverChoice, LinearSolverKind, NewtonError, NewtonReport, NewtonSettings};
 use rayon::prelude::*;
 use std::time::Instant;
@@ -200,6 +200,14 @@ impl<const D: usize> Dynamic<D> {
         }
     }
 
+    /// Add or remove points between steps ([`Model::change_points`]); returns how many.
+    /// The next step connects the points anew.
+    pub fn change_points(&mut self, change: PointChange<D>) -> Result<usize, ModelError> {
+        let changed = self.engine.model.change_points(change);
+        self.engine.invalidate();
+        changed
+    }
+
     /// Go on from `state` and `model`, saved by an analysis of the same scene: the next
     /// step is the one after `state.step`, with the numbers the saving run would have had.
     /// A state that does not fit is refused and nothing changes.
@@ -305,14 +313,14 @@ impl<const D: usize> Dynamic<D> {
         let nodal_mass = &mut self.inertia.nodal_mass;
         nodal_mass.resize(n_nodes, 0.0);
         gather_nodal(conn, 1, nodal_mass, |p, a, out| {
-            out[0] += conn.support_values(p)[a] * pts.mass[p];
+            out[0] += conn.support_values(p)[a] * pts.mass()[p];
         });
         for (field, point_field) in
-            [(&mut self.inertia.velocity, &pts.velocity), (&mut self.acceleration, &pts.acceleration)]
+            [(&mut self.inertia.velocity, pts.velocity()), (&mut self.acceleration, pts.acceleration())]
         {
             field.resize(n_nodes * D, 0.0);
             gather_nodal(conn, D, field, |p, a, out| {
-                let w = conn.support_values(p)[a] * pts.mass[p];
+                let w = conn.support_values(p)[a] * pts.mass()[p];
                 for i in 0..D {
                     out[i] += w * point_field[p][i];
                 }
@@ -340,7 +348,7 @@ impl<const D: usize> Dynamic<D> {
             let k = p * stride + a;
             let g = &conn.support_gradients(p)[a];
             let c = average.map_or(*g, |avg| avg.strain_gradient(k, g));
-            internal_force(pts.volume[p], &pts.stress[p], &c, average.map(|avg| avg.average(k)))
+            internal_force(pts.volume()[p], &pts.stress()[p], &c, average.map(|avg| avg.average(k)))
         });
         for (k, a) in self.acceleration.iter_mut().enumerate() {
             let m = self.inertia.nodal_mass[k / D];
@@ -453,12 +461,12 @@ mod tests {
             let pts = dynamic.model().points();
             let (fall, speed) = (0.5 * g * t * t, g * t);
             for p in 0..pts.len() {
-                let u = pts.position[p] - pts.position0[p];
+                let u = pts.position()[p] - pts.position0()[p];
                 assert!(
                     u[0].abs() < 1e-12 && (u[1] - fall).abs() < 1e-12 * fall.abs(),
                     "{mass:?}: point {p} moved {u}"
                 );
-                let v = pts.velocity[p];
+                let v = pts.velocity()[p];
                 assert!(v[0].abs() < 1e-12 && (v[1] - speed).abs() < 1e-12 * speed.abs(), "{mass:?}: v = {v}");
             }
         }

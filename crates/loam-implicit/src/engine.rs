@@ -277,7 +277,7 @@ impl<const D: usize> Engine<D> {
         self.body_factor = lambda;
         self.update_water_forces();
         let (model, conn, water) = (&self.model, &self.conn, &self.water_force);
-        let volume = &model.points().volume;
+        let volume = model.points().volume();
         self.f_ext.resize(conn.active_nodes().len() * D, 0.0);
         // The water's force on the committed volumes joins the point loads (a finite-strain
         // residual adds its change with the volume).
@@ -378,9 +378,9 @@ impl<const D: usize> Engine<D> {
             ghost: &self.ghost,
             constrained: &self.constrained,
             f_ext: if follower { &self.f_follower } else { &self.f_ext },
-            mass: &self.model.points().mass,
+            mass: self.model.points().mass(),
             water_force: if self.model.kinematics() == Kinematics::FiniteStrain { &self.water_force } else { &[] },
-            committed_volume: &self.model.points().volume,
+            committed_volume: self.model.points().volume(),
         };
         Ok(residual(&inputs, &self.trial, inertia, &self.du, &mut self.residual, &mut self.reaction))
     }
@@ -393,7 +393,7 @@ impl<const D: usize> Engine<D> {
             average: CellAverage::of(&self.model, &self.cell_gradients),
             ghost: &self.ghost,
             constrained: &self.constrained,
-            mass: &self.model.points().mass,
+            mass: self.model.points().mass(),
             water_force: if self.model.kinematics() == Kinematics::FiniteStrain { &self.water_force } else { &[] },
         };
         assemble(&inputs, &self.trial, inertia, &mut self.matrix);

@@ -70,7 +70,7 @@ pub(crate) fn add_follower_tangent<const D: usize>(
             for (slot, &w) in facet.iter().enumerate() {
                 let da = area_derivative(&corners, slot);
                 let p = load.carriers()[w as usize] as usize;
-                let carry = Carry { p, offset: *load.offset(w as usize), f: points.deformation_gradient[p] };
+                let carry = Carry { p, offset: *load.offset(w as usize), f: points.deformation_gradient()[p] };
                 for &v in facet {
                     let coefficient = scale * pressure[v as usize] / D as f64;
                     let (nodes_j, weights) = supports.support(k, v as usize);

@@ -20,7 +20,7 @@ pub(crate) fn scaled_ghost_faces<const D: usize>(
     let (mut fill, mut modulus) = (vec![0.0; grid.num_cells()], vec![0.0f64; grid.num_cells()]);
     let moduli: Vec<f64> = model.materials().iter().map(|m| m.p_wave_modulus()).collect();
     let pts = model.points();
-    for ((x, v), &m) in model.configuration().iter().zip(&pts.volume).zip(&pts.material) {
+    for ((x, v), &m) in model.configuration().iter().zip(pts.volume()).zip(pts.material()) {
         let c = grid.cell_index(grid.cell_coords(x));
         fill[c] += v / grid.cell_volume();
         modulus[c] = modulus[c].max(moduli[m as usize]);

@@ -166,7 +166,7 @@ fn finite_strain_point<const D: usize>(
         update_point(Kinematics::FiniteStrain, model.law(p), &embed(g), Committed::of(pts, p), history, |u| {
             let det_df = u.delta_f.determinant();
             (*delta_f, *stress, *elastic_strain) = (*u.delta_f, *u.stress, *u.elastic_strain);
-            *volume = det_df * pts.volume[p];
+            *volume = det_df * pts.volume()[p];
             *tangent = in_plane::<D>(u.tangent, *volume);
             det_df
         })?;
@@ -208,7 +208,7 @@ fn small_strain_point<const D: usize>(
     let TrialSlot { delta_f, stress, elastic_strain, volume, tangent, grad_x, volumetric, history } = slot;
     update_point(Kinematics::SmallStrain, model.law(p), &g3, Committed::of(pts, p), history, |u| {
         (*delta_f, *stress, *elastic_strain) = (*u.delta_f, *u.stress, *u.elastic_strain);
-        *volume = pts.volume[p];
+        *volume = pts.volume()[p];
         *tangent = in_plane::<D>(u.tangent, *volume);
         if theta_bar.is_some() {
             let (a, v) = (u.tangent, *volume);

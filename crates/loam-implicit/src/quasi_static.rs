@@ -9,7 +9,7 @@ use crate::engine::Engine;
 use crate::points::PointUpdateError;
 use crate::{IterationProfile, StepError, StepReport};
 use loam_kernels::{on_pool, RunError};
-use loam_model::{LoadLevel, Model, ModelError, ModelState};
+use loam_model::{LoadLevel, Model, ModelError, ModelState, PointChange};
 use loam_solve::{
     BlockPattern, LinearSolver, LinearSolverChoice, LinearSolverKind, LinearSolverTimings, NewtonError, NewtonReport,
     NewtonSettings,
@@ -119,6 +119,14 @@ impl<const D: usize> QuasiStatic<D> {
             previous_increment: self.previous_increment,
             linear_solver: self.engine.resolved_linear_solver(),
         }
+    }
+
+    /// Add or remove points between steps ([`Model::change_points`]); returns how many.
+    /// The next step connects the points anew.
+    pub fn change_points(&mut self, change: PointChange<D>) -> Result<usize, ModelError> {
+        let changed = self.engine.model.change_points(change);
+        self.engine.invalidate();
+        changed
     }
 
     /// Go on from `state` and `model`, saved by an analysis of the same scene: the next

@@ -52,9 +52,32 @@ fn tensor_field(n: usize, stress: impl Fn(usize) -> Matrix3<f64>) -> Vec<f64> {
         .collect()
 }
 
+/// `values` (`width` to a point, in the store's order) in the order `order`, the points'
+/// id order ([`loam_points::PointStore::id_order`]; `None`: they are in it).
+fn in_id_order(values: Vec<f64>, width: usize, order: Option<&[usize]>) -> Vec<f64> {
+    match order {
+        None => values,
+        Some(order) => order.iter().flat_map(|&p| values[p * width..(p + 1) * width].iter().copied()).collect(),
+    }
+}
+
 impl Fields {
-    /// The `chosen` fields of `model`, pore pressures at gravity's factor `body_factor`.
+    /// The `chosen` fields of `model`, pore pressures at gravity's factor `body_factor`,
+    /// point by point in id order.
     fn of<const D: usize>(model: &Model<D>, chosen: &[FieldSpec], body_factor: f64) -> Self {
+        let mut fields = Self::in_store_order(model, chosen, body_factor);
+        let order = model.points().id_order();
+        let order = order.as_deref();
+        for (list, width) in [(&mut fields.scalars, 1), (&mut fields.vectors, D), (&mut fields.tensors, 6)] {
+            for (_, values) in list.iter_mut() {
+                *values = in_id_order(std::mem::take(values), width, order);
+            }
+        }
+        fields
+    }
+
+    /// [`Fields::of`] in the order of the store.
+    fn in_store_order<const D: usize>(model: &Model<D>, chosen: &[FieldSpec], body_factor: f64) -> Self {
         let pts = model.points();
         let flat = |v: &[SVector<f64, D>]| v.iter().flat_map(|x| x.iter().copied()).collect::<Vec<f64>>();
         let scalar = |f: &dyn Fn(usize) -> f64| (0..pts.len()).map(f).collect::<Vec<f64>>();
@@ -62,25 +85,25 @@ impl Fields {
         for field in chosen {
             match field {
                 FieldSpec::Displacement => {
-                    let u = pts.position.iter().zip(&pts.position0).map(|(x, x0)| x - x0).collect::<Vec<_>>();
+                    let u = pts.position().iter().zip(pts.position0()).map(|(x, x0)| x - x0).collect::<Vec<_>>();
                     out.vectors.push(("displacement".into(), flat(&u)));
                 }
-                FieldSpec::Velocity => out.vectors.push(("velocity".into(), flat(&pts.velocity))),
-                FieldSpec::Stress => out.tensors.push(("stress".into(), tensor_field(pts.len(), |p| pts.stress[p]))),
+                FieldSpec::Velocity => out.vectors.push(("velocity".into(), flat(pts.velocity()))),
+                FieldSpec::Stress => out.tensors.push(("stress".into(), tensor_field(pts.len(), |p| pts.stress()[p]))),
                 FieldSpec::PorePressure => {
                     out.scalars.push(("pore_pressure".into(), scalar(&|p| model.pore_pressure(p, body_factor))))
                 }
                 FieldSpec::TotalStress => {
-                    let total = |p| pts.stress[p] - Matrix3::identity() * model.pore_pressure(p, body_factor);
+                    let total = |p| pts.stress()[p] - Matrix3::identity() * model.pore_pressure(p, body_factor);
                     out.tensors.push(("total_stress".into(), tensor_field(pts.len(), total)));
                 }
-                FieldSpec::MeanStress => out.scalars.push(("p".into(), scalar(&|p| invariants(&pts.stress[p]).0))),
+                FieldSpec::MeanStress => out.scalars.push(("p".into(), scalar(&|p| invariants(&pts.stress()[p]).0))),
                 FieldSpec::DeviatoricStress => {
-                    out.scalars.push(("q".into(), scalar(&|p| invariants(&pts.stress[p]).1)))
+                    out.scalars.push(("q".into(), scalar(&|p| invariants(&pts.stress()[p]).1)))
                 }
-                FieldSpec::Volume => out.scalars.push(("volume".into(), pts.volume.clone())),
-                FieldSpec::Mass => out.scalars.push(("mass".into(), pts.mass.clone())),
-                FieldSpec::Material => out.scalars.push(("material".into(), scalar(&|p| pts.material[p] as f64))),
+                FieldSpec::Volume => out.scalars.push(("volume".into(), pts.volume().to_vec())),
+                FieldSpec::Mass => out.scalars.push(("mass".into(), pts.mass().to_vec())),
+                FieldSpec::Material => out.scalars.push(("material".into(), scalar(&|p| pts.material()[p] as f64))),
                 FieldSpec::PlasticStrain => out
                     .scalars
                     .push(("plastic_strain".into(), scalar(&|p| model.law(p).plastic_strain(pts.history(p))))),
@@ -99,8 +122,8 @@ impl Fields {
 fn yielding<const D: usize>(model: &Model<D>, p: usize) -> bool {
     let pts = model.points();
     let stress = match model.kinematics() {
-        Kinematics::FiniteStrain => pts.stress[p] * pts.deformation_gradient[p].determinant(),
-        Kinematics::SmallStrain => pts.stress[p],
+        Kinematics::FiniteStrain => pts.stress()[p] * pts.deformation_gradient()[p].determinant(),
+        Kinematics::SmallStrain => pts.stress()[p],
     };
     model.law(p).is_yielding(&stress, pts.history(p))
 }
@@ -144,7 +167,8 @@ pub(crate) fn write_frame<const D: usize>(
     time: f64,
 ) -> Result<(), OutputError> {
     let f = Fields::of(model, chosen, body_factor);
-    let positions: Vec<f64> = model.points().position.iter().flat_map(|x| x.iter().copied()).collect();
+    let positions: Vec<f64> = model.points().position().iter().flat_map(|x| x.iter().copied()).collect();
+    let positions = in_id_order(positions, D, model.points().id_order().as_deref());
     let mut cloud = PointCloud::new(D, &positions);
     cloud.scalars = f.scalars.iter().map(|(n, v)| (n.as_str(), v.as_slice())).collect();
     cloud.vectors = f.vectors.iter().map(|(n, v)| (n.as_str(), v.as_slice())).collect();
@@ -155,7 +179,7 @@ pub(crate) fn write_frame<const D: usize>(
     pvd.add(time, &name)
 }
 
-/// `points_final.csv`: one row per point with initial and current position, stress
+/// `points_final.csv`: one row per point, in id order, with initial and current position, stress
 /// (xx, yy, zz, xy[, yz, xz]), initial and current volume and mass, then the `chosen`
 /// scalar fields beyond those (p, q, the plastic state, the pore pressure at gravity's
 /// factor `body_factor`).
@@ -171,11 +195,11 @@ pub fn write_points_csv<const D: usize>(
     let mut columns: Vec<Vec<f64>> = Vec::new();
     for a in 0..D {
         header.push(format!("{}0", axes[a]));
-        columns.push(pts.position0.iter().map(|x| x[a]).collect());
+        columns.push(pts.position0().iter().map(|x| x[a]).collect());
     }
     for a in 0..D {
         header.push(axes[a].to_string());
-        columns.push(pts.position.iter().map(|x| x[a]).collect());
+        columns.push(pts.position().iter().map(|x| x[a]).collect());
     }
     let mut comps = vec![("sxx", 0, 0), ("syy", 1, 1), ("szz", 2, 2), ("sxy", 0, 1)];
     if D == 3 {
@@ -183,10 +207,14 @@ pub fn write_points_csv<const D: usize>(
     }
     for (name, i, j) in comps {
         header.push(name.to_string());
-        columns.push(pts.stress.iter().map(|s| s[(i, j)]).collect());
+        columns.push(pts.stress().iter().map(|s| s[(i, j)]).collect());
     }
     header.extend(["volume0", "volume", "mass"].map(String::from));
-    columns.extend([pts.volume0.clone(), pts.volume.clone(), pts.mass.clone()]);
+    columns.extend([pts.volume0().to_vec(), pts.volume().to_vec(), pts.mass().to_vec()]);
+    let order = pts.id_order();
+    for column in &mut columns {
+        *column = in_id_order(std::mem::take(column), 1, order.as_deref());
+    }
     use FieldSpec::*;
     let extra: Vec<FieldSpec> = (chosen.iter().copied())
         .filter(|f| {

@@ -16,7 +16,7 @@ use loam_analysis::{Analysis, AnalysisState};
 use loam_explicit::ExplicitState;
 use loam_implicit::{DynamicState, FactorOfSafety, QuasiStaticState, StrengthTrial};
 use loam_model::{Model, ModelState};
-use loam_points::PointStore;
+use loam_points::{Column, PointStore};
 use loam_solve::LinearSolverKind;
 use nalgebra::{SMatrix, SVector};
 use std::path::{Path, PathBuf};
@@ -371,31 +371,14 @@ fn unflat<const R: usize, const C: usize>(
     Ok(())
 }
 
-fn scalars(c: &Checkpoint, name: &str, out: &mut [f64]) -> Result<(), CheckpointError> {
-    let v = c.f64s(name)?;
-    if v.len() != out.len() {
-        return Err(shape_error(name, format!("{} values where this run has {}", v.len(), out.len())));
-    }
-    out.copy_from_slice(v);
-    Ok(())
-}
-
 fn put_model<const D: usize>(c: &mut Checkpoint, model: &Model<D>) {
-    let p = model.points();
-    c.put("points.position", flat(&p.position));
-    c.put("points.position0", flat(&p.position0));
-    c.put("points.volume", Section::F64(p.volume.clone()));
-    c.put("points.volume0", Section::F64(p.volume0.clone()));
-    c.put("points.mass", Section::F64(p.mass.clone()));
-    c.put("points.velocity", flat(&p.velocity));
-    c.put("points.acceleration", flat(&p.acceleration));
-    c.put("points.deformation_gradient", flat(&p.deformation_gradient));
-    c.put("points.elastic_strain", flat(&p.elastic_strain));
-    c.put("points.stress", flat(&p.stress));
-    c.put("points.half_length0", flat(&p.half_length0));
-    c.put("points.half_length", flat(&p.half_length));
-    c.put("points.material", Section::U64(p.material.iter().map(|&m| m as u64).collect()));
-    c.put("points.history", Section::F64(p.history.clone()));
+    for (name, column) in model.points().columns() {
+        let section = match column {
+            Column::Floats(v) => Section::F64(v),
+            Column::Integers(v) => Section::U64(v),
+        };
+        c.put(&format!("points.{name}"), section);
+    }
     let vertices: Vec<SVector<f64, D>> = model.loads().iter().flat_map(|l| l.positions().iter().copied()).collect();
     c.put("model.load_vertices", flat(&vertices));
     if let Some(mesh) = model.background().mesh() {
@@ -403,28 +386,15 @@ fn put_model<const D: usize>(c: &mut Checkpoint, model: &Model<D>) {
     }
 }
 
-/// The model state of checkpoint `c` for `model` (built from the same scene): its points
-/// with every field overwritten, each field's length checked.
+/// The model state of checkpoint `c` for `model` (built from the same scene): its points,
+/// every field read by name and its length checked.
 fn take_model<const D: usize>(c: &Checkpoint, model: &Model<D>) -> Result<ModelState<D>, CheckpointError> {
-    let mut p: PointStore<D> = model.points().clone();
-    unflat(c, "points.position", &mut p.position)?;
-    unflat(c, "points.position0", &mut p.position0)?;
-    scalars(c, "points.volume", &mut p.volume)?;
-    scalars(c, "points.volume0", &mut p.volume0)?;
-    scalars(c, "points.mass", &mut p.mass)?;
-    unflat(c, "points.velocity", &mut p.velocity)?;
-    unflat(c, "points.acceleration", &mut p.acceleration)?;
-    unflat(c, "points.deformation_gradient", &mut p.deformation_gradient)?;
-    unflat(c, "points.elastic_strain", &mut p.elastic_strain)?;
-    unflat(c, "points.stress", &mut p.stress)?;
-    unflat(c, "points.half_length0", &mut p.half_length0)?;
-    unflat(c, "points.half_length", &mut p.half_length)?;
-    scalars(c, "points.history", &mut p.history)?;
-    let material = c.u64s("points.material")?;
-    if material.len() != p.material.len() || material.iter().any(|&m| m > u32::MAX as u64) {
-        return Err(shape_error("points.material", format!("{} values for {} points", material.len(), p.len())));
-    }
-    p.material.iter_mut().zip(material).for_each(|(m, &saved)| *m = saved as u32);
+    let column = |name: &str| match c.f64s(&format!("points.{name}")) {
+        Ok(v) => Some(Column::Floats(v.to_vec())),
+        Err(_) => c.u64s(&format!("points.{name}")).ok().map(|v| Column::Integers(v.to_vec())),
+    };
+    let p = PointStore::from_columns(&column, model.points().history_stride())
+        .map_err(|e| shape_error("points", e.to_string()))?;
     let mut vertices: Vec<SVector<f64, D>> = model.loads().iter().flat_map(|l| l.positions().iter().copied()).collect();
     unflat(c, "model.load_vertices", &mut vertices)?;
     let mut rest = &vertices[..];

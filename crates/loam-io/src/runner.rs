@@ -12,12 +12,12 @@ use crate::point_fields::{default_fields, write_frame, write_points_csv};
 use crate::restart::{self, CheckpointEvery, CheckpointWritten, Checkpoints, OutputsState, Phase, RunTotals};
 use crate::run_plots::plot_run;
 use crate::scene::FieldSpec;
-use crate::scene::{AnalysisSpec, LoadedScene, OutputSpec, SceneError};
+use crate::scene::{AnalysisSpec, Excavation, LoadedScene, OutputSpec, SceneError};
 use loam_analysis::{Analysis, AnalysisError, Progress};
 use loam_implicit::{
     reduced_strength, FactorOfSafety, QuasiStatic, StrengthReduction, StrengthReductionError, StrengthTrial,
 };
-use loam_model::{ExternalWork, LoadLevel, Model};
+use loam_model::{ExternalWork, LoadLevel, Model, ModelError, PointChange};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
@@ -36,6 +36,8 @@ pub enum RunFailure {
     StrengthReduction(#[from] StrengthReductionError),
     #[error(transparent)]
     Checkpoint(#[from] CheckpointError),
+    #[error("excavation {stage} after step {step}: {source}")]
+    Excavation { stage: usize, step: usize, source: ModelError },
 }
 
 /// What a finished run did.
@@ -81,6 +83,8 @@ pub enum RunEvent<'a> {
     Checkpoint(CheckpointWritten),
     /// A resumed run starts after `step` steps and `trials` strength-reduction trials.
     Resumed { step: usize, trials: usize },
+    /// Excavation stage `stage` removed `removed` points after step `step`.
+    Excavated { stage: usize, step: usize, removed: usize },
 }
 
 /// Run a scene, writing its outputs into `out_dir`; `progress` is told of each
@@ -248,9 +252,11 @@ fn run_prepared<const D: usize>(
         None => (Outputs::create(&scene.scene.output, &analysis, out_dir)?, RunTotals::default()),
     };
     let end_time = analysis.end_time();
+    let excavations = scene.excavations::<D>()?;
     let stop = |a: &Analysis<D>| a.is_finished() || options.max_steps.is_some_and(|m| a.steps_done() >= m);
     while !stop(&analysis) {
         let r = analysis.step()?;
+        excavate(&mut analysis, &excavations, r.step, progress)?;
         totals.add(&r);
         outputs.record(&r, analysis.model(), stop(&analysis))?;
         progress(RunEvent::Step { report: &r, end: end_time });
@@ -274,6 +280,23 @@ fn run_prepared<const D: usize>(
         factor_of_safety,
         plots: Ok(Vec::new()),
     })
+}
+
+/// The excavation stages due after step `step`, in the scene's order: their points are
+/// removed before the step's outputs and checkpoint, which show the excavated ground.
+fn excavate<const D: usize>(
+    analysis: &mut Analysis<D>,
+    stages: &[Excavation<D>],
+    step: usize,
+    progress: &mut dyn FnMut(RunEvent),
+) -> Result<(), RunFailure> {
+    for (stage, e) in stages.iter().enumerate().filter(|(_, e)| e.after_step == step) {
+        let removed = analysis
+            .change_points(PointChange::RemoveIn(e.region.clone()))
+            .map_err(|source| RunFailure::Excavation { stage, step, source })?;
+        progress(RunEvent::Excavated { stage, step, removed });
+    }
+    Ok(())
 }
 
 /// Where a strength-reduction search writes and saves, and the checkpoint it goes on from:

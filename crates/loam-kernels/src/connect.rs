@@ -15,7 +15,7 @@ pub fn connect<const D: usize>(
 ) -> Result<(), ConnectError> {
     model
         .background()
-        .connect(conn, model.configuration(), &model.points().half_length)
+        .connect(conn, model.configuration(), model.points().half_length())
         .map_err(|e| ConnectError::locate(step, e))?;
     model.constrained_dofs(conn.active_nodes(), constrained);
     Ok(())

@@ -151,8 +151,8 @@ pub fn trial_vertices<const D: usize>(
     (0..load.positions().len())
         .map(|v| {
             let p = load.carriers()[v] as usize;
-            let moved = points.position[p] + interpolate(conn, p, du);
-            load.carried(v, &moved, &(delta_f[p] * points.deformation_gradient[p]))
+            let moved = points.position()[p] + interpolate(conn, p, du);
+            load.carried(v, &moved, &(delta_f[p] * points.deformation_gradient()[p]))
         })
         .collect()
 }

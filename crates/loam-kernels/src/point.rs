@@ -35,8 +35,8 @@ impl<'a> Committed<'a> {
     #[inline]
     pub fn of<const D: usize>(points: &'a PointStore<D>, p: usize) -> Self {
         Self {
-            f: &points.deformation_gradient[p],
-            elastic_strain: &points.elastic_strain[p],
+            f: &points.deformation_gradient()[p],
+            elastic_strain: &points.elastic_strain()[p],
             history: points.history(p),
         }
     }

@@ -3,8 +3,10 @@
 
 use crate::{Kinematics, LoadLevel, Model};
 use loam_constitutive::tensor::sym_log;
+use loam_points::{PointId, PointStore};
 use nalgebra::SVector;
 use rayon::prelude::*;
+use std::collections::HashMap;
 
 impl<const D: usize> Model<D> {
     /// Stored elastic energy Σ_p V⁰_p W(ε^e_p): with finite strain ε^e = ½ ln b^e and W
@@ -16,13 +18,13 @@ impl<const D: usize> Model<D> {
             .map(|p| {
                 let law = self.law(p);
                 let eps = match self.kinematics {
-                    Kinematics::SmallStrain => pts.elastic_strain[p],
-                    Kinematics::FiniteStrain => match sym_log(&pts.elastic_strain[p]) {
+                    Kinematics::SmallStrain => pts.elastic_strain()[p],
+                    Kinematics::FiniteStrain => match sym_log(&pts.elastic_strain()[p]) {
                         Ok(l) => l * 0.5,
                         Err(_) => return f64::NAN,
                     },
                 };
-                pts.volume0[p] * law.stored_energy(&eps)
+                pts.volume0()[p] * law.stored_energy(&eps)
             })
             .collect::<Vec<_>>()
             .iter()
@@ -33,10 +35,13 @@ impl<const D: usize> Model<D> {
 /// Work of the loads (gravity, point forces, the water's force, the loads on surfaces) on
 /// the motion of the points and load vertices, accumulated step by step with the trapezoidal rule: exact for
 /// dead loads held constant, and for loads ramped linearly with displacement increments of
-/// one step.
+/// one step. Points removed between two calls do no work in that interval, points added
+/// start doing work from the next one.
 #[derive(Debug, Clone)]
 pub struct ExternalWork<const D: usize> {
+    /// Every point's place at the last call, and its id.
     previous: Vec<SVector<f64, D>>,
+    previous_ids: Vec<PointId>,
     previous_loads: Vec<Vec<(SVector<f64, D>, SVector<f64, D>)>>,
     previous_level: LoadLevel,
     work: f64,
@@ -46,7 +51,8 @@ impl<const D: usize> ExternalWork<D> {
     /// Start at the model's current positions and load level.
     pub fn new(model: &Model<D>, level: LoadLevel) -> Self {
         Self {
-            previous: model.points().position.clone(),
+            previous: model.points().position().to_vec(),
+            previous_ids: model.points().id().to_vec(),
             previous_loads: vertex_forces(model, level),
             previous_level: level,
             work: 0.0,
@@ -63,19 +69,22 @@ impl<const D: usize> ExternalWork<D> {
     /// to `level`. Returns the accumulated work.
     pub fn advance(&mut self, model: &Model<D>, level: LoadLevel) -> f64 {
         let pts = model.points();
+        if self.previous_ids != pts.id() {
+            self.follow_ids(pts);
+        }
         let (before, now) = (self.previous_level.body_factor(), level.body_factor());
         let dw: f64 = (0..pts.len())
             .map(|p| {
                 let mean = (model.point_load_at(p, before) + model.point_load_at(p, now)) * 0.5;
-                mean.dot(&(pts.position[p] - self.previous[p]))
+                mean.dot(&(pts.position()[p] - self.previous[p]))
             })
             .sum();
         // The water's force on the points, on their current volumes.
         let (wb, wn) = (self.previous_level.body_factor(), level.body_factor());
         let dw_water: f64 = (0..pts.len())
             .map(|p| {
-                let mean = (model.water_force(p, wb) + model.water_force(p, wn)) * (0.5 * pts.volume[p]);
-                mean.dot(&(pts.position[p] - self.previous[p]))
+                let mean = (model.water_force(p, wb) + model.water_force(p, wn)) * (0.5 * pts.volume()[p]);
+                mean.dot(&(pts.position()[p] - self.previous[p]))
             })
             .sum();
         let loads = vertex_forces(model, level);
@@ -86,7 +95,7 @@ impl<const D: usize> ExternalWork<D> {
             .map(|((x, f), (x0, f0))| ((f + f0) * 0.5).dot(&(x - x0)))
             .sum();
         self.work += dw + dw_water + dw_loads;
-        self.previous.copy_from_slice(&pts.position);
+        self.previous.copy_from_slice(pts.position());
         self.previous_loads = loads;
         self.previous_level = level;
         self.work
@@ -94,6 +103,15 @@ impl<const D: usize> ExternalWork<D> {
 
     pub fn work(&self) -> f64 {
         self.work
+    }
+
+    /// The last places of `points` by id, after points came or went: a point added since
+    /// starts where it is now.
+    fn follow_ids(&mut self, points: &PointStore<D>) {
+        let last: HashMap<PointId, SVector<f64, D>> =
+            self.previous_ids.iter().copied().zip(self.previous.iter().copied()).collect();
+        self.previous = points.id().iter().zip(points.position()).map(|(id, x)| *last.get(id).unwrap_or(x)).collect();
+        self.previous_ids = points.id().to_vec();
     }
 }
 

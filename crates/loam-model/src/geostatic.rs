@@ -32,8 +32,8 @@ impl<const D: usize> Model<D> {
             strains.push(self.carrying_strain(p, &sigma, (k0, sv), &mut h_out)?);
             stresses.push(sigma);
         }
-        self.points.elastic_strain = strains;
-        self.points.stress = stresses;
+        self.points.elastic_strain_mut().copy_from_slice(&strains);
+        self.points.stress_mut().copy_from_slice(&stresses);
         self.gravity_preloaded = true;
         Ok(())
     }
@@ -49,21 +49,21 @@ impl<const D: usize> Model<D> {
         // The column of a point: its cell's coordinates across gravity (the vertical one
         // zeroed), so points sort by column, then from the top down.
         let column = |p: usize| {
-            let mut ijk = self.grid().cell_coords(&pts.position[p]);
+            let mut ijk = self.grid().cell_coords(&pts.position()[p]);
             ijk[vertical] = 0;
             ijk
         };
         let mut order: Vec<([usize; D], usize)> = (0..pts.len()).map(|p| (column(p), p)).collect();
         order.sort_by(|(ca, a), (cb, b)| {
-            ca.cmp(cb).then((up * pts.position[*b][vertical]).total_cmp(&(up * pts.position[*a][vertical])))
+            ca.cmp(cb).then((up * pts.position()[*b][vertical]).total_cmp(&(up * pts.position()[*a][vertical])))
         });
         let tol = 1e-9 * h[vertical];
         let mut sigma_v = vec![0.0; pts.len()];
         for col in order.chunk_by(|a, b| a.0 == b.0) {
             let mut above = 0.0;
             // The rows of the column: points at the same height, top down.
-            for row in
-                col.chunk_by(|&(_, a), &(_, b)| (pts.position[a][vertical] - pts.position[b][vertical]).abs() <= tol)
+            for row in col
+                .chunk_by(|&(_, a), &(_, b)| (pts.position()[a][vertical] - pts.position()[b][vertical]).abs() <= tol)
             {
                 let row_weight: f64 = row.iter().map(|&(_, q)| self.effective_weight(q, g)).sum();
                 for &(_, q) in row {
@@ -81,10 +81,10 @@ impl<const D: usize> Model<D> {
     fn effective_weight(&self, q: usize, g: f64) -> f64 {
         let pts = &self.points;
         let buoyancy = self.water.as_ref().map_or(0.0, |w| {
-            let half = pts.half_length[q][w.vertical()];
-            w.force_density(&pts.position[q], half)[w.vertical()].abs()
+            let half = pts.half_length()[q][w.vertical()];
+            w.force_density(&pts.position()[q], half)[w.vertical()].abs()
         });
-        g.abs() * pts.mass[q] - buoyancy * pts.volume[q]
+        g.abs() * pts.mass()[q] - buoyancy * pts.volume()[q]
     }
 
     /// The elastic strain state that carries `sigma` (K0 and σ_v given for the message) at
@@ -102,7 +102,7 @@ impl<const D: usize> Model<D> {
         let Some(elastic) = law.elasticity() else {
             return Err(ModelError::Geostatic(format!(
                 "material {} ({}) has no isotropic elasticity to carry an initial stress",
-                pts.material[p],
+                pts.material()[p],
                 law.name()
             )));
         };
@@ -112,7 +112,7 @@ impl<const D: usize> Model<D> {
         if (upd.stress - sigma).norm() > 1e-8 * sigma.norm().max(f64::MIN_POSITIVE) {
             return Err(ModelError::Geostatic(format!(
                 "point {p} at {:?}: the K0 = {k0} stress (σ_v = {:.4e}) lies outside the yield surface of material {} ({}); use a K0 inside it or gravity loading",
-                pts.position[p].as_slice(), sv, pts.material[p], law.name()
+                pts.position()[p].as_slice(), sv, pts.material()[p], law.name()
             )));
         }
         match self.kinematics {

@@ -13,21 +13,22 @@ mod constraint;
 mod energy;
 mod geostatic;
 mod loads;
-mod points_mut;
+mod population;
 mod rigid;
 mod water;
 
 pub use constraint::PlaneConstraint;
 pub use energy::ExternalWork;
 pub use loads::{Load, LoadKind, LoadLevel, TimeFunction};
-pub use points_mut::{PointsMut, StateFields};
+pub use population::PointChange;
 pub use rigid::{FreeBody, RigidMode};
 pub use water::{PhreaticLevel, Water};
 
 use loam_constitutive::ConstitutiveLaw;
 use loam_grid::{ActiveNodes, Background, BasisKind, FeMesh, Grid};
 use loam_points::{PointStore, PointsError};
-use nalgebra::{Matrix3, SVector};
+pub use loam_points::{PointsMut, StateFields};
+use nalgebra::SVector;
 use std::sync::Arc;
 
 /// Kinematics of the step update (docs/theory.md §2 and §3): one pipeline, two strain
@@ -126,6 +127,10 @@ pub enum ModelError {
     GeometricallyLinear(String),
     #[error("the saved state does not fit this model: {0}")]
     Restore(String),
+    #[error("removing points: {0}")]
+    Removal(String),
+    #[error("adding points: {0}")]
+    Append(String),
     #[error("basis: {0}")]
     Basis(String),
 }
@@ -194,23 +199,13 @@ impl<const D: usize> Model<D> {
             return Err(ModelError::NoPoints);
         }
         points.check()?;
-        if let Some(p) = (0..points.len())
-            .find(|&p| points.stress[p] != Matrix3::zeros() || points.deformation_gradient[p] != Matrix3::identity())
-        {
-            return Err(ModelError::Prestrained(p));
-        }
+        population::check_unstrained(&points)?;
         check_materials(&points, &materials)?;
         check_constraints(background.grid(), &constraints)?;
         if let Some(axis) = (0..D).find(|&a| !gravity[a].is_finite()) {
             return Err(ModelError::Gravity { axis, value: gravity[axis] });
         }
-        points.reset_elastic_strain(match kinematics {
-            Kinematics::FiniteStrain => Matrix3::identity(),
-            Kinematics::SmallStrain => Matrix3::zeros(),
-        });
-        let stride = materials.iter().map(|m| m.history_len()).max().unwrap_or(0);
-        let material = points.material.clone();
-        points.init_history(stride, |p, h| materials[material[p] as usize].init_history(h));
+        population::start_unstrained(&mut points, kinematics, &materials);
         Ok(Self {
             background,
             kinematics,
@@ -256,6 +251,7 @@ impl<const D: usize> Model<D> {
                 return Err(ModelError::Density { block: b, value: rho });
             }
             points.push(x, volume, rho, SVector::zeros(), m);
+            points.assign_body(p..p + 1, b as u32);
         }
         Self::on(Background::body_fitted(grid, mesh), kinematics, points, materials, constraints, gravity)
     }
@@ -325,7 +321,7 @@ impl<const D: usize> Model<D> {
             }
         }
         self.loads = loads;
-        let positions = &self.points.position0;
+        let positions = self.points.position0();
         for load in &mut self.loads {
             load.attach(grid, positions);
         }
@@ -368,7 +364,7 @@ impl<const D: usize> Model<D> {
     pub fn water_force(&self, p: usize, body_factor: f64) -> SVector<f64, D> {
         let factor = if self.gravity_preloaded { 1.0 } else { body_factor };
         self.water.as_ref().map_or(SVector::zeros(), |w| {
-            let half = self.points.half_length[p][w.vertical()];
+            let half = self.points.half_length()[p][w.vertical()];
             w.force_density(&self.configuration()[p], half) * factor
         })
     }
@@ -476,7 +472,7 @@ impl<const D: usize> Model<D> {
 
     /// The points' evolving state, for the analyses that advance it.
     pub fn points_mut(&mut self) -> PointsMut<'_, D> {
-        PointsMut::new(&mut self.points)
+        self.points.view_mut()
     }
 
     /// Move the background's nodes by the converged increment `du` (D values per node of
@@ -486,40 +482,18 @@ impl<const D: usize> Model<D> {
         self.background.displace(active, du);
     }
 
-    /// Exchange the points' position, velocity, deformation gradient, volume, GIMP
-    /// half-lengths, stress, elastic strain and (where the laws keep one) history with
-    /// `fields`, each holding one value per point (the history in the laws' layout). O(1),
-    /// and the model's invariants hold: a field of another length is a bug of the analysis,
-    /// and panics.
+    /// Exchange the points' state fields (position, velocity, deformation gradient, volume,
+    /// GIMP half-lengths, stress, elastic strain and, where the laws keep one, history)
+    /// with `fields`, each holding one value per point (the history in the laws' layout).
+    /// O(1), and the model's invariants hold: a field of another length is a bug of the
+    /// analysis, and panics.
     pub fn swap_state(&mut self, fields: &mut StateFields<D>) {
-        let n = self.points.len();
-        let pts = &mut self.points;
-        let lengths = [
-            fields.position.len(),
-            fields.velocity.len(),
-            fields.deformation_gradient.len(),
-            fields.volume.len(),
-            fields.half_length.len(),
-            fields.stress.len(),
-            fields.elastic_strain.len(),
-        ];
-        assert!(lengths.iter().all(|&l| l == n), "swap_state: fields of {lengths:?} values for {n} points");
-        std::mem::swap(&mut pts.position, &mut fields.position);
-        std::mem::swap(&mut pts.velocity, &mut fields.velocity);
-        std::mem::swap(&mut pts.deformation_gradient, &mut fields.deformation_gradient);
-        std::mem::swap(&mut pts.volume, &mut fields.volume);
-        std::mem::swap(&mut pts.half_length, &mut fields.half_length);
-        std::mem::swap(&mut pts.stress, &mut fields.stress);
-        std::mem::swap(&mut pts.elastic_strain, &mut fields.elastic_strain);
-        if pts.history_stride() > 0 {
-            assert_eq!(fields.history.len(), pts.history.len(), "swap_state: history of another layout");
-            std::mem::swap(&mut pts.history, &mut fields.history);
-        }
+        self.points.swap_state(fields);
     }
 
     /// The points' velocities, to set an initial condition.
     pub fn velocities_mut(&mut self) -> &mut [SVector<f64, D>] {
-        &mut self.points.velocity
+        self.points.velocity_mut()
     }
 
     pub fn materials(&self) -> &[Arc<dyn ConstitutiveLaw>] {
@@ -529,7 +503,7 @@ impl<const D: usize> Model<D> {
     /// The law of point `p`'s material.
     #[inline]
     pub fn law(&self, p: usize) -> &dyn ConstitutiveLaw {
-        &*self.materials[self.points.material[p] as usize]
+        &*self.materials[self.points.material()[p] as usize]
     }
 
     pub fn constraints(&self) -> &[PlaneConstraint] {
@@ -550,45 +524,8 @@ impl<const D: usize> Model<D> {
     /// committed step).
     pub fn update_load_vertices(&mut self) {
         for load in &mut self.loads {
-            load.follow(&self.points.position, &self.points.deformation_gradient);
+            load.follow(self.points.position(), self.points.deformation_gradient());
         }
-    }
-
-    /// Put the model in `state`, saved from a model of the same scene: refused, and nothing
-    /// changed, unless it has as many points, each of the same material and with the same
-    /// history layout, valid volumes and masses, as many vertices per load and a mesh of as
-    /// many nodes (none on a grid).
-    pub fn restore(&mut self, state: ModelState<D>) -> Result<(), ModelError> {
-        let ModelState { points, load_vertices, mesh_nodes } = state;
-        let fail = |what: String| Err(ModelError::Restore(what));
-        if points.len() != self.points.len() {
-            return fail(format!("{} points saved, {} in the model", points.len(), self.points.len()));
-        }
-        points.check()?;
-        if points.material != self.points.material {
-            return fail("the points' materials differ".into());
-        }
-        let stride = self.points.history_stride();
-        if points.history_stride() != stride || points.history.len() != stride * points.len() {
-            return fail(format!("the material history is not {stride} values per point"));
-        }
-        let saved: Vec<usize> = load_vertices.iter().map(Vec::len).collect();
-        let model: Vec<usize> = self.loads.iter().map(|l| l.positions().len()).collect();
-        if saved != model {
-            return fail(format!("vertices per load {saved:?} saved, {model:?} in the model"));
-        }
-        let nodes = self.background.mesh().map(|m| m.num_nodes());
-        if mesh_nodes.as_ref().map(Vec::len) != nodes {
-            return fail(format!("mesh nodes {:?} saved, {nodes:?} in the model", mesh_nodes.as_ref().map(Vec::len)));
-        }
-        if let Some(x) = &mesh_nodes {
-            self.background.set_mesh_positions(x);
-        }
-        for (load, x) in self.loads.iter_mut().zip(&load_vertices) {
-            load.set_positions(x);
-        }
-        self.points = points;
-        Ok(())
     }
 
     /// Body force per unit mass at full load.
@@ -631,9 +568,9 @@ impl<const D: usize> Model<D> {
     /// displacement for output).
     pub fn configuration(&self) -> &[SVector<f64, D>] {
         if self.geometrically_linear {
-            &self.points.position0
+            self.points.position0()
         } else {
-            &self.points.position
+            self.points.position()
         }
     }
 
@@ -708,7 +645,7 @@ impl<const D: usize> Model<D> {
     #[inline]
     pub fn point_load_at(&self, p: usize, lambda: f64) -> SVector<f64, D> {
         let g = if self.gravity_preloaded { 1.0 } else { lambda };
-        let f = self.gravity * (g * self.points.mass[p]);
+        let f = self.gravity * (g * self.points.mass()[p]);
         match self.point_forces.get(p) {
             Some(fp) => f + fp * lambda,
             None => f,
@@ -721,7 +658,7 @@ fn check_materials<const D: usize>(
     points: &PointStore<D>,
     materials: &[Arc<dyn ConstitutiveLaw>],
 ) -> Result<(), ModelError> {
-    match points.material.iter().enumerate().find(|(_, &m)| m as usize >= materials.len()) {
+    match points.material().iter().enumerate().find(|(_, &m)| m as usize >= materials.len()) {
         Some((point, &material)) => Err(ModelError::MissingMaterial { point, material, count: materials.len() }),
         None => Ok(()),
     }

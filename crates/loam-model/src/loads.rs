@@ -285,6 +285,19 @@ impl<const D: usize> Load<D> {
         true
     }
 
+    /// The first vertex whose carrier `new_index` drops (gives `None` for), if any.
+    pub(crate) fn dropped_carrier(&self, new_index: impl Fn(usize) -> Option<usize>) -> Option<usize> {
+        self.carrier.iter().position(|&p| new_index(p as usize).is_none())
+    }
+
+    /// Give every vertex's carrier its index in `new_index` (which keeps every carrier:
+    /// [`Load::dropped_carrier`] first).
+    pub(crate) fn renumber_carriers(&mut self, new_index: impl Fn(usize) -> Option<usize>) {
+        for c in &mut self.carrier {
+            *c = new_index(*c as usize).expect("checked: every carrier is kept") as u32;
+        }
+    }
+
     /// Put every vertex where its carrier now puts it.
     pub(crate) fn follow(&mut self, positions: &[SVector<f64, D>], f: &[Matrix3<f64>]) {
         for v in 0..self.position.len() {

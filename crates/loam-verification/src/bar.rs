@@ -158,7 +158,8 @@ impl VibratingBar {
         let mut points = PointStore::new();
         let shape = Shape::Box { min: Vector2::zeros(), max: Vector2::new(self.length, self.cell_size) };
         points.fill(&grid, &shape, points_per_cell, self.density, 0).expect("bar fits the grid");
-        for (v, x) in points.velocity.iter_mut().zip(&points.position) {
+        let view = points.view_mut();
+        for (v, x) in view.velocity.iter_mut().zip(view.position.iter()) {
             *v = self.initial_velocity(x);
         }
         Model::new(grid, basis, kinematics, points, vec![law], constraints, Vector2::zeros()).expect("valid bar model")
@@ -183,7 +184,7 @@ impl VibratingBar {
             Vector2::zeros(),
         )
         .expect("valid bar FEM model");
-        let velocities: Vec<_> = model.points().position.iter().map(|x| self.initial_velocity(x)).collect();
+        let velocities: Vec<_> = model.points().position().iter().map(|x| self.initial_velocity(x)).collect();
         model.velocities_mut().copy_from_slice(&velocities);
         model
     }
@@ -248,7 +249,7 @@ mod tests {
             bar.model_with_spare_cells(2, 2, BasisKind::Linear, Kinematics::FiniteStrain),
         );
         assert_eq!((a.grid().cells(), b.grid().cells()), ([29, 1], [27, 1]));
-        assert_eq!(a.points().position, b.points().position);
-        assert_eq!(a.points().velocity, b.points().velocity);
+        assert_eq!(a.points().position(), b.points().position());
+        assert_eq!(a.points().velocity(), b.points().velocity());
     }
 }

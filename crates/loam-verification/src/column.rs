@@ -148,9 +148,9 @@ pub fn column_stress_error<const D: usize>(points: &PointStore<D>, column: &Colu
     let mut num = 0.0;
     let mut vol = 0.0;
     for p in 0..points.len() {
-        let s = points.stress[p][(vertical, vertical)];
-        num += (s - column.stress_yy(points.position0[p][vertical])).abs() * points.volume0[p];
-        vol += points.volume0[p];
+        let s = points.stress()[p][(vertical, vertical)];
+        num += (s - column.stress_yy(points.position0()[p][vertical])).abs() * points.volume0()[p];
+        vol += points.volume0()[p];
     }
     num / (vol * column.stress_scale())
 }
@@ -166,12 +166,12 @@ pub fn column_errors<const D: usize>(
     // The highest point at the start; the first of equal ones.
     let mut top = 0;
     for p in 0..points.len() {
-        if points.position0[p][vertical] > points.position0[top][vertical] {
+        if points.position0()[p][vertical] > points.position0()[top][vertical] {
             top = p;
         }
     }
-    let y0 = points.position0[top][vertical];
-    let u = points.position[top][vertical] - y0;
+    let y0 = points.position0()[top][vertical];
+    let u = points.position()[top][vertical] - y0;
     let u_ref = reference_u(y0);
     ColumnErrors {
         stress: column_stress_error(points, column, vertical),

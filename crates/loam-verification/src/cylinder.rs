@@ -92,7 +92,7 @@ impl Cylinder {
     pub fn measure(&self, points: &PointStore<2>) -> CylinderErrors {
         let (mut m, mut rhs) = ([[0.0; 2]; 2], [0.0; 2]);
         let mut worst = 0.0f64;
-        for (x0, x) in points.position0.iter().zip(&points.position) {
+        for (x0, x) in points.position0().iter().zip(points.position()) {
             let r = x0.norm();
             let u = (x - x0).dot(&(x0 / r));
             let phi = [r, 1.0 / r];

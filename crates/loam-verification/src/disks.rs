@@ -64,7 +64,7 @@ pub fn disks_model_with(outline: DiskOutline, basis: BasisKind, kinematics: Kine
         let first = points.len();
         points.fill(&grid, &shape, 2, DENSITY, 0).expect("disk fits the grid");
         for p in first..points.len() {
-            points.velocity[p] = Vector2::new(v, v);
+            points.velocity_mut()[p] = Vector2::new(v, v);
         }
     }
     let law = Elastic::new(YOUNG, POISSON).expect("valid elastic constants");
@@ -107,10 +107,10 @@ mod tests {
     fn the_disks_approach_each_other() {
         let model = disks_model_with(DiskOutline::Polygon { sides: 64 }, BasisKind::Gimp, Kinematics::FiniteStrain);
         let p = model.points();
-        for (x, v) in p.position.iter().zip(&p.velocity) {
+        for (x, v) in p.position().iter().zip(p.velocity()) {
             let sign = if x.x < 0.5 { 1.0 } else { -1.0 };
             assert_eq!(*v, Vector2::new(0.1, 0.1) * sign);
         }
-        assert!(p.position.iter().any(|x| x.x < 0.5) && p.position.iter().any(|x| x.x > 0.5));
+        assert!(p.position().iter().any(|x| x.x < 0.5) && p.position().iter().any(|x| x.x > 0.5));
     }
 }

@@ -81,12 +81,12 @@ impl WaterColumn {
         let scale = -self.total_stress(0.0);
         let (mut eff, mut tot, mut vol, mut pw) = (0.0, 0.0, 0.0, 0.0f64);
         for (p, &pore_p) in pore.iter().enumerate() {
-            let y0 = points.position0[p][1];
-            let y = if geometrically_linear { y0 } else { points.position[p][1] };
-            let s = points.stress[p][(1, 1)];
-            eff += (s - (self.total_stress(y0) + self.pore_pressure(y))).abs() * points.volume0[p];
-            tot += (s - pore_p - self.total_stress(y0)).abs() * points.volume0[p];
-            vol += points.volume0[p];
+            let y0 = points.position0()[p][1];
+            let y = if geometrically_linear { y0 } else { points.position()[p][1] };
+            let s = points.stress()[p][(1, 1)];
+            eff += (s - (self.total_stress(y0) + self.pore_pressure(y))).abs() * points.volume0()[p];
+            tot += (s - pore_p - self.total_stress(y0)).abs() * points.volume0()[p];
+            vol += points.volume0()[p];
             pw = pw.max((pore_p - self.pore_pressure(y)).abs() / self.pore_pressure(0.0));
         }
         WaterColumnErrors { effective: eff / (vol * scale), total: tot / (vol * scale), pore_pressure: pw }

@@ -85,23 +85,23 @@ pub fn settings(duration: f64) -> ExplicitSettings {
 /// Every committed point field is finite.
 pub fn assert_finite(m: &Model<2>) {
     let p = &m.points();
-    let v2 = |v: &Vec<Vector2<f64>>| v.iter().all(|x| x.iter().all(|c| c.is_finite()));
-    let m3 = |v: &Vec<nalgebra::Matrix3<f64>>| v.iter().all(|x| x.iter().all(|c| c.is_finite()));
-    assert!(v2(&p.position) && v2(&p.velocity) && v2(&p.half_length), "non-finite position, velocity or domain");
-    assert!(m3(&p.stress) && m3(&p.elastic_strain) && m3(&p.deformation_gradient), "non-finite stress or strain");
-    assert!(p.volume.iter().chain(&p.history).all(|c| c.is_finite()), "non-finite volume or history");
-    assert!(p.volume.iter().all(|&v| v > 0.0), "non-positive volume");
+    let v2 = |v: &[Vector2<f64>]| v.iter().all(|x| x.iter().all(|c| c.is_finite()));
+    let m3 = |v: &[nalgebra::Matrix3<f64>]| v.iter().all(|x| x.iter().all(|c| c.is_finite()));
+    assert!(v2(p.position()) && v2(p.velocity()) && v2(p.half_length()), "non-finite position, velocity or domain");
+    assert!(m3(p.stress()) && m3(p.elastic_strain()) && m3(p.deformation_gradient()), "non-finite stress or strain");
+    assert!(p.volume().iter().chain(p.history_values()).all(|c| c.is_finite()), "non-finite volume or history");
+    assert!(p.volume().iter().all(|&v| v > 0.0), "non-positive volume");
 }
 
 /// The committed point state of `a` and `b` is bitwise the same.
 pub fn assert_same_state(a: &Model<2>, b: &Model<2>) {
     let (p, q) = (&a.points(), &b.points());
-    assert!(p.position == q.position, "positions differ");
-    assert!(p.velocity == q.velocity, "velocities differ");
-    assert!(p.stress == q.stress, "stresses differ");
-    assert!(p.elastic_strain == q.elastic_strain, "elastic strains differ");
-    assert!(p.deformation_gradient == q.deformation_gradient, "deformation gradients differ");
-    assert!(p.volume == q.volume, "volumes differ");
-    assert!(p.half_length == q.half_length, "domains differ");
-    assert!(p.history == q.history, "histories differ");
+    assert!(p.position() == q.position(), "positions differ");
+    assert!(p.velocity() == q.velocity(), "velocities differ");
+    assert!(p.stress() == q.stress(), "stresses differ");
+    assert!(p.elastic_strain() == q.elastic_strain(), "elastic strains differ");
+    assert!(p.deformation_gradient() == q.deformation_gradient(), "deformation gradients differ");
+    assert!(p.volume() == q.volume(), "volumes differ");
+    assert!(p.half_length() == q.half_length(), "domains differ");
+    assert!(p.history_values() == q.history_values(), "histories differ");
 }

@@ -24,7 +24,7 @@ fn stressed_block_with(
     let shape = Shape::Box { min: Vector2::new(1.0, 0.0), max: Vector2::new(3.0, 2.0) };
     points.fill(&grid, &shape, 2, 1000.0, 0).unwrap();
     if ghost.is_some() {
-        points.position.iter_mut().for_each(|x| x[0] += 0.3);
+        points.position_mut().iter_mut().for_each(|x| x[0] += 0.3);
     }
     let fixed = PlaneConstraint::new(1, 0, [true, true, false]);
     let mut model = Model::new(grid, basis, kinematics, points, vec![law], vec![fixed], Vector2::new(3.0, -10.0))

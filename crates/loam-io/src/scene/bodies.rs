@@ -12,7 +12,7 @@ use nalgebra::{SVector, Vector2};
 /// What the bodies become: material points, or one mesh of blocks (one block per body,
 /// each with its density and material index).
 pub(super) enum Bodies<const D: usize> {
-    Points(PointStore<D>),
+    Points(Box<PointStore<D>>),
     Mesh { mesh: FeMesh<D>, density: Vec<f64>, material: Vec<u32> },
 }
 
@@ -43,20 +43,21 @@ impl LoadedScene {
                 .fill(grid, &shape, b.points_per_cell, density, material as u32)
                 .map_err(|e| self.error(&body_key(i, "shape"), format!("body {i}: {e}")))?;
             let first = points.len() - added;
+            points.assign_body(first..points.len(), i as u32);
             if !b.may_overlap {
-                self.check_overlap(i, &points.position[first..], &shapes)?;
+                self.check_overlap(i, &points.position()[first..], &shapes)?;
             }
             if let Some(v) = &b.velocity {
                 let field = self.velocity_field::<D>(v, i)?;
                 for p in first..points.len() {
-                    points.velocity[p] = field(&points.position[p]);
-                    if !(points.mass[p] * points.velocity[p].norm_squared()).is_finite() {
+                    points.velocity_mut()[p] = field(&points.position_mut()[p]);
+                    if !(points.mass()[p] * points.velocity()[p].norm_squared()).is_finite() {
                         return Err(self.error(
                             &body_key(i, "velocity"),
                             format!(
                                 "body {i}: the velocity {:?} at {:?} makes the kinetic energy overflow; is a component mistyped?",
-                                points.velocity[p].as_slice(),
-                                points.position[p].as_slice()
+                                points.velocity()[p].as_slice(),
+                                points.position()[p].as_slice()
                             ),
                         ));
                     }
@@ -64,7 +65,7 @@ impl LoadedScene {
             }
             shapes.push(shape);
         }
-        Ok(Bodies::Points(points))
+        Ok(Bodies::Points(Box::new(points)))
     }
 
     /// Refuse body `i` if one of its points lies inside an earlier body's shape: the points
@@ -150,8 +151,13 @@ impl LoadedScene {
 
     /// Body `i`'s shape, its points with `D` finite components.
     pub(super) fn shape<const D: usize>(&self, i: usize, b: &BodySpec) -> Result<Shape<D>, SceneError> {
-        let at = |key| [Seg::Key("bodies"), Seg::Index(i), Seg::Key("shape"), Seg::Key(key)];
-        Ok(match &b.shape {
+        self.shape_at(&b.shape, &body_key(i, "shape"))
+    }
+
+    /// The shape `spec` at `path` in the file, its points with `D` finite components.
+    pub(super) fn shape_at<const D: usize>(&self, spec: &ShapeSpec, path: &[Seg]) -> Result<Shape<D>, SceneError> {
+        let at = |key| [path, &[Seg::Key(key)]].concat();
+        Ok(match spec {
             ShapeSpec::Box { min, max } => Shape::Box {
                 min: self.vector(min, &at("min"), "Box min")?,
                 max: self.vector(max, &at("max"), "Box max")?,
@@ -162,7 +168,7 @@ impl LoadedScene {
             ShapeSpec::Polygon { vertices } => {
                 if D != 2 {
                     return Err(self.error(
-                        &body_key(i, "shape"),
+                        path,
                         "Polygon shapes are 2D only; in 3D use Prism (a polygon extruded along an axis), CutBox or Box",
                     ));
                 }
@@ -170,7 +176,7 @@ impl LoadedScene {
             }
             ShapeSpec::Prism { section, axis, from, to } => {
                 if D != 3 {
-                    return Err(self.error(&body_key(i, "shape"), "Prism shapes are 3D only; in 2D use Polygon"));
+                    return Err(self.error(path, "Prism shapes are 3D only; in 2D use Polygon"));
                 }
                 if from.partial_cmp(to) != Some(std::cmp::Ordering::Less) {
                     return Err(self.error(&at("to"), format!("Prism from {from} to {to}: `to` must exceed `from`")));
@@ -205,7 +211,7 @@ impl LoadedScene {
         let mesh = model.background().mesh().expect("FEM model has a mesh");
         let per = mesh.gauss_per_element();
         let blocks: Vec<usize> = (0..model.points().len()).map(|p| mesh.element_block(p / per)).collect();
-        let positions = model.points().position.clone();
+        let positions = model.points().position().to_vec();
         for (i, b) in self.scene.bodies.iter().enumerate() {
             if let Some(v) = &b.velocity {
                 let field = self.velocity_field::<D>(v, i)?;

@@ -34,6 +34,7 @@ mod analysis;
 mod bodies;
 mod constraints;
 mod convert;
+mod excavation;
 mod grid;
 mod loads;
 mod locate;
@@ -44,6 +45,7 @@ mod schema;
 mod solver;
 mod water;
 
+pub use excavation::Excavation;
 pub use locate::SceneError;
 pub use memory::{default_memory_limit, MemoryEstimate};
 pub use schema::*;
@@ -182,6 +184,7 @@ impl LoadedScene {
         let model = self.with_loads(model, loads)?;
         let mut analysis = self.analysis(model, solver)?;
         self.check_before_the_first_step(&mut analysis)?;
+        self.excavations::<D>()?;
         Ok(analysis)
     }
 }

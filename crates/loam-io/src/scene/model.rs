@@ -69,7 +69,7 @@ impl LoadedScene {
         let at_bodies = |e: ModelError| self.error(&[Seg::Key("bodies")], e.to_string());
         let model = match bodies {
             Bodies::Points(points) => {
-                Model::new(grid, s.basis.into(), s.kinematics.into(), points, laws, constraints, gravity)
+                Model::new(grid, s.basis.into(), s.kinematics.into(), *points, laws, constraints, gravity)
                     .map_err(at_bodies)?
             }
             Bodies::Mesh { mesh, density, material } => {

@@ -54,10 +54,24 @@ pub struct Scene {
     #[serde(default)]
     pub water: Option<WaterSpec>,
     pub analysis: AnalysisSpec,
+    /// Excavation stages: after step `after_step`, the points whose place lies in `region`
+    /// are removed (default none).
+    #[serde(default)]
+    pub excavation: Vec<ExcavationSpec>,
     #[serde(default)]
     pub solver: SolverSpec,
     #[serde(default)]
     pub output: OutputSpec,
+}
+
+/// One excavation stage.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ExcavationSpec {
+    /// The step after which the region is excavated (1 or more).
+    pub after_step: usize,
+    /// Where the points go: any body shape.
+    pub region: ShapeSpec,
 }
 
 #[derive(Debug, Clone, Deserialize, PartialEq)]
