@@ -48,12 +48,10 @@ fn deposit(model: &Model<2>) -> Deposit {
 /// min_p h / c_p with c_p = √(M / ρ_p): what the CFL step comes back to at rest (a loose,
 /// dilated front has a lower density and a higher c_p than the column had).
 fn wave_step(model: &Model<2>) -> f64 {
-    let pts = model.points();
+    let (pts, moduli) = (model.points(), model.constant_p_wave_moduli());
     let h = model.grid().cell_size().min();
     let c_max = (0..pts.len())
-        .map(|p| {
-            (model.materials()[pts.material()[p] as usize].p_wave_modulus() * pts.volume()[p] / pts.mass()[p]).sqrt()
-        })
+        .map(|p| (model.p_wave_modulus(&moduli, p) * pts.volume()[p] / pts.mass()[p]).sqrt())
         .fold(0.0, f64::max);
     h / c_max
 }

@@ -6,7 +6,7 @@
 use nalgebra::Matrix3;
 
 use crate::tensor::{isotropic, Tensor4};
-use crate::{check_finite, ConstitutiveError, ConstitutiveLaw, StressUpdate};
+use crate::{check_finite, ConstitutiveError, ConstitutiveLaw, MaterialState, StressUpdate};
 
 /// Linear isotropic elasticity with Young's modulus and Poisson's ratio.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -48,6 +48,13 @@ impl Elastic {
         (stress * (1.0 + self.poisson) - Matrix3::identity() * (self.poisson * stress.trace())) / self.young
     }
 
+    /// P-wave (constrained) modulus λ + 2μ.
+    #[inline]
+    pub fn p_wave_modulus(&self) -> f64 {
+        let (lambda, mu) = self.lame();
+        lambda + 2.0 * mu
+    }
+
     /// Stress for a given (symmetric) strain.
     #[inline]
     pub fn stress(&self, eps: &Matrix3<f64>) -> Matrix3<f64> {
@@ -57,7 +64,7 @@ impl Elastic {
 }
 
 impl ConstitutiveLaw for Elastic {
-    fn elasticity(&self) -> Option<Elastic> {
+    fn elasticity(&self, _state: &MaterialState) -> Option<Elastic> {
         Some(*self)
     }
 
@@ -90,9 +97,8 @@ impl ConstitutiveLaw for Elastic {
         0.5 * lambda * eps.trace().powi(2) + mu * eps.component_mul(eps).sum()
     }
 
-    fn p_wave_modulus(&self) -> f64 {
-        let (lambda, mu) = self.lame();
-        lambda + 2.0 * mu
+    fn p_wave_modulus(&self, _state: &MaterialState) -> f64 {
+        Elastic::p_wave_modulus(self)
     }
 }
 

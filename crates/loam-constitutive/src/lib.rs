@@ -77,9 +77,11 @@ pub trait ConstitutiveLaw: Send + Sync + std::fmt::Debug {
     fn history_len(&self) -> usize {
         0
     }
-    /// The history of an unloaded point: zero (accumulated plastic strains) unless a law
-    /// says otherwise.
-    fn init_history(&self, h: &mut [f64]) {
+    /// The history of a point that starts at `initial_stress` (the law's own stress; zero
+    /// for unloaded ground, a geostatic state otherwise): zero (accumulated plastic
+    /// strains) unless a law says otherwise — a hardening law's size of yield surface may
+    /// follow from the initial stress.
+    fn init_history(&self, h: &mut [f64], _initial_stress: &Matrix3<f64>) {
         h.iter_mut().for_each(|v| *v = 0.0);
     }
     /// What each history value is, one name per value (the output fields' names).
@@ -124,23 +126,49 @@ pub trait ConstitutiveLaw: Send + Sync + std::fmt::Debug {
         let u = self.update(eps_trial, h_n, h_out)?;
         Ok((u.stress, u.elastic_strain))
     }
-    /// The law's isotropic elasticity, if it has one: initial stress states (K0) are turned
-    /// into elastic strains with it.
-    fn elasticity(&self) -> Option<Elastic> {
+    /// The law's isotropic elasticity at `state`, if it has one: initial stress states (K0)
+    /// are turned into elastic strains with it.
+    fn elasticity(&self, _state: &MaterialState) -> Option<Elastic> {
         None
+    }
+    /// Whether the law's stiffness is the same in every state ([`ConstitutiveLaw::p_wave_modulus`]
+    /// and [`ConstitutiveLaw::elasticity`] ignore the state): callers may then take it once
+    /// per material instead of once per point.
+    fn constant_stiffness(&self) -> bool {
+        true
     }
     /// The law's strength, if it has one that a strength-reduction analysis can divide
     /// ([`StrengthReducible`]); `None` for a law without a strength (elastic).
     fn as_strength_reducible(&self) -> Option<&dyn StrengthReducible> {
         None
     }
-    /// P-wave (constrained) modulus λ + 2μ: the stiffness of the explicit CFL condition
-    /// (docs/theory.md §10) and of stiffness scaling.
-    fn p_wave_modulus(&self) -> f64;
+    /// P-wave (constrained) modulus λ + 2μ at `state`: the stiffness of the explicit CFL
+    /// condition (docs/theory.md §10), of the ghost penalty and of stiffness scaling.
+    fn p_wave_modulus(&self, state: &MaterialState) -> f64;
     /// Stored (elastic) energy per unit volume at elastic strain ε^e: ½ ε^e : C : ε^e for
     /// isotropic linear elasticity. With logarithmic strain it is the Hencky energy per unit
     /// reference volume. Energy histories (kinetic + stored − external work) use it.
     fn stored_energy(&self, elastic_strain: &Matrix3<f64>) -> f64;
+}
+
+/// A point's material state, on which a law's stiffness may depend (a pressure-dependent
+/// law's moduli follow the mean stress): the law's own stress (Kirchhoff in finite
+/// strain), its elastic strain and its history.
+#[derive(Debug, Clone, Copy)]
+pub struct MaterialState<'a> {
+    pub stress: &'a Matrix3<f64>,
+    pub elastic_strain: &'a Matrix3<f64>,
+    pub history: &'a [f64],
+}
+
+static ZERO: Matrix3<f64> = Matrix3::from_array_storage(nalgebra::ArrayStorage([[0.0; 3]; 3]));
+
+impl<'a> MaterialState<'a> {
+    /// Unstressed and unstrained (small-strain ε^e = 0) with history `history`: the state a
+    /// constant law's stiffness is read at.
+    pub fn at_rest(history: &'a [f64]) -> Self {
+        Self { stress: &ZERO, elastic_strain: &ZERO, history }
+    }
 }
 
 /// A law whose strength a strength-reduction analysis (Griffiths & Lane 1999) divides by a

@@ -83,7 +83,9 @@
 use nalgebra::{Matrix3, Matrix4, Matrix4x3, Vector3, Vector4};
 
 use crate::tensor::{flatten, spectral, Tensor4};
-use crate::{check_finite, ConstitutiveError, ConstitutiveLaw, Elastic, StrengthReducible, StressUpdate};
+use crate::{
+    check_finite, ConstitutiveError, ConstitutiveLaw, Elastic, MaterialState, StrengthReducible, StressUpdate,
+};
 
 /// Linear softening of c, φ, ψ to residual values at κ = κ_res (angles in radians).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -1013,7 +1015,7 @@ impl StrengthReducible for MohrCoulomb {
 }
 
 impl ConstitutiveLaw for MohrCoulomb {
-    fn elasticity(&self) -> Option<Elastic> {
+    fn elasticity(&self, _state: &MaterialState) -> Option<Elastic> {
         Some(self.elastic)
     }
 
@@ -1076,7 +1078,7 @@ impl ConstitutiveLaw for MohrCoulomb {
         Ok((r.stress, r.elastic_strain))
     }
 
-    fn p_wave_modulus(&self) -> f64 {
+    fn p_wave_modulus(&self, _state: &MaterialState) -> f64 {
         self.elastic.p_wave_modulus()
     }
 

@@ -9,7 +9,9 @@
 use nalgebra::Matrix3;
 
 use crate::tensor::{flatten, identity_dyad, sym_identity, Tensor4};
-use crate::{check_finite, ConstitutiveError, ConstitutiveLaw, Elastic, StrengthReducible, StressUpdate};
+use crate::{
+    check_finite, ConstitutiveError, ConstitutiveLaw, Elastic, MaterialState, StrengthReducible, StressUpdate,
+};
 
 /// Which branch of the return mapping an update took (see [`VonMises::update_with_region`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -209,7 +211,7 @@ impl StrengthReducible for VonMises {
 }
 
 impl ConstitutiveLaw for VonMises {
-    fn elasticity(&self) -> Option<Elastic> {
+    fn elasticity(&self, _state: &MaterialState) -> Option<Elastic> {
         Some(self.elastic)
     }
 
@@ -266,7 +268,7 @@ impl ConstitutiveLaw for VonMises {
         Ok((r.stress, r.elastic_strain))
     }
 
-    fn p_wave_modulus(&self) -> f64 {
+    fn p_wave_modulus(&self, _state: &MaterialState) -> f64 {
         self.elastic.p_wave_modulus()
     }
 
@@ -367,7 +369,7 @@ mod tests {
         let l = law();
         let e = Matrix3::new(1e-3, 0.0, 2e-4, 0.0, -3e-4, 0.0, 2e-4, 0.0, 5e-4);
         assert_eq!(l.stored_energy(&e), l.elastic.stored_energy(&e));
-        assert_eq!(l.p_wave_modulus(), l.elastic.p_wave_modulus());
+        assert_eq!(l.p_wave_modulus(&MaterialState::at_rest(&[0.0])), l.elastic.p_wave_modulus());
     }
 
     #[test]

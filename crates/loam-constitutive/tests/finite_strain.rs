@@ -68,7 +68,7 @@ impl ConstitutiveLaw for Quadratic {
         }
         Ok(StressUpdate { stress, elastic_strain: *e, tangent: d })
     }
-    fn p_wave_modulus(&self) -> f64 {
+    fn p_wave_modulus(&self, _state: &loam_constitutive::MaterialState) -> f64 {
         self.lambda + 2.0 * self.mu
     }
     fn stored_energy(&self, e: &Matrix3<f64>) -> f64 {
@@ -107,7 +107,7 @@ impl ConstitutiveLaw for Relax {
         let proj = sym_identity() - mf * mf.transpose() * self.beta;
         Ok(StressUpdate { stress: self.el.stress(&ee), elastic_strain: ee, tangent: del * proj })
     }
-    fn p_wave_modulus(&self) -> f64 {
+    fn p_wave_modulus(&self, _state: &loam_constitutive::MaterialState) -> f64 {
         self.el.p_wave_modulus()
     }
     fn stored_energy(&self, e: &Matrix3<f64>) -> f64 {

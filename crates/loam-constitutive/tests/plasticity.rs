@@ -228,7 +228,7 @@ fn mohr_coulomb_oedometer_closed_form() {
         let de = 5.05 * eps_y / n as f64;
         let mut ee = Matrix3::zeros();
         let mut h = vec![0.0; law.history_len()];
-        law.init_history(&mut h);
+        law.init_history(&mut h, &Matrix3::zeros());
         let mut plastic_steps = 0;
         for step in 1..=n {
             let mut grad = Matrix3::zeros();
@@ -729,12 +729,12 @@ fn mc_errors_not_panics() {
     let huge = Matrix3::from_diagonal(&Vector3::new(1e305, -1e305, 0.0));
     assert!(law.update(&huge, &[0.0; 2], &mut [0.0; 2]).is_err());
     let mut h = [1.0, 1.0];
-    law.init_history(&mut h);
+    law.init_history(&mut h, &Matrix3::zeros());
     assert_eq!(h, [0.0, 0.0]);
     assert_eq!(law.history_len(), 2);
     let e2 = Matrix3::new(1e-3, 0.0, 2e-4, 0.0, -3e-4, 0.0, 2e-4, 0.0, 5e-4);
     assert_eq!(law.stored_energy(&e2), law.elastic.stored_energy(&e2));
-    assert_eq!(law.p_wave_modulus(), law.elastic.p_wave_modulus());
+    assert_eq!(law.p_wave_modulus(&loam_constitutive::MaterialState::at_rest(&h)), law.elastic.p_wave_modulus());
 }
 
 // ---------------------------------------------------------------- property tests

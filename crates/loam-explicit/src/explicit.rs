@@ -1,7 +1,7 @@
 //! The explicit analysis: one time step as described in the crate docs.
 
 use crate::{ExplicitError, ExplicitSettings, TimeStep, UpdateScheme};
-use loam_grid::{ActiveNodes, AxisBasis, BasisError, PointBasisError};
+use loam_grid::{ActiveNodes, AxisBasis, BasisError, NodeLayout, PointBasisError};
 use loam_kernels::{
     check_constraints, embed, internal_force, on_pool, update_point_stress, BandScatter, Committed, ConnectError,
     LoadSupports, RunError,
@@ -85,11 +85,22 @@ impl StepPhases {
     }
 }
 
+/// The record the points scatter to every grid node: its mass, momentum (D) and force (D),
+/// `WIDTH` values in that order.
+struct NodeRecord<const D: usize>;
+
+impl<const D: usize> NodeRecord<D> {
+    const WIDTH: usize = 1 + 2 * D;
+    const MASS: usize = 0;
+    const MOMENTUM: usize = 1;
+    const FORCE: usize = 1 + D;
+}
+
 /// Nodal scratch of one step, reused across steps: dense over the grid's nodes (an empty
 /// node has zero mass and is left at rest).
 #[derive(Debug, Default)]
 struct NodalScratch {
-    /// Per node [m, p (D), f (D)] as scattered from the points.
+    /// Per node its [`NodeRecord`] as scattered from the points.
     gathered: Vec<f64>,
     /// USF: internal force of the updated stress (D per node).
     internal: Vec<f64>,
@@ -157,8 +168,9 @@ pub struct Explicit<const D: usize> {
     settings: ExplicitSettings,
     time: f64,
     steps: usize,
-    /// P-wave modulus of each material, for the critical time step.
-    p_wave: Vec<f64>,
+    /// P-wave modulus of each material whose law's stiffness is constant, for the critical
+    /// time step (`None`: per point, from its state).
+    p_wave: Vec<Option<f64>>,
     /// The step's basis at the points, as 1D factors.
     basis: AxisBasis<D>,
     /// The points grouped for the deterministic scatter.
@@ -205,9 +217,10 @@ impl<const D: usize> Explicit<D> {
         }
         tracing::info!(scheme = ?settings.scheme, flip = settings.flip, time_step = ?settings.time_step,
             damping = settings.damping, duration = settings.duration, "explicit analysis");
-        let p_wave = model.materials().iter().map(|m| m.p_wave_modulus()).collect();
+        let p_wave = model.constant_p_wave_moduli();
         let mut constrained = Vec::new();
-        model.constrained_dofs(&ActiveNodes::all(model.grid().num_nodes()), &mut constrained);
+        let every_node = ActiveNodes::all(model.grid().num_nodes());
+        model.constrained_dofs(&NodeLayout::motion(D), &every_node, &mut constrained);
         Ok(Self {
             basis: AxisBasis::new(model.basis()),
             model,
@@ -303,7 +316,7 @@ impl<const D: usize> Explicit<D> {
         let model = &self.model;
         let (mut basis, mut bands) = (AxisBasis::new(model.basis()), BandScatter::default());
         locate(model, &mut basis, &mut bands, self.steps + 1)?;
-        let mut gathered = vec![0.0; model.grid().num_nodes() * (1 + 2 * D)];
+        let mut gathered = vec![0.0; model.grid().num_nodes() * NodeRecord::<D>::WIDTH];
         scatter_grid(model, &basis, &bands, false, &mut gathered);
         let mut velocity = vec![0.0; model.grid().num_nodes() * D];
         carried_velocity::<D>(&gathered, &self.constrained, empty_node_mass::<D>(&gathered), &mut velocity);
@@ -355,7 +368,11 @@ impl<const D: usize> Explicit<D> {
         let (p_wave, basis, velocity) = (&self.p_wave, &self.basis, &self.nodes.strain_velocity);
         let speeds = |p: usize| {
             // By hypot, so that 1e300 is reported as such and not as its overflowed square.
-            (p, wave_speed(pts, p_wave, p), carried(basis, velocity, p).iter().fold(0.0, |a: f64, &b| a.hypot(b)))
+            (
+                p,
+                wave_speed(&self.model, p_wave, p),
+                carried(basis, velocity, p).iter().fold(0.0, |a: f64, &b| a.hypot(b)),
+            )
         };
         // A NaN speed counts as the fastest: it is the point to name.
         let key = |t: &(usize, f64, f64)| if (t.1 + t.2).is_nan() { f64::INFINITY } else { t.1 + t.2 };
@@ -438,7 +455,7 @@ impl<const D: usize> Explicit<D> {
     fn size_buffers(&mut self) {
         let n_nodes = self.model.grid().num_nodes();
         let nodes = &mut self.nodes;
-        nodes.gathered.resize(n_nodes * (1 + 2 * D), 0.0);
+        nodes.gathered.resize(n_nodes * NodeRecord::<D>::WIDTH, 0.0);
         for v in [&mut nodes.internal, &mut nodes.velocity, &mut nodes.acceleration, &mut nodes.strain_velocity] {
             v.resize(n_nodes * D, 0.0);
         }
@@ -452,7 +469,8 @@ impl<const D: usize> Explicit<D> {
         let usf = self.settings.scheme == UpdateScheme::Usf;
         scatter_grid(&self.model, &self.basis, &self.bands, !usf, &mut self.nodes.gathered);
         let m_min = empty_node_mass::<D>(&self.nodes.gathered);
-        self.active_nodes = self.nodes.gathered.par_chunks(1 + 2 * D).filter(|g| g[0] > m_min).count();
+        let width = NodeRecord::<D>::WIDTH;
+        self.active_nodes = self.nodes.gathered.par_chunks(width).filter(|g| g[NodeRecord::<D>::MASS] > m_min).count();
         self.add_loads(step, m_min)?;
         Ok(m_min)
     }
@@ -465,7 +483,7 @@ impl<const D: usize> Explicit<D> {
         if self.model.loads().is_empty() {
             return Ok(());
         }
-        let stride = 1 + 2 * D;
+        let stride = NodeRecord::<D>::WIDTH;
         self.number_nodes_with_mass(m_min);
         self.loads.connect(&self.model, &self.loaded, step)?;
         let level = LoadLevel::Time(self.time);
@@ -477,7 +495,7 @@ impl<const D: usize> Explicit<D> {
         for (&g, f) in self.loaded.active_to_grid.iter().zip(f.chunks(D)) {
             let node = &mut self.nodes.gathered[g as usize * stride..(g as usize + 1) * stride];
             for i in 0..D {
-                node[1 + D + i] += f[i];
+                node[NodeRecord::<D>::FORCE + i] += f[i];
             }
         }
         Ok(())
@@ -487,7 +505,8 @@ impl<const D: usize> Explicit<D> {
     /// into `loaded`.
     fn number_nodes_with_mass(&mut self, m_min: f64) {
         let gathered = &self.nodes.gathered;
-        self.loaded.fill_from(self.model.grid().num_nodes(), |g| gathered[g * (1 + 2 * D)] > m_min);
+        let mass = |g: usize| gathered[g * NodeRecord::<D>::WIDTH + NodeRecord::<D>::MASS];
+        self.loaded.fill_from(self.model.grid().num_nodes(), |g| mass(g) > m_min);
     }
 
     /// USF: the stress updated from the start-of-step nodal velocity p_I / m_I (the carried
@@ -597,13 +616,17 @@ fn locate<const D: usize>(
 
 /// The mass at or below which a node of the scattered `gathered` is empty.
 fn empty_node_mass<const D: usize>(gathered: &[f64]) -> f64 {
-    EMPTY_NODE_MASS * gathered.par_chunks(1 + 2 * D).map(|g| g[0]).reduce(|| 0.0, f64::max)
+    let (width, mass) = (NodeRecord::<D>::WIDTH, NodeRecord::<D>::MASS);
+    EMPTY_NODE_MASS * gathered.par_chunks(width).map(|g| g[mass]).reduce(|| 0.0, f64::max)
 }
 
 /// The velocity the grid carries the material at, p_I / m_I, from the scattered
 /// [m, p, f] per node; zero at held dofs and empty nodes.
 fn carried_velocity<const D: usize>(gathered: &[f64], constrained: &[bool], m_min: f64, out: &mut [f64]) {
-    out.par_chunks_mut(D).zip(gathered.par_chunks(1 + 2 * D)).for_each(|(v, g)| v.copy_from_slice(&g[1..1 + D]));
+    let (width, momentum) = (NodeRecord::<D>::WIDTH, NodeRecord::<D>::MOMENTUM);
+    out.par_chunks_mut(D)
+        .zip(gathered.par_chunks(width))
+        .for_each(|(v, g)| v.copy_from_slice(&g[momentum..momentum + D]));
     momentum_to_velocity::<D>(gathered, constrained, m_min, out);
 }
 
@@ -628,24 +651,25 @@ fn carried<const D: usize>(basis: &AxisBasis<D>, velocity: &[f64], p: usize) -> 
 /// momentum (more points than nodes), and a held node stops its own part without moving
 /// the point, so a body at rest can carry point velocities that shorten the step and move
 /// nothing.
-fn critical_step<const D: usize>(model: &Model<D>, p_wave: &[f64], velocity: &[f64]) -> f64 {
+fn critical_step<const D: usize>(model: &Model<D>, p_wave: &[Option<f64>], velocity: &[f64]) -> f64 {
     let (pts, h) = (model.points(), model.grid().cell_size().min());
     // max √x = √(max x) exactly (the root is correctly rounded and monotonic): one root for
     // the body instead of one per point and one per node.
-    let c2_max = (0..pts.len()).into_par_iter().map(|p| squared_wave_speed(pts, p_wave, p)).reduce(|| 0.0, f64::max);
+    let c2_max = (0..pts.len()).into_par_iter().map(|p| squared_wave_speed(model, p_wave, p)).reduce(|| 0.0, f64::max);
     let v2_max = velocity.par_chunks(D).map(|v| v.iter().map(|c| c * c).sum::<f64>()).reduce(|| 0.0, f64::max);
     h / (c2_max.sqrt() + v2_max.sqrt())
 }
 
 /// The P-wave speed c_p = √(M / ρ_p) of point `p`, ρ_p = m_p / v_p (docs/theory.md §10).
-fn wave_speed<const D: usize>(pts: &loam_points::PointStore<D>, p_wave: &[f64], p: usize) -> f64 {
-    squared_wave_speed(pts, p_wave, p).sqrt()
+fn wave_speed<const D: usize>(model: &Model<D>, p_wave: &[Option<f64>], p: usize) -> f64 {
+    squared_wave_speed(model, p_wave, p).sqrt()
 }
 
-/// c_p² = M / ρ_p of point `p`.
+/// c_p² = M / ρ_p of point `p`, M its material's where constant (`p_wave`).
 #[inline]
-fn squared_wave_speed<const D: usize>(pts: &loam_points::PointStore<D>, p_wave: &[f64], p: usize) -> f64 {
-    p_wave[pts.material()[p] as usize] / (pts.mass()[p] / pts.volume()[p])
+fn squared_wave_speed<const D: usize>(model: &Model<D>, p_wave: &[Option<f64>], p: usize) -> f64 {
+    let pts = model.points();
+    model.p_wave_modulus(p_wave, p) / (pts.mass()[p] / pts.volume()[p])
 }
 
 /// Sign with sign(0) = 0 (`f64::signum` gives ±1 at zero).
@@ -670,7 +694,8 @@ fn scatter_grid<const D: usize>(
     out: &mut [f64],
 ) {
     let pts = model.points();
-    let width = 1 + 2 * D;
+    let (width, mass, momentum, force) =
+        (NodeRecord::<D>::WIDTH, NodeRecord::<D>::MASS, NodeRecord::<D>::MOMENTUM, NodeRecord::<D>::FORCE);
     bands.scatter(width, out, |p, window| {
         let (m, v, load) = (pts.mass()[p], &pts.velocity()[p], model.point_load(p));
         let (volume, stress) = (pts.volume()[p], &pts.stress()[p]);
@@ -679,16 +704,16 @@ fn scatter_grid<const D: usize>(
             // bounds check, not one per entry.
             let o = &mut window.node(node)[..width];
             let nm = n * m;
-            o[0] += nm;
+            o[mass] += nm;
             for i in 0..D {
-                o[1 + i] += nm * v[i];
-                o[1 + D + i] += n * load[i];
+                o[momentum + i] += nm * v[i];
+                o[force + i] += n * load[i];
             }
             if with_internal {
                 // f_ext − f_int, point by point in one sum.
                 let f = internal_force(volume, stress, &grad, None);
                 for i in 0..D {
-                    o[1 + D + i] -= f[i];
+                    o[force + i] -= f[i];
                 }
             }
         });
@@ -743,9 +768,9 @@ fn remap_momentum<const D: usize>(
 
 /// In place: nodal momentum → velocity p_I / m_I; zero at empty nodes and constrained dofs.
 fn momentum_to_velocity<const D: usize>(gathered: &[f64], constrained: &[bool], m_min: f64, v: &mut [f64]) {
-    v.par_chunks_mut(D).zip(gathered.par_chunks(1 + 2 * D)).zip(constrained.par_chunks(D)).for_each(
+    v.par_chunks_mut(D).zip(gathered.par_chunks(NodeRecord::<D>::WIDTH)).zip(constrained.par_chunks(D)).for_each(
         |((v, g), fixed)| {
-            let m = g[0];
+            let m = g[NodeRecord::<D>::MASS];
             for i in 0..D {
                 v[i] = if m > m_min && !fixed[i] { v[i] / m } else { 0.0 };
             }
@@ -775,15 +800,15 @@ fn nodal_update<const D: usize>(
     let stride = 1 + 2 * D;
     velocity.par_chunks_mut(D).zip(acceleration.par_chunks_mut(D)).enumerate().for_each(|(j, (v, a))| {
         let g = &gathered[j * stride..(j + 1) * stride];
-        let m = g[0];
+        let m = g[NodeRecord::<D>::MASS];
         for i in 0..D {
-            let p = g[1 + i];
+            let p = g[NodeRecord::<D>::MOMENTUM + i];
             if m <= m_min || constrained[j * D + i] {
                 v[i] = 0.0;
                 a[i] = if m > m_min { -p / (m * dt) } else { 0.0 };
                 continue;
             }
-            let mut f = g[1 + D + i] + internal.map_or(0.0, |fi| fi[j * D + i]);
+            let mut f = g[NodeRecord::<D>::FORCE + i] + internal.map_or(0.0, |fi| fi[j * D + i]);
             // sign(v_I) = sign(p_I) since m_I > 0.
             f -= damping * f.abs() * sign(p);
             a[i] = f / m;

@@ -17,6 +17,7 @@ mod connectivity;
 mod gauss;
 mod ghost;
 mod index;
+mod layout;
 mod mesh;
 
 pub use axis_basis::AxisBasis;
@@ -26,6 +27,7 @@ pub use connectivity::{ActiveNodes, Connectivity, NodePointAdjacency, PointBasis
 pub use gauss::GaussLegendre;
 pub use ghost::{ghost_faces, GhostFace, CUT_FILL};
 pub use index::{lexicographic_coords, lexicographic_index};
+pub use layout::{LayoutError, NodeField, NodeLayout};
 pub use mesh::{ElementError, FeMesh, MeshError};
 
 use nalgebra::SVector;

@@ -12,7 +12,7 @@ use crate::points::{update_points, PointInputs, PointUpdateError, TrialState};
 use crate::residual::{residual, water_body_force, ResidualInputs};
 use crate::tangent::{assemble, PointCouplings, TangentInputs};
 use crate::StepError;
-use loam_grid::{Connectivity, GhostFace};
+use loam_grid::{Connectivity, GhostFace, NodeLayout};
 use loam_kernels::{
     advance_deformation, check_constraints, connect, gather_nodal, interpolate_add, trial_vertices, LoadSupports,
 };
@@ -28,6 +28,9 @@ use rayon::prelude::*;
 /// of its committed configuration, the step's increment, trial state and linear system.
 pub(crate) struct Engine<const D: usize> {
     pub model: Model<D>,
+    /// The fields of every active node and their dofs: one body's displacement (the
+    /// kernels of this crate assemble that one field, D dofs a node).
+    pub layout: NodeLayout,
     pub conn: Connectivity<D>,
     /// The connectivity is that of the committed configuration (recomputed after a commit
     /// that moved the points).
@@ -109,11 +112,13 @@ impl<const D: usize> Engine<D> {
             LinearSolverChoice::Direct | LinearSolverChoice::Auto => LinearSolverKind::for_tangent(false, definite),
         };
         let linear = kind.solver();
+        let layout = NodeLayout::motion(D);
         Self {
             conn: Connectivity::new(model.basis()),
             model,
+            pattern: BlockPattern::new(layout.dofs_per_node()),
+            layout,
             conn_current: false,
-            pattern: BlockPattern::new(D),
             matrix: SystemMatrix::new(linear.layout()),
             constrained: Vec::new(),
             f_ext: Vec::new(),
@@ -213,7 +218,7 @@ impl<const D: usize> Engine<D> {
         if self.conn_current {
             return Ok(());
         }
-        connect(&self.model, &mut self.conn, &mut self.constrained, step)?;
+        connect(&self.model, &self.layout, &mut self.conn, &mut self.constrained, step)?;
         self.loads.connect(&self.model, self.conn.active_nodes(), step)?;
         if let Some(gamma) = self.model.ghost_penalty() {
             self.ghost = scaled_ghost_faces(&self.model, &self.conn, gamma);
@@ -265,7 +270,7 @@ impl<const D: usize> Engine<D> {
     }
 
     pub fn num_dofs(&self) -> usize {
-        self.conn.active_nodes().len() * D
+        self.layout.num_dofs(self.conn.active_nodes().len())
     }
 
     /// Stage 3, external forces at `level` (a load factor, or the time of a dynamic step):
@@ -278,7 +283,7 @@ impl<const D: usize> Engine<D> {
         self.update_water_forces();
         let (model, conn, water) = (&self.model, &self.conn, &self.water_force);
         let volume = model.points().volume();
-        self.f_ext.resize(conn.active_nodes().len() * D, 0.0);
+        self.f_ext.resize(self.layout.num_dofs(conn.active_nodes().len()), 0.0);
         // The water's force on the committed volumes joins the point loads (a finite-strain
         // residual adds its change with the volume).
         gather_nodal(conn, D, &mut self.f_ext, |p, a, out| {
@@ -521,7 +526,7 @@ impl<const D: usize> Engine<D> {
                 let mut sum = [0.0; 3];
                 for a in self.model.constraint_nodes(active, c) {
                     for i in (0..D).filter(|&i| c.fixed[i]) {
-                        sum[i] += self.reaction[a * D + i];
+                        sum[i] += self.reaction[self.layout.dof(a, 0, i)];
                     }
                 }
                 sum

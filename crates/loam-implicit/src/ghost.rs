@@ -18,12 +18,12 @@ pub(crate) fn scaled_ghost_faces<const D: usize>(
 ) -> Vec<GhostFace> {
     let grid = model.grid();
     let (mut fill, mut modulus) = (vec![0.0; grid.num_cells()], vec![0.0f64; grid.num_cells()]);
-    let moduli: Vec<f64> = model.materials().iter().map(|m| m.p_wave_modulus()).collect();
+    let moduli = model.constant_p_wave_moduli();
     let pts = model.points();
-    for ((x, v), &m) in model.configuration().iter().zip(pts.volume()).zip(pts.material()) {
+    for (p, (x, v)) in model.configuration().iter().zip(pts.volume()).enumerate() {
         let c = grid.cell_index(grid.cell_coords(x));
         fill[c] += v / grid.cell_volume();
-        modulus[c] = modulus[c].max(moduli[m as usize]);
+        modulus[c] = modulus[c].max(model.p_wave_modulus(&moduli, p));
     }
     let to_active = &conn.active_nodes().grid_to_active;
     let mut faces = ghost_faces(grid, &fill, |g| to_active[g] != INACTIVE);

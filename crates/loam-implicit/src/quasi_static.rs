@@ -222,13 +222,14 @@ impl<const D: usize> QuasiStatic<D> {
         let e = &mut self.engine;
         e.du.clear();
         e.du.resize(e.num_dofs(), 0.0);
-        e.model.prescribed_increment(e.conn.active_nodes(), self.load_factor, lambda, &mut e.du);
+        e.model.prescribed_increment(&e.layout, e.conn.active_nodes(), self.load_factor, lambda, &mut e.du);
         let increment = lambda - self.load_factor;
         if let (true, Some(previous_increment)) = (self.settings.extrapolate, self.previous_increment) {
             let ratio = increment / previous_increment;
+            let n = e.layout.dofs_per_node();
             for (a, &g) in e.conn.active_nodes().active_to_grid.iter().enumerate() {
-                for i in (0..D).filter(|&i| !e.constrained[a * D + i]) {
-                    e.du[a * D + i] = ratio * self.previous[g as usize * D + i];
+                for c in (0..n).filter(|&c| !e.constrained[a * n + c]) {
+                    e.du[a * n + c] = ratio * self.previous[g as usize * n + c];
                 }
             }
         }
@@ -240,11 +241,11 @@ impl<const D: usize> QuasiStatic<D> {
             return;
         }
         let e = &self.engine;
-        let nodes = e.conn.active_nodes().grid_to_active.len();
+        let (nodes, n) = (e.conn.active_nodes().grid_to_active.len(), e.layout.dofs_per_node());
         self.previous.clear();
-        self.previous.resize(nodes * D, 0.0);
+        self.previous.resize(nodes * n, 0.0);
         for (a, &g) in e.conn.active_nodes().active_to_grid.iter().enumerate() {
-            self.previous[g as usize * D..(g as usize + 1) * D].copy_from_slice(&e.du[a * D..(a + 1) * D]);
+            self.previous[g as usize * n..(g as usize + 1) * n].copy_from_slice(&e.du[a * n..(a + 1) * n]);
         }
         self.previous_increment = Some(lambda - self.load_factor);
     }

@@ -1,14 +1,15 @@
 //! Stage 1 of every step: connect the points to the background.
 
 use crate::ConnectError;
-use loam_grid::{ActiveNodes, Connectivity};
+use loam_grid::{ActiveNodes, Connectivity, NodeLayout};
 use loam_model::Model;
 
 /// Connect the points of `model` at the configuration the mechanics is written on to its
 /// background (basis values and gradients, active nodes, node → point adjacency) and mark
-/// the constrained dofs of the active nodes. `step` names the step in an error.
+/// the constrained dofs of the active nodes in `layout`. `step` names the step in an error.
 pub fn connect<const D: usize>(
     model: &Model<D>,
+    layout: &NodeLayout,
     conn: &mut Connectivity<D>,
     constrained: &mut Vec<bool>,
     step: usize,
@@ -17,7 +18,7 @@ pub fn connect<const D: usize>(
         .background()
         .connect(conn, model.configuration(), model.points().half_length())
         .map_err(|e| ConnectError::locate(step, e))?;
-    model.constrained_dofs(conn.active_nodes(), constrained);
+    model.constrained_dofs(layout, conn.active_nodes(), constrained);
     Ok(())
 }
 

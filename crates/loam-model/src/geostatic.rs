@@ -1,6 +1,7 @@
 //! The geostatic (K0) initial stress of level or layered ground.
 
 use crate::{Kinematics, Model, ModelError};
+use loam_constitutive::MaterialState;
 use nalgebra::Matrix3;
 
 impl<const D: usize> Model<D> {
@@ -23,17 +24,32 @@ impl<const D: usize> Model<D> {
             return Err(ModelError::Geostatic("a geostatic stress needs gravity along one axis".into()));
         }
         let sigma_v = self.overburden(vertical, g);
-        let mut h_out = vec![0.0; self.points.history_stride()];
-        let mut strains = Vec::with_capacity(sigma_v.len());
-        let mut stresses = Vec::with_capacity(sigma_v.len());
-        for (p, &sv) in sigma_v.iter().enumerate() {
-            let mut sigma = Matrix3::identity() * (k0 * sv);
-            sigma[(vertical, vertical)] = sv;
-            strains.push(self.carrying_strain(p, &sigma, (k0, sv), &mut h_out)?);
-            stresses.push(sigma);
+        let stresses: Vec<Matrix3<f64>> = (sigma_v.iter())
+            .map(|&sv| {
+                let mut sigma = Matrix3::identity() * (k0 * sv);
+                sigma[(vertical, vertical)] = sv;
+                sigma
+            })
+            .collect();
+        // Every law's history from the point's initial stress (at F = I the Kirchhoff stress
+        // is the Cauchy stress), kept aside until every point's state is admissible.
+        let hs = self.points.history_stride();
+        let mut history = vec![0.0; self.points.history_values().len()];
+        if hs > 0 {
+            for (p, h) in history.chunks_mut(hs).enumerate() {
+                self.law(p).init_history(h, &stresses[p]);
+            }
         }
-        self.points.elastic_strain_mut().copy_from_slice(&strains);
-        self.points.stress_mut().copy_from_slice(&stresses);
+        let mut h_out = vec![0.0; hs];
+        let mut strains = Vec::with_capacity(sigma_v.len());
+        for (p, (sigma, &sv)) in stresses.iter().zip(&sigma_v).enumerate() {
+            let h = &history[p * hs..(p + 1) * hs];
+            strains.push(self.carrying_strain(p, sigma, h, (k0, sv), &mut h_out)?);
+        }
+        let view = self.points.view_mut();
+        view.elastic_strain.copy_from_slice(&strains);
+        view.stress.copy_from_slice(&stresses);
+        view.history.copy_from_slice(&history);
         self.gravity_preloaded = true;
         Ok(())
     }
@@ -88,18 +104,20 @@ impl<const D: usize> Model<D> {
     }
 
     /// The elastic strain state that carries `sigma` (K0 and σ_v given for the message) at
-    /// point `p` (ε^e = C⁻¹σ, or b^e = exp(2 C⁻¹σ) in finite strain), checked admissible:
-    /// the law's own update from it returns the stress.
+    /// point `p` with history `history` (ε^e = C⁻¹σ, or b^e = exp(2 C⁻¹σ) in finite
+    /// strain), checked admissible: the law's own update from it returns the stress.
     fn carrying_strain(
         &self,
         p: usize,
         sigma: &Matrix3<f64>,
+        history: &[f64],
         (k0, sv): (f64, f64),
         h_out: &mut [f64],
     ) -> Result<Matrix3<f64>, ModelError> {
         let pts = &self.points;
         let law = self.law(p);
-        let Some(elastic) = law.elasticity() else {
+        let state = MaterialState { stress: sigma, elastic_strain: &Matrix3::zeros(), history };
+        let Some(elastic) = law.elasticity(&state) else {
             return Err(ModelError::Geostatic(format!(
                 "material {} ({}) has no isotropic elasticity to carry an initial stress",
                 pts.material()[p],
@@ -107,8 +125,7 @@ impl<const D: usize> Model<D> {
             )));
         };
         let eps = elastic.strain(sigma);
-        let upd =
-            law.update(&eps, pts.history(p), h_out).map_err(|e| ModelError::Geostatic(format!("point {p}: {e}")))?;
+        let upd = law.update(&eps, history, h_out).map_err(|e| ModelError::Geostatic(format!("point {p}: {e}")))?;
         if (upd.stress - sigma).norm() > 1e-8 * sigma.norm().max(f64::MIN_POSITIVE) {
             return Err(ModelError::Geostatic(format!(
                 "point {p} at {:?}: the K0 = {k0} stress (σ_v = {:.4e}) lies outside the yield surface of material {} ({}); use a K0 inside it or gravity loading",

@@ -24,8 +24,8 @@ pub use population::PointChange;
 pub use rigid::{FreeBody, RigidMode};
 pub use water::{PhreaticLevel, Water};
 
-use loam_constitutive::ConstitutiveLaw;
-use loam_grid::{ActiveNodes, Background, BasisKind, FeMesh, Grid};
+use loam_constitutive::{ConstitutiveLaw, MaterialState};
+use loam_grid::{ActiveNodes, Background, BasisKind, FeMesh, Grid, NodeField, NodeLayout};
 use loam_points::{PointStore, PointsError};
 pub use loam_points::{PointsMut, StateFields};
 use nalgebra::SVector;
@@ -506,6 +506,33 @@ impl<const D: usize> Model<D> {
         &*self.materials[self.points.material()[p] as usize]
     }
 
+    /// Point `p`'s committed material state, which its law's stiffness may depend on
+    /// ([`ConstitutiveLaw::constant_stiffness`]). Its stress is the Cauchy stress; the laws
+    /// of loam that read it (none of today's: their stiffness is constant) take the
+    /// difference from the Kirchhoff stress, det F, as second order at the point's state.
+    pub fn material_state(&self, p: usize) -> MaterialState<'_> {
+        let pts = &self.points;
+        MaterialState { stress: &pts.stress()[p], elastic_strain: &pts.elastic_strain()[p], history: pts.history(p) }
+    }
+
+    /// Per material, its P-wave modulus where the law's stiffness is constant (`None`: it
+    /// follows the state, [`Model::p_wave_modulus`] per point).
+    pub fn constant_p_wave_moduli(&self) -> Vec<Option<f64>> {
+        (self.materials.iter())
+            .map(|m| m.constant_stiffness().then(|| m.p_wave_modulus(&MaterialState::at_rest(&[]))))
+            .collect()
+    }
+
+    /// The P-wave modulus of point `p` in its committed state, from `constant` (the
+    /// model's [`Model::constant_p_wave_moduli`]) where its material's is constant.
+    #[inline]
+    pub fn p_wave_modulus(&self, constant: &[Option<f64>], p: usize) -> f64 {
+        match constant[self.points.material()[p] as usize] {
+            Some(m) => m,
+            None => self.law(p).p_wave_modulus(&self.material_state(p)),
+        }
+    }
+
     pub fn constraints(&self) -> &[PlaneConstraint] {
         &self.constraints
     }
@@ -580,14 +607,17 @@ impl<const D: usize> Model<D> {
     }
 
     /// The prescribed displacement increments of a step from load factor `from` to `to`
-    /// on the constrained dofs (zero elsewhere), into `out` (sized like `constrained`).
-    pub fn prescribed_increment(&self, active: &ActiveNodes, from: f64, to: f64, out: &mut [f64]) {
+    /// on the constrained dofs of every motion field of `layout` (zero elsewhere), into
+    /// `out` (sized like `constrained`).
+    pub fn prescribed_increment(&self, layout: &NodeLayout, active: &ActiveNodes, from: f64, to: f64, out: &mut [f64]) {
         out.iter_mut().for_each(|v| *v = 0.0);
         for c in self.constraints.iter().filter(|c| c.is_displaced()) {
             for (a, &g) in active.active_to_grid.iter().enumerate() {
                 if self.node_on_plane(g as usize, c) {
-                    for i in (0..D).filter(|&i| c.fixed[i]) {
-                        out[a * D + i] = (to - from) * c.displacement[i];
+                    for k in motion_fields(layout) {
+                        for i in (0..D).filter(|&i| c.fixed[i]) {
+                            out[layout.dof(a, k, i)] = (to - from) * c.displacement[i];
+                        }
                     }
                 }
             }
@@ -610,15 +640,18 @@ impl<const D: usize> Model<D> {
         self.materials.iter().any(|m| m.can_soften())
     }
 
-    /// Mark the constrained dofs (`active node · D + component`) of the active nodes.
-    pub fn constrained_dofs(&self, active: &ActiveNodes, out: &mut Vec<bool>) {
+    /// Mark the constrained dofs of the active nodes in `layout`: a constraint holds its
+    /// components of every motion field at the nodes of its plane.
+    pub fn constrained_dofs(&self, layout: &NodeLayout, active: &ActiveNodes, out: &mut Vec<bool>) {
         out.clear();
-        out.resize(active.len() * D, false);
+        out.resize(layout.num_dofs(active.len()), false);
         for (a, &g) in active.active_to_grid.iter().enumerate() {
             for c in &self.constraints {
                 if self.node_on_plane(g as usize, c) {
-                    for i in 0..D {
-                        out[a * D + i] |= c.fixed[i];
+                    for k in motion_fields(layout) {
+                        for i in 0..D {
+                            out[layout.dof(a, k, i)] |= c.fixed[i];
+                        }
                     }
                 }
             }
@@ -651,6 +684,11 @@ impl<const D: usize> Model<D> {
             None => f,
         }
     }
+}
+
+/// The indices of `layout`'s motion fields (the ones constraints hold).
+fn motion_fields(layout: &NodeLayout) -> impl Iterator<Item = usize> + '_ {
+    (layout.fields().iter().enumerate()).filter(|(_, f)| matches!(f, NodeField::Motion { .. })).map(|(k, _)| k)
 }
 
 /// Every point's material must exist.

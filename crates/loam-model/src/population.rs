@@ -36,7 +36,8 @@ pub(crate) fn start_unstrained<const D: usize>(
     });
     let stride = materials.iter().map(|m| m.history_len()).max().unwrap_or(0);
     let material = points.material().to_vec();
-    points.init_history(stride, |p, h| materials[material[p] as usize].init_history(h));
+    let unstressed = Matrix3::zeros();
+    points.init_history(stride, |p, h| materials[material[p] as usize].init_history(h, &unstressed));
 }
 
 /// A change of a model's points between steps.

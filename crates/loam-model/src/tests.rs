@@ -2,7 +2,7 @@
 //! range or run with silently wrong.
 
 use super::*;
-use loam_constitutive::{Elastic, VonMises};
+use loam_constitutive::{Elastic, MaterialState, VonMises};
 use loam_points::{PointsError, Shape};
 use nalgebra::{Matrix3, Vector2};
 
@@ -118,7 +118,7 @@ fn replaced_materials_keep_count_and_history_layout() {
     assert!(matches!(model.with_materials(vec![plastic]), Err(ModelError::Materials(_))));
     let softer: Arc<dyn ConstitutiveLaw> = Arc::new(Elastic::new(1e3, 0.3).unwrap());
     let replaced = model.with_materials(vec![softer]).unwrap();
-    assert_eq!(replaced.materials()[0].p_wave_modulus(), Elastic::new(1e3, 0.3).unwrap().p_wave_modulus());
+    assert_eq!(replaced.constant_p_wave_moduli()[0].unwrap(), Elastic::new(1e3, 0.3).unwrap().p_wave_modulus());
 }
 
 #[test]
@@ -239,4 +239,75 @@ fn free_rigid_bodies_are_those_no_constraint_holds() {
     assert_eq!((two.len(), two[0].alone, two[0].points, two[0].centre), (1, false, 8, [3.5, 1.0, 0.0]));
     expect(two[0].modes.clone(), &[Translation(0), Translation(1), about(3.5, 1.0)]);
     assert_eq!(two[0].describe(2), "the body of 8 points around (3.5, 1) against translation along x, translation along y, rotation about (3.5, 1)");
+}
+
+/// A law whose stiffness follows the state and whose history starts from the initial
+/// stress (the shape of a pressure-dependent law): elastic, but M = M₀ (1 + p / p_ref) at
+/// mean stress p = −tr σ / 3, and the history the initial p.
+#[derive(Debug)]
+struct PressureDependent(Elastic);
+
+impl ConstitutiveLaw for PressureDependent {
+    fn name(&self) -> &'static str {
+        "pressure-dependent"
+    }
+    fn history_len(&self) -> usize {
+        1
+    }
+    fn init_history(&self, h: &mut [f64], initial_stress: &Matrix3<f64>) {
+        h[0] = -initial_stress.trace() / 3.0;
+    }
+    fn update(
+        &self,
+        eps: &Matrix3<f64>,
+        h_n: &[f64],
+        h_out: &mut [f64],
+    ) -> Result<loam_constitutive::StressUpdate, loam_constitutive::ConstitutiveError> {
+        h_out.copy_from_slice(h_n);
+        self.0.update(eps, &[], &mut [])
+    }
+    fn elasticity(&self, _state: &MaterialState) -> Option<Elastic> {
+        Some(self.0)
+    }
+    fn constant_stiffness(&self) -> bool {
+        false
+    }
+    fn p_wave_modulus(&self, state: &MaterialState) -> f64 {
+        self.0.p_wave_modulus() * (1.0 - state.stress.trace() / 3.0 / 100.0)
+    }
+    fn stored_energy(&self, e: &Matrix3<f64>) -> f64 {
+        self.0.stored_energy(e)
+    }
+}
+
+/// A law that says its stiffness follows the state is asked at every point, in the
+/// point's state (a constant one once per material); its history starts from each point's
+/// geostatic stress. Elastic E = 1e5, ν = 0.3: M₀ = 134 615.38…; the block 2 m deep of
+/// 1000 kg/m³ under g = 10 has σ_v = −ρ g depth at its points (depths 0.25 … 1.75 m).
+#[test]
+fn a_law_may_state_its_stiffness_and_history_from_the_state() {
+    let law: Arc<dyn ConstitutiveLaw> = Arc::new(PressureDependent(Elastic::new(1e5, 0.3).unwrap()));
+    let mut model = Model::new(
+        grid(),
+        BasisKind::Linear,
+        Kinematics::SmallStrain,
+        points(1),
+        vec![elastic(), law],
+        vec![],
+        Vector2::new(0.0, -10.0),
+    )
+    .unwrap();
+    let m0 = Elastic::new(1e5, 0.3).unwrap().p_wave_modulus();
+    assert_eq!(model.constant_p_wave_moduli(), vec![Some(m0), None]);
+    assert_eq!(model.points().history(0), &[0.0], "unstressed before the geostatic stress");
+    model.geostatic_stress(0.5).unwrap();
+    let moduli = model.constant_p_wave_moduli();
+    for p in 0..model.points().len() {
+        let s = model.points().stress()[p];
+        let mean = -s.trace() / 3.0;
+        assert!(mean > 0.0);
+        assert_eq!(model.points().history(p), &[mean], "point {p}: history from its initial stress");
+        let expected = m0 * (1.0 + mean / 100.0);
+        assert!((model.p_wave_modulus(&moduli, p) / expected - 1.0).abs() < 1e-15, "point {p}");
+    }
 }

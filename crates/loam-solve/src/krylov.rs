@@ -215,6 +215,10 @@ impl LinearSolver for IterativeSolver {
 
     fn prepare(&mut self, system: &LinearSystem<'_>) -> Result<(), LinearSolveError> {
         let lattice = system.lattice.ok_or(LinearSolveError::NoLattice)?;
+        let d = system.pattern.dofs_per_node();
+        if d > 3 {
+            return Err(LinearSolveError::BlockSize(d));
+        }
         let t = Instant::now();
         if self.multigrid.set_structure(system.pattern, lattice) {
             self.timings.symbolic += t.elapsed();

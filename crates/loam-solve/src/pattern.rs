@@ -42,8 +42,10 @@ pub struct BlockPattern {
 }
 
 impl BlockPattern {
+    /// An empty pattern of `dofs_per_node` dofs at every node (any number from 1: a
+    /// displacement of 1–3 components, fields of several bodies, a pore pressure).
     pub fn new(dofs_per_node: usize) -> Self {
-        assert!((1..=3).contains(&dofs_per_node));
+        assert!(dofs_per_node >= 1, "a node carries at least one dof");
         Self { dofs_per_node, ..Default::default() }
     }
 
@@ -158,13 +160,14 @@ impl BlockPattern {
     }
 
     /// For every node `j` in parallel, with `out` the values `chunk(j)` long that
-    /// `values` holds from `start(j)`: `visit(j, out, e, slot_j, i, q, slot_i)` for each
-    /// element `e` touching `j` (ascending) and each node `i` of it, `q` the place of `i`
-    /// among `j`'s neighbours. The one gather loop of both layouts.
+    /// `values` holds from `start(j)`: `visit(j, out, block, e, slot_j, i, q, slot_i)` for
+    /// each element `e` touching `j` (ascending) and each node `i` of it, `q` the place of
+    /// `i` among `j`'s neighbours, `block` a zeroed d × d scratch for the element's block
+    /// (one per task, reused). The one gather loop of both layouts.
     fn gather<C, F>(&self, couplings: &C, values: &mut [f64], visit: F)
     where
         C: Couplings,
-        F: Fn(usize, &mut [f64], usize, usize, usize, usize, usize) + Sync,
+        F: Fn(usize, &mut [f64], &mut [f64], usize, usize, usize, usize, usize) + Sync,
     {
         let dd = self.dofs_per_node * self.dofs_per_node;
         let mut chunks: Vec<&mut [f64]> = Vec::with_capacity(self.num_nodes());
@@ -174,19 +177,23 @@ impl BlockPattern {
             chunks.push(head);
             rest = tail;
         }
-        chunks.into_par_iter().enumerate().for_each(|(j, out)| {
-            let nb = self.neighbours(j);
-            for &(e, b) in couplings.elements_of(j) {
-                let nodes = couplings.nodes_of(e as usize);
-                let mut q = 0;
-                for (a, &i) in nodes.iter().enumerate() {
-                    while nb[q] != i {
-                        q += 1;
+        chunks.into_par_iter().enumerate().for_each_init(
+            || vec![0.0; dd],
+            |block, (j, out)| {
+                let nb = self.neighbours(j);
+                for &(e, b) in couplings.elements_of(j) {
+                    let nodes = couplings.nodes_of(e as usize);
+                    let mut q = 0;
+                    for (a, &i) in nodes.iter().enumerate() {
+                        while nb[q] != i {
+                            q += 1;
+                        }
+                        block.iter_mut().for_each(|v| *v = 0.0);
+                        visit(j, out, block, e as usize, b as usize, i as usize, q, a);
                     }
-                    visit(j, out, e as usize, b as usize, i as usize, q, a);
                 }
-            }
-        });
+            },
+        );
     }
 
     /// Assemble a matrix with this pattern into `values` (resized to `nnz`), in the
@@ -204,10 +211,9 @@ impl BlockPattern {
         let d = self.dofs_per_node;
         values.clear();
         values.resize(self.nnz(), 0.0);
-        self.gather(couplings, values, |j, out, e, b, i, q, a| {
+        self.gather(couplings, values, |j, out, buf, e, b, i, q, a| {
             let col_len = self.neighbours(j).len() * d;
-            let mut buf = [0.0f64; 9];
-            block(e, a, b, &mut buf[..d * d]);
+            block(e, a, b, buf);
             for k in 0..d {
                 for r in 0..d {
                     if kept(constrained, d, i, r, j, k) {
@@ -231,10 +237,9 @@ impl BlockPattern {
         }
         let values = matrix.values_mut();
         values.iter_mut().for_each(|v| *v = 0.0);
-        self.gather(couplings, values, |j, out, e, b, i, q, a| {
-            let mut buf = [0.0f64; 9];
+        self.gather(couplings, values, |j, out, buf, e, b, i, q, a| {
             // Block (j, i): node j's slot gives the rows.
-            block(e, b, a, &mut buf[..d * d]);
+            block(e, b, a, buf);
             for r in 0..d {
                 for k in 0..d {
                     if kept(constrained, d, j, r, i, k) {

@@ -5,7 +5,7 @@
 use super::bodies::Bodies;
 use super::locate::Seg;
 use super::{AnalysisSpec, InitialStressSpec, LoadedScene, SceneError};
-use loam_constitutive::ConstitutiveLaw;
+use loam_constitutive::{ConstitutiveLaw, MaterialState};
 use loam_grid::Grid;
 use loam_model::{Load, Model, ModelError, PlaneConstraint};
 use nalgebra::SVector;
@@ -34,7 +34,10 @@ impl LoadedScene {
         let height = (0..D).map(|a| grid.cells()[a] as f64).fold(0.0, f64::max);
         for (i, (m, law)) in self.scene.materials.iter().zip(laws).enumerate() {
             let at = |key| [Seg::Key("materials"), Seg::Index(i), Seg::Key(key)];
-            let stiffness = law.p_wave_modulus() * volume / (h.min() * h.min());
+            let mut history = vec![0.0; law.history_len()];
+            law.init_history(&mut history, &nalgebra::Matrix3::zeros());
+            let at_rest = law.p_wave_modulus(&MaterialState::at_rest(&history));
+            let stiffness = at_rest * volume / (h.min() * h.min());
             let weight = m.density * gravity.norm() * volume * height;
             let (scale, what, key) = if stiffness > LARGEST_SCALE {
                 (stiffness, "stiffness per cell (P-wave modulus × cell volume / cell size²)", "law")
