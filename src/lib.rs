@@ -11,7 +11,9 @@
 //! - [`implicit`]: quasi-static and Newmark-dynamic implicit analysis;
 //! - [`explicit`]: explicit MPM (USF, USL, MUSL) for comparison;
 //! - [`analysis`]: one stepping interface over the three analyses;
-//! - [`io`]: scenes, output writers, the scene runner.
+//! - [`format`]: the file formats: VTU/PVD/CSV outputs, plots, the checkpoint container;
+//! - [`scene`]: scene files: their schema, validation and the model and analysis they build;
+//! - [`run`]: the runner of a scene with its outputs, checkpoint and restart.
 //!
 //! The verification problems (closed forms, fixtures, norms, bounds) are not part of the
 //! facade: they live in the unpublished `loam-verification` crate, which the tests, the
@@ -20,10 +22,12 @@
 pub use loam_analysis as analysis;
 pub use loam_constitutive as constitutive;
 pub use loam_explicit as explicit;
+pub use loam_format as format;
 pub use loam_grid as grid;
 pub use loam_implicit as implicit;
-pub use loam_io as io;
 pub use loam_kernels as kernels;
 pub use loam_model as model;
 pub use loam_points as points;
+pub use loam_run as run;
+pub use loam_scene as scene;
 pub use loam_solve as solve;

@@ -2,7 +2,8 @@
 //! after a step, and the run goes on with the rest — equilibrium with the weight left,
 //! the outputs of the points left, momentum of the body left.
 
-use loam::io::{run_scene, LoadedScene, RunEvent};
+use loam::run::{run_scene, RunEvent};
+use loam::scene::LoadedScene;
 use std::path::Path;
 
 /// `examples/name` with each (from, to) replaced once.
@@ -116,9 +117,9 @@ fn bad_excavation_stages_are_refused() {
 fn outputs_are_in_id_order() {
     use loam::constitutive::Elastic;
     use loam::grid::{BasisKind, Grid};
-    use loam::io::scene::FieldSpec;
     use loam::model::{Kinematics, Model};
     use loam::points::{PointStore, Shape};
+    use loam::scene::FieldSpec;
     use nalgebra::Vector2;
     use std::sync::Arc;
     let grid = Grid::new(Vector2::zeros(), Vector2::new(1.0, 1.0), [3, 4]).unwrap();
@@ -145,7 +146,7 @@ fn outputs_are_in_id_order() {
     let fields = [FieldSpec::MeanStress, FieldSpec::Material];
     let write = |model: &Model<2>, name: &str| {
         let path = dir.path().join(name);
-        loam::io::write_points_csv(model, &fields, 1.0, &path).unwrap();
+        loam::run::write_points_csv(model, &fields, 1.0, &path).unwrap();
         std::fs::read(path).unwrap()
     };
     let (a, b) = (write(&build(points), "a.csv"), write(&build(reversed), "b.csv"));

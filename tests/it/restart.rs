@@ -5,8 +5,9 @@
 //! reach: a body-fitted mesh whose nodes move, loads whose vertices follow the surface, a
 //! dead load, two bodies in explicit FLIP, and 3D.
 
-use loam::io::checkpoint::Checkpoint;
-use loam::io::{resume_scene, run_scene_with, CheckpointEvery, LoadedScene, RunOptions, CHECKPOINT_FILE};
+use loam::format::checkpoint::Checkpoint;
+use loam::run::{resume_scene, run_scene_with, CheckpointEvery, RunOptions, CHECKPOINT_FILE};
+use loam::scene::LoadedScene;
 use std::path::Path;
 
 fn scene(name: &str, edits: &[(&str, &str)]) -> LoadedScene {

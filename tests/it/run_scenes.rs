@@ -1,7 +1,8 @@
 //! The example scenes run end to end through the runner, and their outputs hold what the
 //! docs promise.
 
-use loam::io::{run_scene, LoadedScene, RunEvent};
+use loam::run::{run_scene, RunEvent};
+use loam::scene::LoadedScene;
 use std::path::Path;
 
 fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {

@@ -2,7 +2,7 @@
 //! and column of the offending value, and what would be valid. One test per kind of
 //! mistake; each mutates the valid example scene in one place.
 
-use loam::io::{LoadedScene, SceneError};
+use loam::scene::{LoadedScene, SceneError};
 use std::path::Path;
 
 const GOOD: &str = include_str!("../../examples/column.ron");

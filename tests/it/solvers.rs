@@ -83,7 +83,7 @@ fn a_failed_krylov_solve_falls_back_on_the_direct_solver() {
     let source = std::fs::read_to_string(path).unwrap();
     let run = |linear: &str| {
         let text = source.replace("solver: (", &format!("solver: (linear: Some({linear}), "));
-        let scene = loam::io::LoadedScene::parse(path, text).unwrap();
+        let scene = loam::scene::LoadedScene::parse(path, text).unwrap();
         let mut analysis = scene.build::<2>().unwrap();
         (0..4).map(|_| analysis.step().unwrap()).collect::<Vec<_>>()
     };

@@ -7,9 +7,9 @@
 
 use crate::report::{Report, Row};
 use anyhow::Result;
+use loam::format::output::plot::{Plot, Series};
 use loam::grid::BasisKind;
 use loam::implicit::{Kinematics, QuasiStatic, QuasiStaticSettings};
-use loam::io::output::plot::{Plot, Series};
 use loam::model::Model;
 use loam_verification::column::bounds::{GIMP_E_SIGMA_64, GIMP_RATE, V1C_NEWTON_ITERATIONS};
 use loam_verification::{column_errors, column_fem_model, column_model, Column, ColumnErrors};

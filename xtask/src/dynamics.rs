@@ -5,11 +5,11 @@
 
 use crate::report::{Report, Row};
 use anyhow::Result;
+use loam::analysis::Analysis;
 use loam::explicit::{Explicit, ExplicitSettings, LeapfrogEnergy, TimeStep};
+use loam::format::output::plot::{Plot, Series};
 use loam::grid::BasisKind;
 use loam::implicit::{Dynamic, DynamicSettings, Kinematics};
-use loam::io::output::plot::{Plot, Series};
-use loam::io::Analysis;
 use loam::model::Model;
 use loam_verification::bar::bounds as bar_bounds;
 use loam_verification::column::bounds::{SUDDEN_GRAVITY_AMPLIFICATION, SUDDEN_GRAVITY_E_SIGMA};

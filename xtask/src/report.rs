@@ -3,7 +3,7 @@
 //! markdown and in `summary.csv`.
 
 use anyhow::Result;
-use loam::io::output::{CsvCell, CsvWriter};
+use loam::format::output::{CsvCell, CsvWriter};
 use loam_verification::Bound;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};

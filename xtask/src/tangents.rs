@@ -220,7 +220,7 @@ pub fn run(out: &Path) -> Result<()> {
     }
     std::fs::write(out.join("steps.csv"), &steps)?;
     let path = Path::new("examples/footing_von_mises.ron");
-    let scene = loam::io::LoadedScene::parse(path, std::fs::read_to_string(path)?)?;
+    let scene = loam::scene::LoadedScene::parse(path, std::fs::read_to_string(path)?)?;
     let Analysis::QuasiStatic(mut qs) = scene.build::<2>()? else { anyhow::bail!("the footing is quasi-static") };
     qs.set_linear_solver(Box::new(recorder("footing_vm", LinearSolverKind::Cg, 3)));
     for _ in 0..3 {

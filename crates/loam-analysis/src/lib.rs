@@ -3,7 +3,10 @@
 //! for (the scene runner, the CLI) without knowing a file format.
 
 use loam_explicit::{Explicit, ExplicitError, ExplicitState};
-use loam_implicit::{Dynamic, DynamicState, QuasiStatic, QuasiStaticState, StepError, StepReport};
+use loam_implicit::{
+    reduced_strength, Dynamic, DynamicState, QuasiStatic, QuasiStaticState, StepError, StepReport,
+    StrengthReductionError,
+};
 use loam_kernels::ConnectError;
 use loam_model::{LoadLevel, Model, ModelError, ModelState, PointChange};
 use std::time::Duration;
@@ -211,6 +214,20 @@ impl<const D: usize> Analysis<D> {
         }
     }
 
+    /// The same analysis from its start with every material's strength divided by `factor`
+    /// (strength reduction's trial law, `loam_implicit::reduced_strength`): after a search
+    /// has bracketed the factor of safety, the run carries on at the largest factor that
+    /// held, so its outputs show the state just before failure. Quasi-static analyses.
+    pub fn with_strength_reduced(&self, factor: f64) -> Result<Self, StrengthReductionError> {
+        match self {
+            Analysis::QuasiStatic(a) => {
+                let reduced = reduced_strength(a.model(), factor)?;
+                Ok(Analysis::QuasiStatic(QuasiStatic::new(reduced, a.settings().clone())))
+            }
+            _ => Err(StrengthReductionError::NotQuasiStatic(self.name())),
+        }
+    }
+
     /// Add or remove points between steps ([`Model::change_points`]); returns how many.
     pub fn change_points(&mut self, change: PointChange<D>) -> Result<usize, ModelError> {
         match self {
@@ -265,5 +282,96 @@ impl<const D: usize> Analysis<D> {
                 }
             }
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use loam_constitutive::{Elastic, VonMises};
+    use loam_explicit::ExplicitSettings;
+    use loam_grid::{BasisKind, Grid};
+    use loam_implicit::QuasiStaticSettings;
+    use loam_model::{Kinematics, PlaneConstraint};
+    use loam_points::{PointStore, Shape};
+    use nalgebra::{Matrix3, Vector2};
+    use std::sync::Arc;
+
+    /// A 2 × 2 m von Mises block (σ_y = 10, 2 × 2 points per 0.5 m cell) on rollers,
+    /// under gravity.
+    fn block() -> Model<2> {
+        let grid = Grid::new(Vector2::zeros(), Vector2::new(0.5, 0.5), [6, 6]).unwrap();
+        let mut points = PointStore::new();
+        let shape = Shape::Box { min: Vector2::new(0.5, 0.0), max: Vector2::new(2.5, 2.0) };
+        points.fill(&grid, &shape, 2, 1.0, 0).unwrap();
+        let law = Arc::new(VonMises::new(Elastic::new(1e4, 0.3).unwrap(), 10.0, 0.0).unwrap());
+        let base = PlaneConstraint::new(1, 0, [true, true, false]);
+        Model::new(
+            grid,
+            BasisKind::Gimp,
+            Kinematics::SmallStrain,
+            points,
+            vec![law],
+            vec![base],
+            Vector2::new(0.0, -10.0),
+        )
+        .unwrap()
+    }
+
+    fn quasi_static() -> Analysis<2> {
+        Analysis::QuasiStatic(QuasiStatic::new(block(), QuasiStaticSettings { load_steps: 4, ..Default::default() }))
+    }
+
+    /// The interface reports each analysis's step the same way: a quasi-static step is a
+    /// load increment of 1/4 with Newton iterations and a reaction (the base carries the
+    /// weight, 4 m² × 1 × 10 / 4 = 10 per step, to Newton's tolerance); an explicit step
+    /// reports its time step as the increment, no Newton iterations and NaN residual.
+    #[test]
+    fn steps_report_their_progress() {
+        let mut qs = quasi_static();
+        let r = qs.step().unwrap();
+        assert_eq!((r.step, r.load_factor, r.increment), (1, 0.25, 0.25));
+        assert!(r.iterations >= 1 && r.final_residual < 1e-6);
+        assert!((r.reactions[0][1].abs() - 10.0).abs() < 1e-6, "{:?}", r.reactions);
+        assert_eq!((qs.time(), qs.load_level()), (0.25, LoadLevel::Factor(0.25)));
+        let mut ex = Analysis::Explicit(Explicit::new(block(), ExplicitSettings::new(0.01)).unwrap());
+        let r = ex.step().unwrap();
+        assert_eq!((r.step, r.iterations, r.substeps), (1, 0, 1));
+        assert!(r.final_residual.is_nan() && r.reactions.is_empty());
+        assert_eq!((r.increment, r.time, ex.time()), (r.time, r.time, r.time));
+        assert_eq!((ex.name(), ex.end_time(), ex.load_factor()), ("explicit", 0.01, 1.0));
+    }
+
+    /// The strength-reduced analysis starts again with σ_y / F: a deviatoric stress of
+    /// q = σ_y / 2 = 5 is on the yield surface of F = 2, not of the original.
+    #[test]
+    fn a_strength_reduced_analysis_starts_again_weaker() {
+        let mut qs = quasi_static();
+        qs.step().unwrap();
+        let reduced = qs.with_strength_reduced(2.0).unwrap();
+        assert_eq!(reduced.steps_done(), 0);
+        let q = 5.0;
+        let stress = Matrix3::new(q / 3f64.sqrt(), 0.0, 0.0, 0.0, -q / 3f64.sqrt(), 0.0, 0.0, 0.0, 0.0);
+        let h = [0.0];
+        assert!(reduced.model().materials()[0].is_yielding(&stress, &h));
+        assert!(!qs.model().materials()[0].is_yielding(&stress, &h));
+        let ex = Analysis::Explicit(Explicit::new(block(), ExplicitSettings::new(0.01)).unwrap());
+        assert!(matches!(ex.with_strength_reduced(2.0), Err(StrengthReductionError::NotQuasiStatic("explicit"))));
+    }
+
+    /// A state of another analysis is refused and changes nothing; points removed through
+    /// the interface are gone from the model the next step runs on.
+    #[test]
+    fn states_of_other_analyses_are_refused_and_points_change() {
+        let mut qs = quasi_static();
+        let explicit = AnalysisState::Explicit(ExplicitState { steps: 3, time: 0.5 });
+        let saved = ModelState { points: block().points().clone(), load_vertices: Vec::new(), mesh_nodes: None };
+        let e = qs.resume(explicit, saved).unwrap_err();
+        assert!(e.to_string().contains("not of a quasi-static analysis"), "{e}");
+        assert_eq!(qs.steps_done(), 0);
+        let top = Shape::Box { min: Vector2::new(0.0, 1.5), max: Vector2::new(3.0, 3.0) };
+        assert_eq!(qs.change_points(PointChange::RemoveIn(top)).unwrap(), 16);
+        let r = qs.step().unwrap();
+        assert!((r.reactions[0][1].abs() - 7.5).abs() < 1e-6, "three quarters of the weight: {:?}", r.reactions);
     }
 }

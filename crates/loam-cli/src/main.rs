@@ -3,12 +3,13 @@
 use anyhow::Context;
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
+use loam_format::checkpoint::Checkpoint;
 use loam_implicit::StrengthTrial;
-use loam_io::checkpoint::Checkpoint;
-use loam_io::{
-    checkpoint_interval, checkpoint_scene, resume_scene, run_scene_with, CheckpointEvery, CheckpointWritten,
-    LoadedScene, Progress, RunEvent, RunOptions, RunSummary, CHECKPOINT_FILE,
+use loam_run::{
+    checkpoint_interval, checkpoint_scene, resume_scene, run_scene_with, CheckpointEvery, CheckpointWritten, Progress,
+    RunEvent, RunOptions, RunSummary, CHECKPOINT_FILE,
 };
+use loam_scene::LoadedScene;
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -160,7 +161,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Check { scene, max_memory } => check(&scene, max_memory),
         Command::Plot { dir } => {
-            for path in loam_io::plot_run(&dir).with_context(|| format!("plotting the run in {}", dir.display()))? {
+            for path in loam_format::plot_run(&dir).with_context(|| format!("plotting the run in {}", dir.display()))? {
                 println!("{}", path.display());
             }
             Ok(())
@@ -234,7 +235,7 @@ fn run_command(
             .context("starting the worker threads")?;
     }
     let loaded = load(scene, max_memory)?;
-    if let loam_io::scene::AnalysisSpec::QuasiStatic { strength_reduction: Some(srf), .. } = &loaded.scene.analysis {
+    if let loam_scene::AnalysisSpec::QuasiStatic { strength_reduction: Some(srf), .. } = &loaded.scene.analysis {
         if !quiet {
             println!(
                 "strength reduction: bisecting F between {} and {} to {}, one trial per row in {}",

@@ -75,6 +75,8 @@ pub enum StrengthReductionError {
     Model(#[from] ModelError),
     #[error("trial F = {factor}: {source}")]
     Trial { factor: f64, source: StepError },
+    #[error("strength reduction runs quasi-static analyses, not {0} ones")]
+    NotQuasiStatic(&'static str),
 }
 
 impl StrengthReduction {

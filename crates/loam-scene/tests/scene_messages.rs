@@ -3,7 +3,7 @@
 //! shows here as a diff. Each case edits one example scene in one or two places; cases
 //! that must be accepted print `ok`.
 
-use loam_io::{LoadedScene, SceneError};
+use loam_scene::{LoadedScene, SceneError};
 use std::fmt::Write;
 use std::path::Path;
 

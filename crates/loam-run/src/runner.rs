@@ -5,19 +5,17 @@
 //! a run writes a checkpoint between steps (`restart`), from which [`resume_scene`] goes on
 //! as if it had never stopped.
 
-use crate::checkpoint::{Checkpoint, CheckpointError, CheckpointHeader};
-use crate::output::{CsvCell, CsvWriter, OutputError, PvdWriter};
-use crate::output_dir::{clear_output_dir, prepare_output_dir, remove_temp_files, OutputDirError};
 use crate::point_fields::{default_fields, write_frame, write_points_csv};
 use crate::restart::{self, CheckpointEvery, CheckpointWritten, Checkpoints, OutputsState, Phase, RunTotals};
-use crate::run_plots::plot_run;
-use crate::scene::FieldSpec;
-use crate::scene::{AnalysisSpec, Excavation, LoadedScene, OutputSpec, SceneError};
 use loam_analysis::{Analysis, AnalysisError, Progress};
-use loam_implicit::{
-    reduced_strength, FactorOfSafety, QuasiStatic, StrengthReduction, StrengthReductionError, StrengthTrial,
-};
+use loam_format::checkpoint::{Checkpoint, CheckpointError, CheckpointHeader};
+use loam_format::output::{CsvCell, CsvWriter, OutputError, PvdWriter};
+use loam_format::output_dir::{clear_output_dir, prepare_output_dir, remove_temp_files, OutputDirError};
+use loam_format::run_plots::plot_run;
+use loam_implicit::{FactorOfSafety, QuasiStatic, StrengthReduction, StrengthReductionError, StrengthTrial};
 use loam_model::{ExternalWork, LoadLevel, Model, ModelError, PointChange};
+use loam_scene::FieldSpec;
+use loam_scene::{AnalysisSpec, Excavation, LoadedScene, OutputSpec, SceneError};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
@@ -327,8 +325,7 @@ fn strength_reduction_first<const D: usize>(
         Some(fos) => fos,
         None => factor_of_safety(qs, spec.bracket, spec.tolerance, search, progress)?,
     };
-    let reduced = reduced_strength(qs.model(), fos.stable)?;
-    *analysis = Analysis::QuasiStatic(QuasiStatic::new(reduced, qs.settings().clone()));
+    *analysis = analysis.with_strength_reduced(fos.stable)?;
     Ok(Some(fos))
 }
 

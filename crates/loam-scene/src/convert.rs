@@ -6,8 +6,8 @@
 use super::schema::{
     AntiLockingSpec, BasisSpec, KinematicsSpec, LinearSpec, MassSpec, SchemeSpec, TimeStepSpec, VtuFormatSpec,
 };
-use crate::output::VtuFormat;
 use loam_explicit::{TimeStep, UpdateScheme};
+use loam_format::output::VtuFormat;
 use loam_grid::BasisKind;
 use loam_implicit::MassMatrix;
 use loam_model::{AntiLocking, Kinematics};

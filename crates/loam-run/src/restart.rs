@@ -11,9 +11,9 @@
 //! else is rebuilt from the scene, as it was built at the start, so the resumed run takes
 //! the steps the interrupted one would have taken with the same numbers.
 
-use crate::checkpoint::{Checkpoint, CheckpointError, CheckpointHeader, Section};
 use loam_analysis::{Analysis, AnalysisState};
 use loam_explicit::ExplicitState;
+use loam_format::checkpoint::{Checkpoint, CheckpointError, CheckpointHeader, Section};
 use loam_implicit::{DynamicState, FactorOfSafety, QuasiStaticState, StrengthTrial};
 use loam_model::{Model, ModelState};
 use loam_points::{Column, PointStore};
@@ -23,8 +23,7 @@ use std::path::{Path, PathBuf};
 use std::str::FromStr;
 use std::time::{Duration, Instant};
 
-/// The checkpoint's name in the output folder.
-pub const CHECKPOINT_FILE: &str = "checkpoint.loam";
+pub use loam_format::checkpoint::CHECKPOINT_FILE;
 
 /// How often a run writes its checkpoint (`loam run --checkpoint-every`).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -127,7 +126,7 @@ impl Checkpoints {
         checkpoint: &Checkpoint,
         step: usize,
         trials: usize,
-    ) -> Result<CheckpointWritten, crate::output::OutputError> {
+    ) -> Result<CheckpointWritten, loam_format::output::OutputError> {
         let start = Instant::now();
         let bytes = checkpoint.write(&self.path)?;
         self.last = Instant::now();

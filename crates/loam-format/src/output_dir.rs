@@ -43,7 +43,7 @@ fn is_loam_output(name: &str) -> bool {
                 | "points_final.csv"
                 | "strength_reduction.csv"
                 | MARKER
-                | crate::restart::CHECKPOINT_FILE
+                | crate::checkpoint::CHECKPOINT_FILE
         )
         || crate::run_plots::PLOT_FILES.contains(&name)
 }

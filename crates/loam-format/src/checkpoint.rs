@@ -26,6 +26,9 @@ use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
+/// The checkpoint's name in the output folder.
+pub const CHECKPOINT_FILE: &str = "checkpoint.loam";
+
 const MAGIC: &[u8; 8] = b"LOAMCKPT";
 /// The version of the layout above; a reader refuses any other.
 pub const FORMAT_VERSION: u32 = 1;

@@ -5,7 +5,8 @@
 //! written as ASCII here; the binary writer is checked against the ASCII values bit for bit
 //! in `output::vtu`.
 
-use loam_io::{run_scene, LoadedScene};
+use loam_run::run_scene;
+use loam_scene::LoadedScene;
 use std::path::Path;
 
 /// A small von Mises block squeezed by a prescribed displacement until it yields.

@@ -5,9 +5,9 @@
 //! name), and with water the pore pressure and the total stress (the stress the laws see
 //! is the effective one). A field that is off costs nothing.
 
-use crate::output::{write_csv_table, write_vtu, OutputError, PointCloud, PvdWriter, VtuFormat};
-use crate::scene::FieldSpec;
+use loam_format::output::{write_csv_table, write_vtu, OutputError, PointCloud, PvdWriter, VtuFormat};
 use loam_model::{Kinematics, Model};
+use loam_scene::FieldSpec;
 use nalgebra::{Matrix3, SVector};
 use std::path::Path;
 

@@ -19,7 +19,8 @@
 //! - `solver`: Newton's tolerances and the linear solver;
 //! - `model`: the model assembled from the parts above, with its options (anti-locking,
 //!   geometric linearity, ghost penalty, initial stress);
-//! - `analysis`: the analysis and its settings, and the checks that need the whole model.
+//! - `analysis`: the analysis and its settings, and the checks that need the whole model;
+//! - `excavation`: the stages that remove a region's points after a step.
 //!
 //! The output settings need no check (every count and flag is valid); the runner reads
 //! them from the schema.
