@@ -10,6 +10,7 @@ mod geostatic;
 mod ghost;
 mod implicit_dynamics;
 mod implicit_mpm;
+mod inclined;
 mod loads;
 mod prescribed_displacement;
 mod restart;

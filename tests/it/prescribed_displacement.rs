@@ -98,7 +98,9 @@ fn within_limits_the_constrained_nodes() {
 #[test]
 fn dynamics_refuses_a_prescribed_displacement() {
     let err = Dynamic::new(block(0.01, None), DynamicSettings::trapezoidal(0.1, 1.0)).err().unwrap();
-    assert!(matches!(err, StepError::DisplacementInDynamics { index: 0 }), "{err}");
+    let StepError::Unaccepted(refusal) = &err else { panic!("{err}") };
+    assert_eq!(refusal.option, loam::model::ModelOption::DisplacedConstraint { index: 0 });
+    assert!(err.to_string().starts_with("constraint 0 prescribes a non-zero displacement"), "{err}");
 }
 
 /// B-bar on a nearly incompressible elastic block (ν = 0.49): the same oedometric push

@@ -95,5 +95,7 @@ fn explicit_analysis_refuses_a_fem_model() {
     use loam::explicit::{Explicit, ExplicitError, ExplicitSettings};
     let model = VibratingBar::REFERENCE.fem_model(2, Kinematics::FiniteStrain);
     let err = Explicit::new(model, ExplicitSettings::new(1.0)).err().unwrap();
-    assert_eq!(err, ExplicitError::FemModel);
+    let ExplicitError::Unaccepted(refusal) = err else { panic!("{err}") };
+    assert_eq!(refusal.option, loam::model::ModelOption::BodyFittedMesh);
+    assert!(refusal.to_string().contains("explicit analysis runs MPM models only"), "{refusal}");
 }

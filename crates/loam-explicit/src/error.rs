@@ -25,11 +25,6 @@ pub enum ExplicitError {
     )]
     Unstable { step: usize, time: f64, point: usize, reason: String },
     #[error(
-        "the model is an updated Lagrangian FEM mesh; explicit analysis runs MPM models only \
-         (use the implicit quasi-static or dynamic analysis for the FEM reference)"
-    )]
-    FemModel,
-    #[error(
         "step {step} (t = {time:e}): the time step {dt:e} is below {floor:e} (1e-9 of the \
          duration), so the run would not reach its end; point {point} sets it, with P-wave \
          speed {wave_speed:.4e} and speed {speed:.4e} (the velocity the grid carries it at). \
@@ -37,14 +32,9 @@ pub enum ExplicitError {
          the grid and the duration"
     )]
     TimeStepCollapsed { step: usize, time: f64, dt: f64, floor: f64, point: usize, wave_speed: f64, speed: f64 },
-    #[error("the model asks for a ghost penalty, which stabilises the implicit tangent; explicit analysis has none (remove it)")]
-    GhostPenalty,
-    #[error("the model is geometrically linear (points held at their places); explicit analysis moves its points by their velocities")]
-    GeometricallyLinear,
-    #[error("the model has groundwater; pore pressures are implemented in the implicit analyses only (QuasiStatic, ImplicitDynamic)")]
-    Water,
-    #[error("constraint {index} prescribes a non-zero displacement; only quasi-static implicit analysis applies displacements (with the load factor)")]
-    DisplacedConstraint { index: usize },
+    /// The model uses an option explicit analysis does not accept (`loam_model`'s table).
+    #[error(transparent)]
+    Unaccepted(#[from] loam_model::Unaccepted),
     #[error("the analysis is already finished ({0} steps)")]
     Finished(usize),
 }

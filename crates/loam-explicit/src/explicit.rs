@@ -6,7 +6,7 @@ use loam_kernels::{
     check_constraints, embed, internal_force, on_pool, update_point_stress, BandScatter, Committed, ConnectError,
     LoadSupports, RunError,
 };
-use loam_model::{Kinematics, LoadLevel, Model, ModelError, ModelState, PointChange, StateFields};
+use loam_model::{AnalysisKind, Kinematics, LoadLevel, Model, ModelError, ModelState, PointChange, StateFields};
 use loam_points::{stretched_half_length, stretched_half_lengths};
 use nalgebra::{Matrix3, SMatrix, SVector};
 use rayon::prelude::*;
@@ -200,21 +200,7 @@ impl<const D: usize> Explicit<D> {
     /// settings with [`ExplicitError::InvalidSettings`].
     pub fn new(model: Model<D>, settings: ExplicitSettings) -> Result<Self, ExplicitError> {
         settings.validate()?;
-        if model.background().moves_with_body() {
-            return Err(ExplicitError::FemModel);
-        }
-        if model.ghost_penalty().is_some() {
-            return Err(ExplicitError::GhostPenalty);
-        }
-        if model.geometrically_linear() {
-            return Err(ExplicitError::GeometricallyLinear);
-        }
-        if model.water().is_some() {
-            return Err(ExplicitError::Water);
-        }
-        if let Some(index) = model.constraints().iter().position(|c| c.is_displaced()) {
-            return Err(ExplicitError::DisplacedConstraint { index });
-        }
+        model.check_accepted_by(AnalysisKind::Explicit)?;
         tracing::info!(scheme = ?settings.scheme, flip = settings.flip, time_step = ?settings.time_step,
             damping = settings.damping, duration = settings.duration, "explicit analysis");
         let p_wave = model.constant_p_wave_moduli();

@@ -26,7 +26,7 @@ use crate::{StepError, StepReport};
 use loam_kernels::{
     gather_internal_force, gather_nodal, internal_force, interpolate, interpolate_pair, on_pool, InvalidSetting,
 };
-use loam_model::{LoadLevel, Model, ModelError, ModelState, PointChange};
+use loam_model::{AnalysisKind, LoadLevel, Model, ModelError, ModelState, PointChange};
 use loam_solve::{LinearSolverChoice, LinearSolverKind, NewtonError, NewtonReport, NewtonSettings};
 use rayon::prelude::*;
 use std::time::Instant;
@@ -144,9 +144,7 @@ impl<const D: usize> Dynamic<D> {
     /// a suddenly applied load starts from the right acceleration.
     pub fn new(model: Model<D>, settings: DynamicSettings) -> Result<Self, StepError> {
         settings.validate()?;
-        if let Some(index) = model.constraints().iter().position(|c| c.is_displaced()) {
-            return Err(StepError::DisplacementInDynamics { index });
-        }
+        model.check_accepted_by(AnalysisKind::Dynamic)?;
         let inertia = Inertia::new(settings.mass == MassMatrix::Consistent);
         Ok(Self {
             engine: Engine::new(model, settings.newton, settings.linear_solver),

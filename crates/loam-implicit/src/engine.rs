@@ -6,6 +6,7 @@
 
 use crate::cell_average::{cell_averaged_gradients, CellAverage};
 use crate::follower::{add_follower_tangent, follower_couplings, has_follower, FollowerInputs};
+use crate::frames::LocalFrames;
 use crate::ghost::{ghost_couplings, scaled_ghost_faces};
 use crate::inertia::Inertia;
 use crate::points::{update_points, PointInputs, PointUpdateError, TrialState};
@@ -38,7 +39,12 @@ pub(crate) struct Engine<const D: usize> {
     pub pattern: BlockPattern,
     /// The tangent, in the layout of the linear solver.
     pub matrix: SystemMatrix,
+    /// The held dofs, in the nodes' frames (`frames`).
     pub constrained: Vec<bool>,
+    /// The local frames at the nodes of inclined rollers, and the dofs assembly
+    /// eliminates beside them (the grid planes' at the other nodes).
+    frames: LocalFrames<D>,
+    assembly_constrained: Vec<bool>,
     pub f_ext: Vec<f64>,
     /// The loads' vertices on the active nodes, and the level the external forces are at.
     loads: LoadSupports,
@@ -83,6 +89,21 @@ pub(crate) struct Engine<const D: usize> {
     lattice: Option<NodeLattice>,
 }
 
+/// The dofs assembly and the residual eliminate: the held ones (`constrained`), but at
+/// nodes with a local frame, whose held dofs are eliminated in their frames afterwards
+/// (`assembly`).
+fn assembly_mask<'a, const D: usize>(
+    frames: &LocalFrames<D>,
+    constrained: &'a [bool],
+    assembly: &'a [bool],
+) -> &'a [bool] {
+    if frames.is_empty() {
+        constrained
+    } else {
+        assembly
+    }
+}
+
 /// With the automatic choice, multigrid CG from this many dofs, by dimension, for symmetric
 /// positive definite tangents (docs/theory.md §19 gives the measurements): in 3D just above
 /// the measured crossover (3 000 to 4 000 dofs); in 2D well above it (8 000), so that the
@@ -121,6 +142,8 @@ impl<const D: usize> Engine<D> {
             conn_current: false,
             matrix: SystemMatrix::new(linear.layout()),
             constrained: Vec::new(),
+            frames: LocalFrames::default(),
+            assembly_constrained: Vec::new(),
             f_ext: Vec::new(),
             loads: LoadSupports::default(),
             level: LoadLevel::Factor(0.0),
@@ -219,6 +242,10 @@ impl<const D: usize> Engine<D> {
             return Ok(());
         }
         connect(&self.model, &self.layout, &mut self.conn, &mut self.constrained, step)?;
+        if !self.model.inclined_rollers().is_empty() {
+            let active = self.conn.active_nodes();
+            self.frames.connect(&self.model, active, &mut self.constrained, &mut self.assembly_constrained);
+        }
         self.loads.connect(&self.model, self.conn.active_nodes(), step)?;
         if let Some(gamma) = self.model.ghost_penalty() {
             self.ghost = scaled_ghost_faces(&self.model, &self.conn, gamma);
@@ -381,13 +408,18 @@ impl<const D: usize> Engine<D> {
             conn: &self.conn,
             average,
             ghost: &self.ghost,
-            constrained: &self.constrained,
+            constrained: assembly_mask(&self.frames, &self.constrained, &self.assembly_constrained),
             f_ext: if follower { &self.f_follower } else { &self.f_ext },
             mass: self.model.points().mass(),
             water_force: if self.model.kinematics() == Kinematics::FiniteStrain { &self.water_force } else { &[] },
             committed_volume: self.model.points().volume(),
         };
-        Ok(residual(&inputs, &self.trial, inertia, &self.du, &mut self.residual, &mut self.reaction))
+        let reference = residual(&inputs, &self.trial, inertia, &self.du, &mut self.residual, &mut self.reaction);
+        if self.frames.is_empty() {
+            return Ok(reference);
+        }
+        let held = self.frames.hold_in_residual(&mut self.residual, &mut self.reaction);
+        Ok((reference * reference + held).sqrt())
     }
 
     /// Assemble the tangent at the trial state.
@@ -397,7 +429,7 @@ impl<const D: usize> Engine<D> {
             pattern: &self.pattern,
             average: CellAverage::of(&self.model, &self.cell_gradients),
             ghost: &self.ghost,
-            constrained: &self.constrained,
+            constrained: assembly_mask(&self.frames, &self.constrained, &self.assembly_constrained),
             mass: self.model.points().mass(),
             water_force: if self.model.kinematics() == Kinematics::FiniteStrain { &self.water_force } else { &[] },
         };
@@ -411,7 +443,15 @@ impl<const D: usize> Engine<D> {
                 du: &self.du,
                 delta_f: &self.trial.delta_f,
             };
-            add_follower_tangent(&inputs, &self.pattern, &self.constrained, &mut self.matrix);
+            add_follower_tangent(
+                &inputs,
+                &self.pattern,
+                assembly_mask(&self.frames, &self.constrained, &self.assembly_constrained),
+                &mut self.matrix,
+            );
+        }
+        if !self.frames.is_empty() {
+            self.frames.hold_in_matrix(&self.pattern, &mut self.matrix);
         }
     }
 
@@ -445,6 +485,7 @@ impl<const D: usize> Engine<D> {
             }
             result => result?,
         };
+        self.frames.to_global(&mut self.correction);
         for (u, c) in self.du.iter_mut().zip(&self.correction) {
             *u += c;
         }
@@ -515,11 +556,13 @@ impl<const D: usize> Engine<D> {
         self.conn_current = !moves;
     }
 
-    /// Per constraint, Σ (f_int − f_ext) over its nodes on its fixed components, from the
-    /// reactions of the converged residual (one per dof).
+    /// Per constraint, Σ (f_int − f_ext) over its nodes on its fixed components, then per
+    /// inclined roller the sum over its nodes, from the reactions of the converged
+    /// residual (one per dof, global).
     fn constraint_reactions(&self) -> Vec<[f64; 3]> {
         let active = self.conn.active_nodes();
-        self.model
+        let mut reactions: Vec<[f64; 3]> = self
+            .model
             .constraints()
             .iter()
             .map(|c| {
@@ -531,7 +574,9 @@ impl<const D: usize> Engine<D> {
                 }
                 sum
             })
-            .collect()
+            .collect();
+        reactions.extend(self.frames.roller_reactions(&self.reaction));
+        reactions
     }
 }
 

@@ -17,6 +17,7 @@ mod cutback;
 mod dynamic;
 mod engine;
 mod follower;
+mod frames;
 mod ghost;
 mod inertia;
 mod points;

@@ -63,8 +63,9 @@ pub enum StepError {
     InvalidSettings(InvalidSetting),
     #[error("linear solver: {0}")]
     LinearSolver(loam_solve::LinearSolveError),
-    #[error("constraint {index} prescribes a non-zero displacement; displacements follow the load factor of a quasi-static analysis and are not applied in dynamics")]
-    DisplacementInDynamics { index: usize },
+    /// The model uses an option the analysis does not accept (`loam_model`'s table).
+    #[error(transparent)]
+    Unaccepted(#[from] loam_model::Unaccepted),
     #[error("the analysis is already finished ({0} steps)")]
     Finished(usize),
     #[error(

@@ -22,11 +22,14 @@ pub fn connect<const D: usize>(
     Ok(())
 }
 
-/// Every constraint must hold at least one of the `active` nodes: one that holds none would
-/// silently constrain nothing.
+/// Every constraint and inclined roller must hold at least one of the `active` nodes: one
+/// that holds none would silently constrain nothing.
 pub fn check_constraints<const D: usize>(model: &Model<D>, active: &ActiveNodes) -> Result<(), ConnectError> {
-    match model.constraint_without_nodes(active) {
-        Some((index, c)) => Err(ConnectError::ConstraintTouchesNoNode { index, axis: c.axis, plane: c.plane }),
+    if let Some((index, c)) = model.constraint_without_nodes(active) {
+        return Err(ConnectError::ConstraintTouchesNoNode { index, axis: c.axis, plane: c.plane });
+    }
+    match (0..model.inclined_rollers().len()).find(|&k| model.inclined_roller_nodes(active, k).is_empty()) {
+        Some(index) => Err(ConnectError::InclinedRollerTouchesNoNode { index }),
         None => Ok(()),
     }
 }

@@ -15,6 +15,8 @@ pub enum ConnectError {
     LoadOffMaterial { step: usize, load: usize, vertex: usize, position: Vec<f64> },
     #[error("constraint {index} (axis {axis}, node plane {plane}) touches no active node: no material point has support on that plane")]
     ConstraintTouchesNoNode { index: usize, axis: usize, plane: usize },
+    #[error("inclined roller {index} holds no active node: no material point has support on or beyond its plane")]
+    InclinedRollerTouchesNoNode { index: usize },
 }
 
 impl ConnectError {

@@ -1,4 +1,7 @@
-//! Constraints on the nodes of a plane of the background grid.
+//! Constraints on the nodes of a plane of the background grid, and rollers on inclined
+//! planes held in a local frame at the nodes.
+
+use nalgebra::{SMatrix, SVector};
 
 /// A constraint on the nodes of a grid plane: the listed displacement components are
 /// prescribed — zero (a roller fixes the component normal to the plane, a fixed plane all
@@ -40,5 +43,85 @@ impl PlaneConstraint {
     /// Whether the constraint prescribes a non-zero displacement.
     pub fn is_displaced(&self) -> bool {
         self.displacement.iter().zip(&self.fixed).any(|(d, &f)| f && *d != 0.0)
+    }
+}
+
+/// A roller on an inclined plane (a slope's base, a tilted wall): every active node on the
+/// plane or beyond it (on the side away from the material, to within 1e-9 of a cell) is
+/// held along the plane's normal and free along the plane, in a local frame at the node
+/// whose first axis is the normal (docs/theory.md §5).
+#[derive(Debug, Clone, PartialEq)]
+pub struct InclinedRoller<const D: usize> {
+    point: SVector<f64, D>,
+    normal: SVector<f64, D>,
+}
+
+impl<const D: usize> InclinedRoller<D> {
+    /// The plane through `point` with normal `normal` pointing into the material (scaled
+    /// to unit length); refused unless both are finite and the normal is not zero.
+    pub fn new(point: SVector<f64, D>, normal: SVector<f64, D>) -> Result<Self, String> {
+        let length = normal.norm();
+        if !(point.iter().chain(normal.iter()).all(|v| v.is_finite()) && length > 0.0) {
+            return Err("an inclined roller needs a finite point and a finite, non-zero normal".into());
+        }
+        Ok(Self { point, normal: normal / length })
+    }
+
+    pub fn point(&self) -> &SVector<f64, D> {
+        &self.point
+    }
+
+    /// The unit normal, into the material.
+    pub fn normal(&self) -> &SVector<f64, D> {
+        &self.normal
+    }
+
+    /// Whether a node at `x` is held: on the plane or beyond it, to within `tolerance`.
+    pub fn holds(&self, x: &SVector<f64, D>, tolerance: f64) -> bool {
+        (x - self.point).dot(&self.normal) <= tolerance
+    }
+
+    /// The local frame at a held node: an orthonormal basis, its first column the normal,
+    /// then the tangents (in 3D the first tangent across the coordinate axis least aligned
+    /// with the normal).
+    pub fn frame(&self) -> SMatrix<f64, D, D> {
+        let n = self.normal;
+        let mut q = SMatrix::<f64, D, D>::zeros();
+        q.set_column(0, &n);
+        match D {
+            2 => q.set_column(1, &SVector::from_fn(|i, _| if i == 0 { -n[1] } else { n[0] })),
+            3 => {
+                let n3 = nalgebra::Vector3::new(n[0], n[1], n[2]);
+                let least = (0..3).min_by(|&a, &b| n3[a].abs().total_cmp(&n3[b].abs())).unwrap_or(0);
+                let t1 = n3.cross(&nalgebra::Vector3::ith(least, 1.0)).normalize();
+                let t2 = n3.cross(&t1);
+                q.set_column(1, &SVector::from_fn(|i, _| t1[i]));
+                q.set_column(2, &SVector::from_fn(|i, _| t2[i]));
+            }
+            _ => {}
+        }
+        q
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{Vector2, Vector3};
+
+    /// The frame is orthonormal with the normal first, in 2D and 3D; the held side is the
+    /// one away from the material.
+    #[test]
+    fn the_local_frame_is_orthonormal_with_the_normal_first() {
+        let roller = InclinedRoller::new(Vector2::new(1.0, 0.0), Vector2::new(-1.0, 3f64.sqrt())).unwrap();
+        let q = roller.frame();
+        assert!((q.transpose() * q - nalgebra::Matrix2::identity()).norm() < 1e-15);
+        assert_eq!(q.column(0).into_owned(), *roller.normal());
+        assert!(roller.holds(&Vector2::new(2.0, 0.0), 0.0) && !roller.holds(&Vector2::new(0.0, 1.0), 0.0));
+        let roller = InclinedRoller::new(Vector3::zeros(), Vector3::new(0.2, -0.5, 1.0)).unwrap();
+        let q = roller.frame();
+        assert!((q.transpose() * q - nalgebra::Matrix3::identity()).norm() < 1e-15);
+        assert!((q.column(0) - roller.normal()).norm() < 1e-16);
+        assert!(InclinedRoller::new(Vector2::zeros(), Vector2::zeros()).is_err());
     }
 }

@@ -13,13 +13,15 @@ mod constraint;
 mod energy;
 mod geostatic;
 mod loads;
+mod options;
 mod population;
 mod rigid;
 mod water;
 
-pub use constraint::PlaneConstraint;
+pub use constraint::{InclinedRoller, PlaneConstraint};
 pub use energy::ExternalWork;
 pub use loads::{Load, LoadKind, LoadLevel, TimeFunction};
+pub use options::{AnalysisKind, ModelOption, Unaccepted};
 pub use population::PointChange;
 pub use rigid::{FreeBody, RigidMode};
 pub use water::{PhreaticLevel, Water};
@@ -127,6 +129,8 @@ pub enum ModelError {
     GeometricallyLinear(String),
     #[error("the saved state does not fit this model: {0}")]
     Restore(String),
+    #[error("inclined roller: {0}")]
+    InclinedRoller(String),
     #[error("removing points: {0}")]
     Removal(String),
     #[error("adding points: {0}")]
@@ -156,6 +160,8 @@ pub struct Model<const D: usize> {
     points: PointStore<D>,
     materials: Vec<Arc<dyn ConstitutiveLaw>>,
     constraints: Vec<PlaneConstraint>,
+    /// Rollers on inclined planes, held in a local frame at the nodes.
+    inclined: Vec<InclinedRoller<D>>,
     /// Body force per unit mass at full load.
     gravity: SVector<f64, D>,
     /// Force on each point at full load (empty: none).
@@ -212,6 +218,7 @@ impl<const D: usize> Model<D> {
             points,
             materials,
             constraints,
+            inclined: Vec::new(),
             gravity,
             point_forces: Vec::new(),
             loads: Vec::new(),
@@ -327,6 +334,33 @@ impl<const D: usize> Model<D> {
         }
         self.update_load_vertices();
         Ok(self)
+    }
+
+    /// Rollers on inclined planes (docs/theory.md §5): the nodes on or beyond each plane
+    /// held along its normal in a local frame. On a grid (a body-fitted mesh's nodes move).
+    pub fn with_inclined_rollers(mut self, rollers: Vec<InclinedRoller<D>>) -> Result<Self, ModelError> {
+        if !rollers.is_empty() && self.background.moves_with_body() {
+            return Err(ModelError::InclinedRoller(
+                "the updated Lagrangian FEM reference's nodes move with the body; hold it on grid planes".into(),
+            ));
+        }
+        self.inclined = rollers;
+        Ok(self)
+    }
+
+    /// The rollers on inclined planes.
+    pub fn inclined_rollers(&self) -> &[InclinedRoller<D>] {
+        &self.inclined
+    }
+
+    /// The active nodes roller `k` holds, with the node's position.
+    pub fn inclined_roller_nodes(&self, active: &ActiveNodes, k: usize) -> Vec<usize> {
+        let (roller, h) = (&self.inclined[k], self.grid().cell_size().min());
+        (0..active.len())
+            .filter(|&a| {
+                roller.holds(&self.background.node_reference_position(active.active_to_grid[a] as usize), 1e-9 * h)
+            })
+            .collect()
     }
 
     /// Static groundwater (docs/theory.md §18): every point below the phreatic level gets

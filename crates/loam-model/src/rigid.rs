@@ -8,7 +8,8 @@
 //! component i at node x when u_i(x) ≠ 0: each held component is a row of a linear map
 //! from the D + (1 or 3) parameters, and the free motions are the null space of
 //! G = Σ rows ⊗ rows, found from its eigenvalues (a few parameters: a 3 × 3 or 6 × 6
-//! matrix per body). Free translations are the axes no node of the body holds; the rest of
+//! matrix per body). An inclined roller holds the component along its normal, a row the
+//! same way. Free translations are the axes no node of the body holds; the rest of
 //! the null space is rotations, named by axis (a coordinate axis where one is free) and a
 //! point the axis passes through.
 
@@ -117,10 +118,11 @@ fn bodies<const D: usize>(conn: &Connectivity<D>) -> (Vec<usize>, usize) {
     (body, count)
 }
 
-/// One body's nodes: their places and held components.
+/// One body's nodes: their places and the directions they are held in (coordinate axes
+/// of grid-plane constraints, normals of inclined rollers).
 struct BodyNodes {
     x: Vec<Vector3<f64>>,
-    held: Vec<[bool; 3]>,
+    held: Vec<Vec<Vector3<f64>>>,
     points: usize,
 }
 
@@ -134,9 +136,14 @@ impl<const D: usize> Model<D> {
             (0..count).map(|_| BodyNodes { x: Vec::new(), held: Vec::new(), points: 0 }).collect();
         for (a, &g) in active.active_to_grid.iter().enumerate() {
             let x = self.background().node_reference_position(g as usize);
-            let mut held = [false; 3];
+            let mut axes = [false; 3];
             for c in self.constraints().iter().filter(|c| self.node_on_plane(g as usize, c)) {
-                (0..D).for_each(|i| held[i] |= c.fixed[i]);
+                (0..D).for_each(|i| axes[i] |= c.fixed[i]);
+            }
+            let mut held: Vec<Vector3<f64>> = (0..D).filter(|&i| axes[i]).map(|i| Vector3::ith(i, 1.0)).collect();
+            let h = self.grid().cell_size().min();
+            for roller in self.inclined_rollers().iter().filter(|r| r.holds(&x, 1e-9 * h)) {
+                held.push(Vector3::from_fn(|i, _| if i < D { roller.normal()[i] } else { 0.0 }));
             }
             let b = &mut nodes[body[a]];
             b.x.push(Vector3::from_fn(|i, _| if i < D { x[i] } else { 0.0 }));
@@ -176,11 +183,11 @@ fn free_modes<const D: usize>(b: &BodyNodes) -> ([f64; 3], Vec<RigidMode>) {
     let mut g = DMatrix::<f64>::zeros(m, m);
     for (x, held) in b.x.iter().zip(&b.held) {
         let r = (x - c) / size;
-        for i in (0..D).filter(|&i| held[i]) {
+        for e in held {
             let mut row = DVector::<f64>::zeros(m);
-            row[i] = 1.0;
+            (0..D).for_each(|i| row[i] = e[i]);
             for (j, &k) in rot.iter().enumerate() {
-                row[D + j] = Vector3::ith(k, 1.0).cross(&r)[i];
+                row[D + j] = Vector3::ith(k, 1.0).cross(&r).dot(e);
             }
             g += &row * row.transpose();
         }
@@ -191,7 +198,7 @@ fn free_modes<const D: usize>(b: &BodyNodes) -> ([f64; 3], Vec<RigidMode>) {
         .filter(|&k| eig.eigenvalues[k] <= 1e-10 * largest)
         .map(|k| eig.eigenvectors.column(k).into_owned())
         .collect();
-    let free_axes: Vec<usize> = (0..D).filter(|&i| b.held.iter().all(|h| !h[i])).collect();
+    let free_axes: Vec<usize> = (0..D).filter(|&i| b.held.iter().flatten().all(|e| e[i] == 0.0)).collect();
     let mut modes: Vec<RigidMode> = free_axes.iter().map(|&a| RigidMode::Translation(a)).collect();
     modes.extend(rotations::<D>(&null, &free_axes, c, size));
     (c.into(), modes)

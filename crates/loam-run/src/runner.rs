@@ -420,8 +420,8 @@ impl<'a, const D: usize> Outputs<'a, D> {
 /// `run_log.csv`: one row per step (load factor, Newton iterations, final residual, wall
 /// time, ...). Every constraint adds its reaction per held component (implicit analyses;
 /// NaN in explicit ones), a displaced one (a footing) its prescribed displacement before
-/// it: the load–displacement curve. Every load adds its resultant at the step's load
-/// factor or time, per component.
+/// it: the load–displacement curve; every inclined roller its reaction per component.
+/// Every load adds its resultant at the step's load factor or time, per component.
 struct RunLog {
     writer: CsvWriter,
     /// (constraint, component, prescribed displacement at full load if displaced).
@@ -462,6 +462,9 @@ impl RunLog {
             }
             header.push(format!("constraint{k}_reaction_{}", AXES[i]));
         }
+        for k in 0..model.inclined_rollers().len() {
+            header.extend(AXES[..D].iter().map(|a| format!("incline{k}_reaction_{a}")));
+        }
         for k in 0..model.loads().len() {
             header.extend(AXES[..D].iter().map(|a| format!("load{k}_{a}")));
         }
@@ -491,6 +494,11 @@ impl RunLog {
                 cells.push(CsvCell::Float(r.load_factor * u));
             }
             cells.push(CsvCell::Float(r.reactions.get(k).map_or(f64::NAN, |f| f[i])));
+        }
+        let planes = model.constraints().len();
+        for k in 0..model.inclined_rollers().len() {
+            let reaction = r.reactions.get(planes + k);
+            cells.extend((0..D).map(|i| CsvCell::Float(reaction.map_or(f64::NAN, |f| f[i]))));
         }
         for (k, load) in model.loads().iter().enumerate() {
             cells.extend(load.resultant(model.load_scale(k, r.level)).iter().map(|&f| CsvCell::Float(f)));

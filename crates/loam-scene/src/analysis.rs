@@ -10,7 +10,7 @@ use loam_analysis::{Analysis, AnalysisError};
 use loam_explicit::{Explicit, ExplicitError, ExplicitSettings, TimeStep};
 use loam_implicit::{has_strength, Dynamic, DynamicSettings, QuasiStatic, QuasiStaticSettings, StepError};
 use loam_kernels::{ConnectError, InvalidSetting};
-use loam_model::Model;
+use loam_model::{Model, ModelOption, Unaccepted};
 
 /// The path of the analysis's `key`.
 fn analysis_key(key: &str) -> [Seg<'_>; 2] {
@@ -114,8 +114,22 @@ impl LoadedScene {
             Err(StepError::InvalidSettings(InvalidSetting { field, value, valid })) => {
                 Err(self.error(&analysis_key(field), format!("{field} is {value}; valid: {valid}")))
             }
+            Err(StepError::Unaccepted(refusal)) => Err(self.unaccepted(&refusal)),
             Err(e) => Err(self.error(&[Seg::Key("analysis")], e.to_string())),
         }
+    }
+
+    /// A model option the analysis does not take, reported at the option's key.
+    fn unaccepted(&self, refusal: &Unaccepted) -> SceneError {
+        let at: Vec<Seg> = match refusal.option {
+            ModelOption::InclinedRoller { index } => vec![Seg::Key("inclined_rollers"), Seg::Index(index)],
+            ModelOption::DisplacedConstraint { index } => vec![Seg::Key("constraints"), Seg::Index(index)],
+            ModelOption::GhostPenalty => vec![Seg::Key("ghost_penalty")],
+            ModelOption::GeometricallyLinear => vec![Seg::Key("geometrically_linear")],
+            ModelOption::Water => vec![Seg::Key("water")],
+            ModelOption::BodyFittedMesh => vec![Seg::Key("method")],
+        };
+        self.error(&at, refusal.to_string())
     }
 
     /// Explicit MPM; the FEM reference runs with the implicit analyses only.
@@ -129,6 +143,7 @@ impl LoadedScene {
                 let key = if field.starts_with("time_step") { "time_step" } else { field };
                 Err(self.error(&analysis_key(key), format!("{field} is {value}; valid: {valid}")))
             }
+            Err(ExplicitError::Unaccepted(refusal)) => Err(self.unaccepted(&refusal)),
             Err(e) => Err(self.error(&[Seg::Key("analysis")], e.to_string())),
         }
     }
@@ -143,6 +158,9 @@ impl LoadedScene {
         analysis.check().map_err(|e| match e.connect_error() {
             Some(&ConnectError::ConstraintTouchesNoNode { index, .. }) => {
                 self.error(&[Seg::Key("constraints"), Seg::Index(index)], format!("constraint {index}: {e}"))
+            }
+            Some(&ConnectError::InclinedRollerTouchesNoNode { index }) => {
+                self.error(&[Seg::Key("inclined_rollers"), Seg::Index(index)], e.to_string())
             }
             Some(&ConnectError::LoadOffMaterial { load, .. }) => {
                 self.error(&[Seg::Key("loads"), Seg::Index(load)], e.to_string())

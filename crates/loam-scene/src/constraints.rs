@@ -5,7 +5,7 @@
 use super::locate::Seg;
 use super::{AnalysisSpec, Axis, ConstraintSpec, LoadedScene, RegionSpec, SceneError};
 use loam_grid::Grid;
-use loam_model::PlaneConstraint;
+use loam_model::{InclinedRoller, PlaneConstraint};
 use nalgebra::SVector;
 
 impl LoadedScene {
@@ -31,6 +31,19 @@ impl LoadedScene {
             )));
         }
         Ok(constraints)
+    }
+
+    /// The rollers on inclined planes, each at its place in the file.
+    pub(super) fn inclined_rollers<const D: usize>(&self) -> Result<Vec<InclinedRoller<D>>, SceneError> {
+        (self.scene.inclined_rollers.iter().enumerate())
+            .map(|(k, r)| {
+                let at = |key| [Seg::Key("inclined_rollers"), Seg::Index(k), Seg::Key(key)];
+                let point = self.vector(&r.point, &at("point"), "an inclined roller's point")?;
+                let normal = self.vector(&r.normal, &at("normal"), "an inclined roller's normal")?;
+                InclinedRoller::new(point, normal)
+                    .map_err(|e| self.error(&at("normal"), format!("inclined roller {k}: {e}")))
+            })
+            .collect()
     }
 
     /// Constraint `i`, on a plane of grid nodes.

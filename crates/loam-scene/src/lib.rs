@@ -13,7 +13,8 @@
 //! - `memory`: the memory the scene will take, refused above the limit before any point
 //!   is made;
 //! - `bodies`: the material points (or the FEM reference's mesh) and initial velocities;
-//! - `constraints`: gravity, the plane constraints and prescribed displacements;
+//! - `constraints`: gravity, the plane constraints and prescribed displacements, the
+//!   rollers on inclined planes;
 //! - `loads`: forces at points, tractions and pressures on the bodies' boundaries;
 //! - `water`: the phreatic level and the water's unit weight;
 //! - `solver`: Newton's tolerances and the linear solver;
@@ -179,9 +180,13 @@ impl LoadedScene {
         let gravity = self.gravity::<D>()?;
         self.check_scales(&grid, &laws, &gravity)?;
         let constraints = self.constraints(&grid)?;
+        let inclined = self.inclined_rollers::<D>()?;
         let loads = self.loads(&grid)?;
         let solver = self.solver()?;
         let model = self.model(grid, bodies, laws, constraints, gravity)?;
+        let model = model
+            .with_inclined_rollers(inclined)
+            .map_err(|e| self.error(&[Seg::Key("inclined_rollers")], e.to_string()))?;
         let model = self.with_loads(model, loads)?;
         let mut analysis = self.analysis(model, solver)?;
         self.check_before_the_first_step(&mut analysis)?;

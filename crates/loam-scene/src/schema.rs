@@ -44,6 +44,10 @@ pub struct Scene {
     pub gravity: Vec<f64>,
     #[serde(default)]
     pub constraints: Vec<ConstraintSpec>,
+    /// Rollers on inclined planes: the nodes on or beyond each plane held along its normal
+    /// (QuasiStatic; default none).
+    #[serde(default)]
+    pub inclined_rollers: Vec<InclinedRollerSpec>,
     /// Loads beside gravity: forces at points, tractions and pressures on the bodies'
     /// boundaries.
     #[serde(default)]
@@ -62,6 +66,16 @@ pub struct Scene {
     pub solver: SolverSpec,
     #[serde(default)]
     pub output: OutputSpec,
+}
+
+/// A roller on an inclined plane.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct InclinedRollerSpec {
+    /// A point of the plane.
+    pub point: Vec<f64>,
+    /// The plane's normal, pointing into the material.
+    pub normal: Vec<f64>,
 }
 
 /// One excavation stage.

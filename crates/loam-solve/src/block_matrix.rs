@@ -88,6 +88,14 @@ impl BlockMatrix {
         }
     }
 
+    /// Block (i, j), row-major, if the nodes are coupled.
+    pub fn block_mut(&mut self, i: usize, j: usize) -> Option<&mut [f64]> {
+        let dd = self.d * self.d;
+        let q = self.row_cols(i).binary_search(&(j as u32)).ok()?;
+        let start = (self.row_ptr[i] + q) * dd;
+        Some(&mut self.values[start..start + dd])
+    }
+
     /// Entry (i·d + r, j·d + k), zero where the nodes are not coupled.
     pub fn entry(&self, i: usize, r: usize, j: usize, k: usize) -> f64 {
         let d = self.d;

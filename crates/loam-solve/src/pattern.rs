@@ -270,6 +270,14 @@ impl BlockPattern {
         }
     }
 
+    /// Where block (i, j) lies in the compressed-column values: entry (r, k) of the block is
+    /// at `start + k · stride + r`; `None` where the nodes are not coupled.
+    pub fn block_position(&self, i: usize, j: usize) -> Option<(usize, usize)> {
+        let nb = self.neighbours(j);
+        let q = nb.binary_search(&(i as u32)).ok()?;
+        Some((self.column_start(j) + q * self.dofs_per_node, nb.len() * self.dofs_per_node))
+    }
+
     /// Entry (i·d + r, j·d + k) of the compressed-column `values`.
     pub fn entry(&self, values: &[f64], i: usize, r: usize, j: usize, k: usize) -> f64 {
         let d = self.dofs_per_node;

@@ -1,0 +1,134 @@
+//! Which analyses accept which options of a model, in one table: each analysis checks a
+//! model against it when it is made, and the scene reports a refusal at its key.
+
+use crate::Model;
+
+/// The analyses a model can be given to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AnalysisKind {
+    QuasiStatic,
+    Dynamic,
+    Explicit,
+}
+
+impl AnalysisKind {
+    fn column(self) -> usize {
+        match self {
+            AnalysisKind::QuasiStatic => 0,
+            AnalysisKind::Dynamic => 1,
+            AnalysisKind::Explicit => 2,
+        }
+    }
+}
+
+/// An option of a model that not every analysis accepts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ModelOption {
+    /// The updated Lagrangian FEM reference's body-fitted mesh.
+    BodyFittedMesh,
+    /// A ghost penalty on cut cells.
+    GhostPenalty,
+    /// Equilibrium on the initial configuration.
+    GeometricallyLinear,
+    /// Static groundwater.
+    Water,
+    /// A plane constraint that prescribes a non-zero displacement.
+    DisplacedConstraint { index: usize },
+    /// A roller on an inclined plane.
+    InclinedRoller { index: usize },
+}
+
+/// One row of the table: the options it is about, whether the quasi-static, dynamic and
+/// explicit analyses accept them, and why an analysis that does not refuses them.
+struct Acceptance {
+    is: fn(&ModelOption) -> bool,
+    by: [bool; 3],
+    why: &'static str,
+}
+
+/// Which analyses accept each option (the module docs).
+const ACCEPTED: [Acceptance; 6] = [
+    Acceptance {
+        is: |o| matches!(o, ModelOption::BodyFittedMesh),
+        by: [true, true, false],
+        why: "the model is an updated Lagrangian FEM mesh; explicit analysis runs MPM models only (use the implicit quasi-static or dynamic analysis for the FEM reference)",
+    },
+    Acceptance {
+        is: |o| matches!(o, ModelOption::GhostPenalty),
+        by: [true, true, false],
+        why: "the model asks for a ghost penalty, which stabilises the implicit tangent; explicit analysis has none (remove it)",
+    },
+    Acceptance {
+        is: |o| matches!(o, ModelOption::GeometricallyLinear),
+        by: [true, true, false],
+        why: "the model is geometrically linear (points held at their places); explicit analysis moves its points by their velocities",
+    },
+    Acceptance {
+        is: |o| matches!(o, ModelOption::Water),
+        by: [true, true, false],
+        why: "the model has groundwater; pore pressures are implemented in the implicit analyses only (QuasiStatic, ImplicitDynamic)",
+    },
+    Acceptance {
+        is: |o| matches!(o, ModelOption::DisplacedConstraint { .. }),
+        by: [true, false, false],
+        why: "prescribes a non-zero displacement; only quasi-static implicit analysis applies displacements (with the load factor)",
+    },
+    Acceptance {
+        is: |o| matches!(o, ModelOption::InclinedRoller { .. }),
+        by: [true, false, false],
+        why: "is a roller on an inclined plane, held in a local frame at the nodes; the quasi-static analysis takes it (the dynamic and explicit ones not yet)",
+    },
+];
+
+/// An option the analysis does not accept, and why.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{}", self.message())]
+pub struct Unaccepted {
+    pub option: ModelOption,
+    pub analysis: AnalysisKind,
+    why: &'static str,
+}
+
+impl Unaccepted {
+    fn message(&self) -> String {
+        match self.option {
+            ModelOption::DisplacedConstraint { index } => format!("constraint {index} {}", self.why),
+            ModelOption::InclinedRoller { index } => format!("inclined roller {index} {}", self.why),
+            _ => self.why.to_string(),
+        }
+    }
+}
+
+impl<const D: usize> Model<D> {
+    /// The options this model uses beyond points, laws, grid-plane constraints and loads.
+    pub fn options(&self) -> Vec<ModelOption> {
+        let mut options = Vec::new();
+        if self.background.moves_with_body() {
+            options.push(ModelOption::BodyFittedMesh);
+        }
+        if self.ghost_penalty.is_some() {
+            options.push(ModelOption::GhostPenalty);
+        }
+        if self.geometrically_linear {
+            options.push(ModelOption::GeometricallyLinear);
+        }
+        if self.water.is_some() {
+            options.push(ModelOption::Water);
+        }
+        let displaced = self.constraints.iter().enumerate().filter(|(_, c)| c.is_displaced());
+        options.extend(displaced.map(|(index, _)| ModelOption::DisplacedConstraint { index }));
+        options.extend((0..self.inclined.len()).map(|index| ModelOption::InclinedRoller { index }));
+        options
+    }
+
+    /// The first option of this model `analysis` does not accept (the table above).
+    pub fn check_accepted_by(&self, analysis: AnalysisKind) -> Result<(), Unaccepted> {
+        for option in self.options() {
+            let row = ACCEPTED.iter().find(|row| (row.is)(&option)).expect("every option is in the table");
+            if !row.by[analysis.column()] {
+                return Err(Unaccepted { option, analysis, why: row.why });
+            }
+        }
+        Ok(())
+    }
+}
