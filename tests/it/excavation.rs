@@ -2,20 +2,9 @@
 //! after a step, and the run goes on with the rest — equilibrium with the weight left,
 //! the outputs of the points left, momentum of the body left.
 
+use crate::restart::scene;
 use loam::run::{run_scene, RunEvent};
-use loam::scene::LoadedScene;
 use std::path::Path;
-
-/// `examples/name` with each (from, to) replaced once.
-fn scene(name: &str, edits: &[(&str, &str)]) -> LoadedScene {
-    let path = Path::new("examples").join(name);
-    let mut text = std::fs::read_to_string(&path).unwrap();
-    for (from, to) in edits {
-        assert!(text.contains(from), "{name} no longer has {from:?}");
-        text = text.replacen(from, to, 1);
-    }
-    LoadedScene::parse(&path, text).unwrap()
-}
 
 /// The columns of a CSV file by name, numbers parsed.
 fn columns(path: &Path) -> Vec<(String, Vec<f64>)> {

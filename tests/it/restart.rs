@@ -10,7 +10,8 @@ use loam::run::{resume_scene, run_scene_with, CheckpointEvery, RunOptions, CHECK
 use loam::scene::LoadedScene;
 use std::path::Path;
 
-fn scene(name: &str, edits: &[(&str, &str)]) -> LoadedScene {
+/// `examples/name` with each (from, to) replaced once.
+pub(crate) fn scene(name: &str, edits: &[(&str, &str)]) -> LoadedScene {
     let path = Path::new("examples").join(name);
     let mut text = std::fs::read_to_string(&path).unwrap();
     for (from, to) in edits {

@@ -602,17 +602,16 @@ fn locate<const D: usize>(
 
 /// The mass at or below which a node of the scattered `gathered` is empty.
 fn empty_node_mass<const D: usize>(gathered: &[f64]) -> f64 {
-    let (width, mass) = (NodeRecord::<D>::WIDTH, NodeRecord::<D>::MASS);
-    EMPTY_NODE_MASS * gathered.par_chunks(width).map(|g| g[mass]).reduce(|| 0.0, f64::max)
+    EMPTY_NODE_MASS
+        * gathered.par_chunks(NodeRecord::<D>::WIDTH).map(|g| g[NodeRecord::<D>::MASS]).reduce(|| 0.0, f64::max)
 }
 
 /// The velocity the grid carries the material at, p_I / m_I, from the scattered
 /// [m, p, f] per node; zero at held dofs and empty nodes.
 fn carried_velocity<const D: usize>(gathered: &[f64], constrained: &[bool], m_min: f64, out: &mut [f64]) {
-    let (width, momentum) = (NodeRecord::<D>::WIDTH, NodeRecord::<D>::MOMENTUM);
     out.par_chunks_mut(D)
-        .zip(gathered.par_chunks(width))
-        .for_each(|(v, g)| v.copy_from_slice(&g[momentum..momentum + D]));
+        .zip(gathered.par_chunks(NodeRecord::<D>::WIDTH))
+        .for_each(|(v, g)| v.copy_from_slice(&g[NodeRecord::<D>::MOMENTUM..NodeRecord::<D>::MOMENTUM + D]));
     momentum_to_velocity::<D>(gathered, constrained, m_min, out);
 }
 
@@ -680,26 +679,25 @@ fn scatter_grid<const D: usize>(
     out: &mut [f64],
 ) {
     let pts = model.points();
-    let (width, mass, momentum, force) =
-        (NodeRecord::<D>::WIDTH, NodeRecord::<D>::MASS, NodeRecord::<D>::MOMENTUM, NodeRecord::<D>::FORCE);
-    bands.scatter(width, out, |p, window| {
+    bands.scatter(NodeRecord::<D>::WIDTH, out, |p, window| {
         let (m, v, load) = (pts.mass()[p], &pts.velocity()[p], model.point_load(p));
         let (volume, stress) = (pts.volume()[p], &pts.stress()[p]);
         basis.for_each_node(p, |node, n, grad| {
-            // Cut to the field's width, which D fixes: the indexing below then needs one
-            // bounds check, not one per entry.
-            let o = &mut window.node(node)[..width];
+            // Cut to the record's width, which D fixes, and indexed by the record's own
+            // constants (not locals the closure would capture): the indexing below then
+            // needs one bounds check, not one per entry.
+            let o = &mut window.node(node)[..NodeRecord::<D>::WIDTH];
             let nm = n * m;
-            o[mass] += nm;
+            o[NodeRecord::<D>::MASS] += nm;
             for i in 0..D {
-                o[momentum + i] += nm * v[i];
-                o[force + i] += n * load[i];
+                o[NodeRecord::<D>::MOMENTUM + i] += nm * v[i];
+                o[NodeRecord::<D>::FORCE + i] += n * load[i];
             }
             if with_internal {
                 // f_ext − f_int, point by point in one sum.
                 let f = internal_force(volume, stress, &grad, None);
                 for i in 0..D {
-                    o[force + i] -= f[i];
+                    o[NodeRecord::<D>::FORCE + i] -= f[i];
                 }
             }
         });

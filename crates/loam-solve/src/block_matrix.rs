@@ -211,21 +211,43 @@ impl BlockMatrix {
         });
     }
 
-    /// `y = A x`, each row summed in column order (deterministic).
+    /// `y = A x`, each row summed in column order (deterministic). Blocks of 1–3 dofs run
+    /// with the block size known to the compiler (the Krylov solvers' hot loop); larger ones
+    /// sum the same way in place.
     pub fn apply(&self, x: &[f64], y: &mut [f64]) {
-        let d = self.d;
         assert_eq!(x.len(), self.num_dofs(), "apply: x has one value per dof");
         assert_eq!(y.len(), self.num_dofs(), "apply: y has one value per dof");
-        y.par_chunks_mut(d).with_min_len(MIN_ROWS_PER_TASK).enumerate().for_each(|(i, yi)| {
-            yi.iter_mut().for_each(|v| *v = 0.0);
-            for (b, &j) in self.row_values(i).chunks_exact(d * d).zip(self.row_cols(i)) {
-                let xj = &x[j as usize * d..j as usize * d + d];
-                for r in 0..d {
-                    for k in 0..d {
-                        yi[r] += b[r * d + k] * xj[k];
+        match self.d {
+            1 => self.apply_blocks_of::<1>(x, y),
+            2 => self.apply_blocks_of::<2>(x, y),
+            3 => self.apply_blocks_of::<3>(x, y),
+            d => y.par_chunks_mut(d).with_min_len(MIN_ROWS_PER_TASK).enumerate().for_each(|(i, yi)| {
+                yi.iter_mut().for_each(|v| *v = 0.0);
+                for (b, &j) in self.row_values(i).chunks_exact(d * d).zip(self.row_cols(i)) {
+                    let xj = &x[j as usize * d..j as usize * d + d];
+                    for r in 0..d {
+                        for k in 0..d {
+                            yi[r] += b[r * d + k] * xj[k];
+                        }
+                    }
+                }
+            }),
+        }
+    }
+
+    /// [`BlockMatrix::apply`] for blocks of `N` dofs.
+    fn apply_blocks_of<const N: usize>(&self, x: &[f64], y: &mut [f64]) {
+        y.par_chunks_mut(N).with_min_len(MIN_ROWS_PER_TASK).enumerate().for_each(|(i, yi)| {
+            let mut acc = [0.0; N];
+            for (b, &j) in self.row_values(i).chunks_exact(N * N).zip(self.row_cols(i)) {
+                let xj = &x[j as usize * N..j as usize * N + N];
+                for r in 0..N {
+                    for k in 0..N {
+                        acc[r] += b[r * N + k] * xj[k];
                     }
                 }
             }
+            yi.copy_from_slice(&acc);
         });
     }
 

@@ -19,6 +19,10 @@ use crate::BlockMatrix;
 use rayon::prelude::*;
 use std::sync::OnceLock;
 
+/// The most dofs a node may carry (the stack buffer of an element block in assembly holds
+/// this many squared): five bodies' 3D motion and a pore pressure.
+pub const MAX_DOFS_PER_NODE: usize = 16;
+
 /// The coupling structure the pattern is built from.
 pub trait Couplings: Sync {
     fn num_nodes(&self) -> usize;
@@ -42,10 +46,14 @@ pub struct BlockPattern {
 }
 
 impl BlockPattern {
-    /// An empty pattern of `dofs_per_node` dofs at every node (any number from 1: a
-    /// displacement of 1–3 components, fields of several bodies, a pore pressure).
+    /// An empty pattern of `dofs_per_node` dofs at every node (1 to
+    /// [`MAX_DOFS_PER_NODE`]: a displacement of 1–3 components, the fields of several
+    /// bodies, a pore pressure).
     pub fn new(dofs_per_node: usize) -> Self {
-        assert!(dofs_per_node >= 1, "a node carries at least one dof");
+        assert!(
+            (1..=MAX_DOFS_PER_NODE).contains(&dofs_per_node),
+            "a node carries 1 to {MAX_DOFS_PER_NODE} dofs, not {dofs_per_node}"
+        );
         Self { dofs_per_node, ..Default::default() }
     }
 
@@ -160,14 +168,13 @@ impl BlockPattern {
     }
 
     /// For every node `j` in parallel, with `out` the values `chunk(j)` long that
-    /// `values` holds from `start(j)`: `visit(j, out, block, e, slot_j, i, q, slot_i)` for
-    /// each element `e` touching `j` (ascending) and each node `i` of it, `q` the place of
-    /// `i` among `j`'s neighbours, `block` a zeroed d × d scratch for the element's block
-    /// (one per task, reused). The one gather loop of both layouts.
+    /// `values` holds from `start(j)`: `visit(j, out, e, slot_j, i, q, slot_i)` for each
+    /// element `e` touching `j` (ascending) and each node `i` of it, `q` the place of `i`
+    /// among `j`'s neighbours. The one gather loop of both layouts.
     fn gather<C, F>(&self, couplings: &C, values: &mut [f64], visit: F)
     where
         C: Couplings,
-        F: Fn(usize, &mut [f64], &mut [f64], usize, usize, usize, usize, usize) + Sync,
+        F: Fn(usize, &mut [f64], usize, usize, usize, usize, usize) + Sync,
     {
         let dd = self.dofs_per_node * self.dofs_per_node;
         let mut chunks: Vec<&mut [f64]> = Vec::with_capacity(self.num_nodes());
@@ -177,23 +184,19 @@ impl BlockPattern {
             chunks.push(head);
             rest = tail;
         }
-        chunks.into_par_iter().enumerate().for_each_init(
-            || vec![0.0; dd],
-            |block, (j, out)| {
-                let nb = self.neighbours(j);
-                for &(e, b) in couplings.elements_of(j) {
-                    let nodes = couplings.nodes_of(e as usize);
-                    let mut q = 0;
-                    for (a, &i) in nodes.iter().enumerate() {
-                        while nb[q] != i {
-                            q += 1;
-                        }
-                        block.iter_mut().for_each(|v| *v = 0.0);
-                        visit(j, out, block, e as usize, b as usize, i as usize, q, a);
+        chunks.into_par_iter().enumerate().for_each(|(j, out)| {
+            let nb = self.neighbours(j);
+            for &(e, b) in couplings.elements_of(j) {
+                let nodes = couplings.nodes_of(e as usize);
+                let mut q = 0;
+                for (a, &i) in nodes.iter().enumerate() {
+                    while nb[q] != i {
+                        q += 1;
                     }
+                    visit(j, out, e as usize, b as usize, i as usize, q, a);
                 }
-            },
-        );
+            }
+        });
     }
 
     /// Assemble a matrix with this pattern into `values` (resized to `nnz`), in the
@@ -208,12 +211,37 @@ impl BlockPattern {
         C: Couplings,
         F: Fn(usize, usize, usize, &mut [f64]) + Sync,
     {
+        match self.dofs_per_node {
+            1..=3 => self.assemble_columns::<9, _, _>(couplings, constrained, values, block),
+            4..=8 => self.assemble_columns::<64, _, _>(couplings, constrained, values, block),
+            _ => self.assemble_columns::<{ MAX_DOFS_PER_NODE * MAX_DOFS_PER_NODE }, _, _>(
+                couplings,
+                constrained,
+                values,
+                block,
+            ),
+        }
+    }
+
+    /// [`BlockPattern::assemble`] with each element block on the stack, in `N` ≥ d² values:
+    /// the smallest that fits, since the buffer is zeroed for every block.
+    fn assemble_columns<const N: usize, C, F>(
+        &self,
+        couplings: &C,
+        constrained: &[bool],
+        values: &mut Vec<f64>,
+        block: F,
+    ) where
+        C: Couplings,
+        F: Fn(usize, usize, usize, &mut [f64]) + Sync,
+    {
         let d = self.dofs_per_node;
         values.clear();
         values.resize(self.nnz(), 0.0);
-        self.gather(couplings, values, |j, out, buf, e, b, i, q, a| {
+        self.gather(couplings, values, |j, out, e, b, i, q, a| {
             let col_len = self.neighbours(j).len() * d;
-            block(e, a, b, buf);
+            let mut buf = [0.0f64; N];
+            block(e, a, b, &mut buf[..d * d]);
             for k in 0..d {
                 for r in 0..d {
                     if kept(constrained, d, i, r, j, k) {
@@ -231,15 +259,40 @@ impl BlockPattern {
         C: Couplings,
         F: Fn(usize, usize, usize, &mut [f64]) + Sync,
     {
-        let d = self.dofs_per_node;
         if !matrix.has_structure_of(self) {
             *matrix = BlockMatrix::structure_of(self);
         }
+        match self.dofs_per_node {
+            1..=3 => self.assemble_block_rows::<9, _, _>(couplings, constrained, matrix, block),
+            4..=8 => self.assemble_block_rows::<64, _, _>(couplings, constrained, matrix, block),
+            _ => self.assemble_block_rows::<{ MAX_DOFS_PER_NODE * MAX_DOFS_PER_NODE }, _, _>(
+                couplings,
+                constrained,
+                matrix,
+                block,
+            ),
+        }
+    }
+
+    /// [`BlockPattern::assemble_rows`] with each element block on the stack (as
+    /// [`BlockPattern::assemble_columns`]).
+    fn assemble_block_rows<const N: usize, C, F>(
+        &self,
+        couplings: &C,
+        constrained: &[bool],
+        matrix: &mut BlockMatrix,
+        block: F,
+    ) where
+        C: Couplings,
+        F: Fn(usize, usize, usize, &mut [f64]) + Sync,
+    {
+        let d = self.dofs_per_node;
         let values = matrix.values_mut();
         values.iter_mut().for_each(|v| *v = 0.0);
-        self.gather(couplings, values, |j, out, buf, e, b, i, q, a| {
+        self.gather(couplings, values, |j, out, e, b, i, q, a| {
+            let mut buf = [0.0f64; N];
             // Block (j, i): node j's slot gives the rows.
-            block(e, b, a, buf);
+            block(e, b, a, &mut buf[..d * d]);
             for r in 0..d {
                 for k in 0..d {
                     if kept(constrained, d, j, r, i, k) {
