@@ -61,6 +61,33 @@ fn a_block_in_a_trough_rests_on_the_incline_and_the_wall() {
     assert!((wall / (weight * 30f64.to_radians().tan()) - 1.0).abs() < 1e-10, "wall {wall}");
 }
 
+/// The same trough in two load steps, with and without the extrapolated predictor: the
+/// second step starts from the first's increment scaled, whole at the framed nodes (whose
+/// increment is along the plane already), so the held normal component stays zero and
+/// both runs end in the same state — every point where the other run puts it, to 1e-6 of
+/// the largest displacement (the Newton tolerances; a predictor that moved the framed
+/// nodes off the plane would leave them there, as Newton never corrects a held dof).
+#[test]
+fn the_extrapolated_predictor_keeps_the_roller() {
+    let run = |extrapolate: bool| {
+        let text = TROUGH.replace("QuasiStatic(load_steps: 1)", "QuasiStatic(load_steps: 2)").replace(
+            "solver: (residual_tolerance: 1e-13)",
+            &format!("solver: (residual_tolerance: 1e-13, extrapolate: {extrapolate})"),
+        );
+        let dir = tempfile::tempdir().unwrap();
+        run_scene(&LoadedScene::parse(Path::new("trough.ron"), text).unwrap(), dir.path(), &mut |_| {}).unwrap();
+        let text = std::fs::read_to_string(dir.path().join("points_final.csv")).unwrap();
+        text.lines()
+            .skip(1)
+            .map(|l| l.split(',').take(4).map(|v| v.parse().unwrap()).collect())
+            .collect::<Vec<Vec<f64>>>()
+    };
+    let (plain, extrapolated) = (run(false), run(true));
+    let largest = plain.iter().map(|r| (r[2] - r[0]).hypot(r[3] - r[1])).fold(0.0, f64::max);
+    let apart = plain.iter().zip(&extrapolated).map(|(a, b)| (a[2] - b[2]).hypot(a[3] - b[3])).fold(0.0, f64::max);
+    assert!(largest > 0.0 && apart <= 1e-6 * largest, "{apart} apart for displacements up to {largest}");
+}
+
 /// The dynamic and explicit analyses do not take an inclined roller yet, and say so at
 /// the roller's place in the file.
 #[test]

@@ -156,7 +156,7 @@ pub trait ConstitutiveLaw: Send + Sync + std::fmt::Debug {
 /// strain), its elastic strain and its history.
 #[derive(Debug, Clone, Copy)]
 pub struct MaterialState<'a> {
-    pub stress: &'a Matrix3<f64>,
+    pub stress: Matrix3<f64>,
     pub elastic_strain: &'a Matrix3<f64>,
     pub history: &'a [f64],
 }
@@ -167,7 +167,7 @@ impl<'a> MaterialState<'a> {
     /// Unstressed and unstrained (small-strain ε^e = 0) with history `history`: the state a
     /// constant law's stiffness is read at.
     pub fn at_rest(history: &'a [f64]) -> Self {
-        Self { stress: &ZERO, elastic_strain: &ZERO, history }
+        Self { stress: Matrix3::zeros(), elastic_strain: &ZERO, history }
     }
 }
 

@@ -201,9 +201,7 @@ impl<const D: usize> Dynamic<D> {
     /// Add or remove points between steps ([`Model::change_points`]); returns how many.
     /// The next step connects the points anew.
     pub fn change_points(&mut self, change: PointChange<D>) -> Result<usize, ModelError> {
-        let changed = self.engine.model.change_points(change);
-        self.engine.invalidate();
-        changed
+        self.engine.change_points(change)
     }
 
     /// Go on from `state` and `model`, saved by an analysis of the same scene: the next

@@ -17,7 +17,7 @@ use loam_grid::{Connectivity, GhostFace, NodeLayout};
 use loam_kernels::{
     advance_deformation, check_constraints, connect, gather_nodal, interpolate_add, trial_vertices, LoadSupports,
 };
-use loam_model::{FreeBody, Kinematics, LoadLevel, Model};
+use loam_model::{FreeBody, Kinematics, LoadLevel, Model, ModelError, PointChange};
 use loam_solve::{
     norm, BlockPattern, LinearSolveError, LinearSolver, LinearSolverChoice, LinearSolverKind, LinearSystem,
     NewtonControl, NewtonError, NewtonReport, NewtonSettings, NodeLattice, SparseDirectSolver, SystemMatrix,
@@ -41,10 +41,8 @@ pub(crate) struct Engine<const D: usize> {
     pub matrix: SystemMatrix,
     /// The held dofs, in the nodes' frames (`frames`).
     pub constrained: Vec<bool>,
-    /// The local frames at the nodes of inclined rollers, and the dofs assembly
-    /// eliminates beside them (the grid planes' at the other nodes).
-    frames: LocalFrames<D>,
-    assembly_constrained: Vec<bool>,
+    /// The local frames at the nodes of inclined rollers.
+    pub frames: LocalFrames<D>,
     pub f_ext: Vec<f64>,
     /// The loads' vertices on the active nodes, and the level the external forces are at.
     loads: LoadSupports,
@@ -89,21 +87,6 @@ pub(crate) struct Engine<const D: usize> {
     lattice: Option<NodeLattice>,
 }
 
-/// The dofs assembly and the residual eliminate: the held ones (`constrained`), but at
-/// nodes with a local frame, whose held dofs are eliminated in their frames afterwards
-/// (`assembly`).
-fn assembly_mask<'a, const D: usize>(
-    frames: &LocalFrames<D>,
-    constrained: &'a [bool],
-    assembly: &'a [bool],
-) -> &'a [bool] {
-    if frames.is_empty() {
-        constrained
-    } else {
-        assembly
-    }
-}
-
 /// With the automatic choice, multigrid CG from this many dofs, by dimension, for symmetric
 /// positive definite tangents (docs/theory.md §19 gives the measurements): in 3D just above
 /// the measured crossover (3 000 to 4 000 dofs); in 2D well above it (8 000), so that the
@@ -143,7 +126,6 @@ impl<const D: usize> Engine<D> {
             matrix: SystemMatrix::new(linear.layout()),
             constrained: Vec::new(),
             frames: LocalFrames::default(),
-            assembly_constrained: Vec::new(),
             f_ext: Vec::new(),
             loads: LoadSupports::default(),
             level: LoadLevel::Factor(0.0),
@@ -243,8 +225,7 @@ impl<const D: usize> Engine<D> {
         }
         connect(&self.model, &self.layout, &mut self.conn, &mut self.constrained, step)?;
         if !self.model.inclined_rollers().is_empty() {
-            let active = self.conn.active_nodes();
-            self.frames.connect(&self.model, active, &mut self.constrained, &mut self.assembly_constrained);
+            self.frames.connect(&self.model, self.conn.active_nodes(), &mut self.constrained);
         }
         self.loads.connect(&self.model, self.conn.active_nodes(), step)?;
         if let Some(gamma) = self.model.ghost_penalty() {
@@ -278,6 +259,13 @@ impl<const D: usize> Engine<D> {
             })
             .collect();
         NodeLattice::new(coords)
+    }
+
+    /// Add or remove points between steps ([`Model::change_points`]); the next step
+    /// connects anew.
+    pub fn change_points(&mut self, change: PointChange<D>) -> Result<usize, ModelError> {
+        self.invalidate();
+        self.model.change_points(change)
     }
 
     /// Force the next `connect` to recompute (e.g. before profiling a cold iteration).
@@ -408,7 +396,7 @@ impl<const D: usize> Engine<D> {
             conn: &self.conn,
             average,
             ghost: &self.ghost,
-            constrained: assembly_mask(&self.frames, &self.constrained, &self.assembly_constrained),
+            constrained: self.frames.assembly_mask(&self.constrained),
             f_ext: if follower { &self.f_follower } else { &self.f_ext },
             mass: self.model.points().mass(),
             water_force: if self.model.kinematics() == Kinematics::FiniteStrain { &self.water_force } else { &[] },
@@ -429,7 +417,7 @@ impl<const D: usize> Engine<D> {
             pattern: &self.pattern,
             average: CellAverage::of(&self.model, &self.cell_gradients),
             ghost: &self.ghost,
-            constrained: assembly_mask(&self.frames, &self.constrained, &self.assembly_constrained),
+            constrained: self.frames.assembly_mask(&self.constrained),
             mass: self.model.points().mass(),
             water_force: if self.model.kinematics() == Kinematics::FiniteStrain { &self.water_force } else { &[] },
         };
@@ -446,7 +434,7 @@ impl<const D: usize> Engine<D> {
             add_follower_tangent(
                 &inputs,
                 &self.pattern,
-                assembly_mask(&self.frames, &self.constrained, &self.assembly_constrained),
+                self.frames.assembly_mask(&self.constrained),
                 &mut self.matrix,
             );
         }

@@ -24,6 +24,8 @@ pub(crate) struct LocalFrames<const D: usize> {
     transforms: Vec<f64>,
     /// The held local dofs (node · D + local component), ascending.
     held: Vec<usize>,
+    /// The dofs assembly eliminates: the held ones but at framed nodes.
+    assembly: Vec<bool>,
     /// Per roller, the nodes it holds.
     roller_nodes: Vec<Vec<usize>>,
 }
@@ -33,16 +35,10 @@ impl<const D: usize> LocalFrames<D> {
         self.nodes.is_empty()
     }
 
-    /// The frames of `model`'s inclined rollers on `active`. `constrained` holds the grid
-    /// planes' dofs on entry and every held dof, in the nodes' frames, on return;
-    /// `assembly` the dofs assembly eliminates (the grid planes' but at framed nodes).
-    pub fn connect(
-        &mut self,
-        model: &Model<D>,
-        active: &ActiveNodes,
-        constrained: &mut [bool],
-        assembly: &mut Vec<bool>,
-    ) {
+    /// The frames of `model`'s inclined rollers on `active` (none without rollers).
+    /// `constrained` holds the grid planes' dofs on entry and every held dof, in the nodes'
+    /// frames, on return.
+    pub fn connect(&mut self, model: &Model<D>, active: &ActiveNodes, constrained: &mut [bool]) {
         self.frame_of.clear();
         self.frame_of.resize(active.len(), NONE);
         self.nodes.clear();
@@ -64,15 +60,26 @@ impl<const D: usize> LocalFrames<D> {
                 everywhere[a] |= (0..D).any(|i| constrained[a * D + i]);
             }
         }
-        assembly.clear();
-        assembly.extend_from_slice(constrained);
+        self.assembly.clear();
+        self.assembly.extend_from_slice(constrained);
         for &a in &self.nodes {
             for i in 0..D {
-                assembly[a * D + i] = false;
+                self.assembly[a * D + i] = false;
                 constrained[a * D + i] = i == 0 || everywhere[a];
             }
         }
         self.held = (0..constrained.len()).filter(|&dof| constrained[dof] && self.frame_of[dof / D] != NONE).collect();
+    }
+
+    /// The dofs assembly, the residual and the predictor treat as held: `constrained` (the
+    /// held dofs), but at framed nodes none, whose held dofs are eliminated in their frames
+    /// afterwards (and whose global increment keeps every component).
+    pub fn assembly_mask<'a>(&'a self, constrained: &'a [bool]) -> &'a [bool] {
+        if self.is_empty() {
+            constrained
+        } else {
+            &self.assembly
+        }
     }
 
     /// Node `a`'s transform, if it has a frame.

@@ -124,9 +124,7 @@ impl<const D: usize> QuasiStatic<D> {
     /// Add or remove points between steps ([`Model::change_points`]); returns how many.
     /// The next step connects the points anew.
     pub fn change_points(&mut self, change: PointChange<D>) -> Result<usize, ModelError> {
-        let changed = self.engine.model.change_points(change);
-        self.engine.invalidate();
-        changed
+        self.engine.change_points(change)
     }
 
     /// Go on from `state` and `model`, saved by an analysis of the same scene: the next
@@ -227,8 +225,9 @@ impl<const D: usize> QuasiStatic<D> {
         if let (true, Some(previous_increment)) = (self.settings.extrapolate, self.previous_increment) {
             let ratio = increment / previous_increment;
             let n = e.layout.dofs_per_node();
+            let held = e.frames.assembly_mask(&e.constrained);
             for (a, &g) in e.conn.active_nodes().active_to_grid.iter().enumerate() {
-                for c in (0..n).filter(|&c| !e.constrained[a * n + c]) {
+                for c in (0..n).filter(|&c| !held[a * n + c]) {
                     e.du[a * n + c] = ratio * self.previous[g as usize * n + c];
                 }
             }

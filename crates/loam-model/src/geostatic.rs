@@ -116,7 +116,7 @@ impl<const D: usize> Model<D> {
     ) -> Result<Matrix3<f64>, ModelError> {
         let pts = &self.points;
         let law = self.law(p);
-        let state = MaterialState { stress: sigma, elastic_strain: &Matrix3::zeros(), history };
+        let state = MaterialState { stress: *sigma, elastic_strain: &Matrix3::zeros(), history };
         let Some(elastic) = law.elasticity(&state) else {
             return Err(ModelError::Geostatic(format!(
                 "material {} ({}) has no isotropic elasticity to carry an initial stress",

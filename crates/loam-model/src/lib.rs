@@ -353,14 +353,17 @@ impl<const D: usize> Model<D> {
         &self.inclined
     }
 
-    /// The active nodes roller `k` holds, with the node's position.
+    /// The active nodes roller `k` holds.
     pub fn inclined_roller_nodes(&self, active: &ActiveNodes, k: usize) -> Vec<usize> {
-        let (roller, h) = (&self.inclined[k], self.grid().cell_size().min());
-        (0..active.len())
-            .filter(|&a| {
-                roller.holds(&self.background.node_reference_position(active.active_to_grid[a] as usize), 1e-9 * h)
-            })
-            .collect()
+        let roller = &self.inclined[k];
+        (0..active.len()).filter(|&a| self.roller_holds(roller, active.active_to_grid[a] as usize)).collect()
+    }
+
+    /// Whether `roller` holds background node `node`: on its plane or beyond it, to within
+    /// 1e-9 of a cell.
+    pub(crate) fn roller_holds(&self, roller: &InclinedRoller<D>, node: usize) -> bool {
+        let tolerance = 1e-9 * self.grid().cell_size().min();
+        roller.holds(&self.background.node_reference_position(node), tolerance)
     }
 
     /// Static groundwater (docs/theory.md §18): every point below the phreatic level gets
@@ -541,12 +544,15 @@ impl<const D: usize> Model<D> {
     }
 
     /// Point `p`'s committed material state, which its law's stiffness may depend on
-    /// ([`ConstitutiveLaw::constant_stiffness`]). Its stress is the Cauchy stress; the laws
-    /// of loam that read it (none of today's: their stiffness is constant) take the
-    /// difference from the Kirchhoff stress, det F, as second order at the point's state.
+    /// ([`ConstitutiveLaw::constant_stiffness`]), with the stress the law works with: the
+    /// Kirchhoff stress τ = J σ in finite strain, σ in small strain.
     pub fn material_state(&self, p: usize) -> MaterialState<'_> {
         let pts = &self.points;
-        MaterialState { stress: &pts.stress()[p], elastic_strain: &pts.elastic_strain()[p], history: pts.history(p) }
+        let stress = match self.kinematics {
+            Kinematics::FiniteStrain => pts.stress()[p] * pts.deformation_gradient()[p].determinant(),
+            Kinematics::SmallStrain => pts.stress()[p],
+        };
+        MaterialState { stress, elastic_strain: &pts.elastic_strain()[p], history: pts.history(p) }
     }
 
     /// Per material, its P-wave modulus where the law's stiffness is constant (`None`: it

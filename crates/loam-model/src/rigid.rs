@@ -141,8 +141,7 @@ impl<const D: usize> Model<D> {
                 (0..D).for_each(|i| axes[i] |= c.fixed[i]);
             }
             let mut held: Vec<Vector3<f64>> = (0..D).filter(|&i| axes[i]).map(|i| Vector3::ith(i, 1.0)).collect();
-            let h = self.grid().cell_size().min();
-            for roller in self.inclined_rollers().iter().filter(|r| r.holds(&x, 1e-9 * h)) {
+            for roller in self.inclined_rollers().iter().filter(|r| self.roller_holds(r, g as usize)) {
                 held.push(Vector3::from_fn(|i, _| if i < D { roller.normal()[i] } else { 0.0 }));
             }
             let b = &mut nodes[body[a]];

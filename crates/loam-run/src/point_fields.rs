@@ -6,7 +6,7 @@
 //! is the effective one). A field that is off costs nothing.
 
 use loam_format::output::{write_csv_table, write_vtu, OutputError, PointCloud, PvdWriter, VtuFormat};
-use loam_model::{Kinematics, Model};
+use loam_model::Model;
 use loam_scene::FieldSpec;
 use nalgebra::{Matrix3, SVector};
 use std::path::Path;
@@ -120,12 +120,8 @@ impl Fields {
 /// Whether point `p` is on its law's yield surface, judged on the stress the law works
 /// with (Kirchhoff τ = J σ in finite strain).
 fn yielding<const D: usize>(model: &Model<D>, p: usize) -> bool {
-    let pts = model.points();
-    let stress = match model.kinematics() {
-        Kinematics::FiniteStrain => pts.stress()[p] * pts.deformation_gradient()[p].determinant(),
-        Kinematics::SmallStrain => pts.stress()[p],
-    };
-    model.law(p).is_yielding(&stress, pts.history(p))
+    let state = model.material_state(p);
+    model.law(p).is_yielding(&state.stress, state.history)
 }
 
 /// Every history value the laws name, one field per name (the union over the materials);
