@@ -1,10 +1,12 @@
-//! `cargo xtask verify [--quick]`: run the verification problems against their closed-form
-//! references, report error and wall time, write `target/verify/{report.md, summary.csv,
-//! *.svg}`, and exit non-zero when a bound fails.
+//! `cargo xtask verify [--quick] [--update-docs]`: run the verification problems against
+//! their closed-form references, report error and wall time, write `target/verify/
+//! {report.md, summary.csv, *.svg}` (and the marked tables of docs/verification.md), and
+//! exit non-zero when a bound fails.
 //! `cargo xtask steps [--quick]`: the implicit-vs-explicit step-size study (`steps.rs`).
 //! `cargo xtask bench`: run the criterion benchmarks.
 
 mod columns;
+mod docs_tables;
 mod dynamics;
 mod footing;
 mod granular;
@@ -45,6 +47,10 @@ enum Cmd {
         /// hard_cases, loads, water, granular.
         #[arg(long, value_delimiter = ',')]
         only: Vec<String>,
+        /// Write the result tables of docs/verification.md marked for this mode from the
+        /// report (`docs_tables.rs`).
+        #[arg(long)]
+        update_docs: bool,
     },
     /// Implicit vs explicit: error against time step and against wall time (V2, V1c).
     Steps {
@@ -86,7 +92,7 @@ enum Cmd {
 
 fn main() -> Result<()> {
     match Cli::parse().command {
-        Cmd::Verify { quick, out, only } => verify(quick, &out, &only),
+        Cmd::Verify { quick, out, only, update_docs } => verify(quick, &out, &only, update_docs),
         Cmd::Steps { quick, out } => steps::run(quick, &out),
         Cmd::Scale { cells, solver, dim, contrast } => scale::run(dim, &cells, &solver, contrast),
         Cmd::Tangents { out } => tangents::run(&out),
@@ -106,7 +112,7 @@ fn main() -> Result<()> {
 
 /// Run every section of the report, write `report.md`, `summary.csv` and the plots, and
 /// fail when a bound fails (after writing, so that the report shows which).
-fn verify(quick: bool, out: &Path, only: &[String]) -> Result<()> {
+fn verify(quick: bool, out: &Path, only: &[String], update_docs: bool) -> Result<()> {
     type Section = fn(bool, &mut Report) -> Result<()>;
     let sections: [(&str, Section); 8] = [
         ("columns", columns::verify),
@@ -133,6 +139,13 @@ fn verify(quick: bool, out: &Path, only: &[String]) -> Result<()> {
     writeln!(report.md, "\nThe linear (standard MPM) basis carries no bound: it is known not to converge on this problem (cell-crossing error), and the tables above show its stagnation.")?;
     std::fs::write(out.join("report.md"), &report.md)?;
     eprintln!("verify: wrote {}/report.md, summary.csv, convergence.svg", out.display());
+    if update_docs {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/verification.md");
+        let docs = std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
+        let (text, ids) = docs_tables::update(&docs, &report.md, quick)?;
+        std::fs::write(&path, text).with_context(|| format!("writing {}", path.display()))?;
+        eprintln!("verify: wrote tables {} of docs/verification.md", ids.join(", "));
+    }
     if !failed.is_empty() {
         bail!("{} bound(s) failed:\n  {}", failed.len(), failed.join("\n  "));
     }

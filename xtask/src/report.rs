@@ -58,6 +58,13 @@ impl Report {
         Ok(Self { md, rows: Vec::new(), out: out.to_owned() })
     }
 
+    /// Mark the table that follows as table `id`, which `--update-docs` copies into the
+    /// docs where they carry its marker (`docs_tables`).
+    pub fn mark_table(&mut self, id: &str) -> Result<()> {
+        writeln!(self.md, "{}", crate::docs_tables::report_marker(id))?;
+        Ok(())
+    }
+
     /// Append the bounds table (the checked rows) to the markdown and write every row to
     /// `summary.csv`; returns the rows that failed their bound, one line each.
     pub fn bounds_table(&mut self) -> Result<Vec<String>> {
