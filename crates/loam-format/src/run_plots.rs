@@ -90,13 +90,15 @@ fn steps_plot(log: &Table) -> Option<Plot> {
     (!log.rows.is_empty()).then_some(plot)
 }
 
-/// Each prescribed displacement's reaction against it.
+/// Each prescribed displacement's reaction against it: every column pair
+/// `<name><k>_displacement_<axis>` and `<name><k>_reaction_<axis>`, labelled "name k, axis".
 fn load_displacement_plot(log: &Table) -> Option<Plot> {
     let mut plot = Plot::new("Reaction against prescribed displacement", "prescribed displacement", "reaction");
-    for name in log.header.iter().filter_map(|h| h.strip_prefix("constraint")) {
-        let Some((k, axis)) = name.split_once("_displacement_") else { continue };
-        let (u, f) = (format!("constraint{k}_displacement_{axis}"), format!("constraint{k}_reaction_{axis}"));
-        plot.series.push(log.series(&format!("constraint {k}, {axis}"), &u, &f)?);
+    for (held, axis) in log.header.iter().filter_map(|h| h.split_once("_displacement_")) {
+        let name = held.trim_end_matches(|c: char| c.is_ascii_digit());
+        let label = format!("{} {}, {axis}", name.replace('_', " "), &held[name.len()..]);
+        let (u, f) = (format!("{held}_displacement_{axis}"), format!("{held}_reaction_{axis}"));
+        plot.series.push(log.series(&label, &u, &f)?);
     }
     (!plot.series.is_empty()).then_some(plot)
 }

@@ -128,10 +128,14 @@ impl<const D: usize> Background<D> {
             None => self.grid.node_coords(node)[axis] == plane,
             Some(_) => (x[axis] - (self.grid.origin()[axis] + plane as f64 * h[axis])).abs() <= 1e-9 * h[axis],
         };
-        on_plane
-            && within.is_none_or(|(lo, hi)| {
-                (0..D).all(|a| a == axis || (x[a] >= lo[a] - 1e-9 * h[a] && x[a] <= hi[a] + 1e-9 * h[a]))
-            })
+        on_plane && within.is_none_or(|bounds| self.in_box(&x, bounds, Some(axis)))
+    }
+
+    /// Whether `x` lies in the box `(min, max)` on every axis but `skip`, to within 1e-9 of
+    /// a cell (a box drawn through nodes or points takes them).
+    pub fn in_box(&self, x: &SVector<f64, D>, (lo, hi): &([f64; 3], [f64; 3]), skip: Option<usize>) -> bool {
+        let h = self.grid.cell_size();
+        (0..D).all(|a| Some(a) == skip || (x[a] >= lo[a] - 1e-9 * h[a] && x[a] <= hi[a] + 1e-9 * h[a]))
     }
 
     /// Move the nodes that move with the body by the converged increment of a step, `du`

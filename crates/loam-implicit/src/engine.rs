@@ -15,7 +15,8 @@ use crate::tangent::{assemble, PointCouplings, TangentInputs};
 use crate::StepError;
 use loam_grid::{Connectivity, GhostFace, NodeLayout};
 use loam_kernels::{
-    advance_deformation, check_constraints, connect, gather_nodal, interpolate_add, trial_vertices, LoadSupports,
+    advance_deformation, check_constraints_connected, connect, gather_nodal, interpolate_add, trial_vertices,
+    LoadSupports,
 };
 use loam_model::{FreeBody, Kinematics, LoadLevel, Model, ModelError, PointChange};
 use loam_solve::{
@@ -276,7 +277,7 @@ impl<const D: usize> Engine<D> {
     /// Before a first step: the points connect, and every constraint holds a node.
     pub fn check(&mut self, step: usize) -> Result<(), StepError> {
         self.connect(step)?;
-        Ok(check_constraints(&self.model, self.conn.active_nodes())?)
+        Ok(check_constraints_connected(&self.model, &self.conn)?)
     }
 
     /// The bodies with rigid-body motions no constraint holds on the active nodes.
@@ -545,26 +546,28 @@ impl<const D: usize> Engine<D> {
     }
 
     /// Per constraint, Σ (f_int − f_ext) over its nodes on its fixed components, then per
-    /// inclined roller the sum over its nodes, from the reactions of the converged
-    /// residual (one per dof, global).
+    /// inclined roller the sum over its nodes, then per body constraint over its nodes,
+    /// from the reactions of the converged residual (one per dof, global).
     fn constraint_reactions(&self) -> Vec<[f64; 3]> {
-        let active = self.conn.active_nodes();
-        let mut reactions: Vec<[f64; 3]> = self
-            .model
-            .constraints()
-            .iter()
-            .map(|c| {
-                let mut sum = [0.0; 3];
-                for a in self.model.constraint_nodes(active, c) {
-                    for i in (0..D).filter(|&i| c.fixed[i]) {
-                        sum[i] += self.reaction[self.layout.dof(a, 0, i)];
-                    }
-                }
-                sum
-            })
-            .collect();
+        let (model, active) = (&self.model, self.conn.active_nodes());
+        let planes = model.constraints().iter().map(|c| self.reaction_sum(model.constraint_nodes(active, c), &c.fixed));
+        let mut reactions: Vec<[f64; 3]> = planes.collect();
         reactions.extend(self.frames.roller_reactions(&self.reaction));
+        let bodies = (model.body_constraints().iter().enumerate())
+            .map(|(k, c)| self.reaction_sum(model.body_constraint_nodes(&self.conn, k), &c.fixed));
+        reactions.extend(bodies);
         reactions
+    }
+
+    /// Σ of the reactions over `nodes` on the `fixed` components of the first motion field.
+    fn reaction_sum(&self, nodes: Vec<usize>, fixed: &[bool; 3]) -> [f64; 3] {
+        let mut sum = [0.0; 3];
+        for a in nodes {
+            for i in (0..D).filter(|&i| fixed[i]) {
+                sum[i] += self.reaction[self.layout.dof(a, 0, i)];
+            }
+        }
+        sum
     }
 }
 

@@ -4,7 +4,8 @@
 //! block touching them becomes T_iᵀ K_ij T_j and their residual Tᵀ R, the normal dof is
 //! held as a grid-plane constraint's dofs are (its row and column eliminated, its residual
 //! taken as the reaction), and the correction is turned back, δu = T δũ. A node held by
-//! two rollers, or by a roller and a grid-plane constraint, is held in every direction.
+//! two rollers, or by a roller and another constraint (a grid plane's or a body's), is
+//! held in every direction.
 
 use loam_grid::ActiveNodes;
 use loam_model::Model;
@@ -36,8 +37,8 @@ impl<const D: usize> LocalFrames<D> {
     }
 
     /// The frames of `model`'s inclined rollers on `active` (none without rollers).
-    /// `constrained` holds the grid planes' dofs on entry and every held dof, in the nodes'
-    /// frames, on return.
+    /// `constrained` holds the grid planes' and bodies' dofs on entry and every held dof,
+    /// in the nodes' frames, on return.
     pub fn connect(&mut self, model: &Model<D>, active: &ActiveNodes, constrained: &mut [bool]) {
         self.frame_of.clear();
         self.frame_of.resize(active.len(), NONE);

@@ -220,7 +220,7 @@ impl<const D: usize> QuasiStatic<D> {
         let e = &mut self.engine;
         e.du.clear();
         e.du.resize(e.num_dofs(), 0.0);
-        e.model.prescribed_increment(&e.layout, e.conn.active_nodes(), self.load_factor, lambda, &mut e.du);
+        e.model.prescribed_increment(&e.layout, &e.conn, self.load_factor, lambda, &mut e.du);
         let increment = lambda - self.load_factor;
         if let (true, Some(previous_increment)) = (self.settings.extrapolate, self.previous_increment) {
             let ratio = increment / previous_increment;

@@ -6,7 +6,8 @@ use loam_model::Model;
 
 /// Connect the points of `model` at the configuration the mechanics is written on to its
 /// background (basis values and gradients, active nodes, node → point adjacency) and mark
-/// the constrained dofs of the active nodes in `layout`. `step` names the step in an error.
+/// the constrained dofs of the active nodes in `layout`: the planes' and the bodies'.
+/// `step` names the step in an error.
 pub fn connect<const D: usize>(
     model: &Model<D>,
     layout: &NodeLayout,
@@ -19,6 +20,7 @@ pub fn connect<const D: usize>(
         .connect(conn, model.configuration(), model.points().half_length())
         .map_err(|e| ConnectError::locate(step, e))?;
     model.constrained_dofs(layout, conn.active_nodes(), constrained);
+    model.mark_body_constrained_dofs(layout, conn, constrained);
     Ok(())
 }
 
@@ -30,6 +32,19 @@ pub fn check_constraints<const D: usize>(model: &Model<D>, active: &ActiveNodes)
     }
     match (0..model.inclined_rollers().len()).find(|&k| model.inclined_roller_nodes(active, k).is_empty()) {
         Some(index) => Err(ConnectError::InclinedRollerTouchesNoNode { index }),
+        None => Ok(()),
+    }
+}
+
+/// [`check_constraints`] on the active nodes of `conn`, and every body constraint must
+/// hold at least one of them.
+pub fn check_constraints_connected<const D: usize>(
+    model: &Model<D>,
+    conn: &Connectivity<D>,
+) -> Result<(), ConnectError> {
+    check_constraints(model, conn.active_nodes())?;
+    match (0..model.body_constraints().len()).find(|&k| model.body_constraint_nodes(conn, k).is_empty()) {
+        Some(index) => Err(ConnectError::BodyConstraintTouchesNoNode { index }),
         None => Ok(()),
     }
 }

@@ -17,6 +17,10 @@ pub enum ConnectError {
     ConstraintTouchesNoNode { index: usize, axis: usize, plane: usize },
     #[error("inclined roller {index} holds no active node: no material point has support on or beyond its plane")]
     InclinedRollerTouchesNoNode { index: usize },
+    #[error(
+        "body constraint {index} holds no node: its body has no point (that started inside its box, if it has one)"
+    )]
+    BodyConstraintTouchesNoNode { index: usize },
 }
 
 impl ConnectError {

@@ -2,7 +2,8 @@
 //! alike: the stages of a step that do not depend on the integrator (docs/theory.md §1).
 //!
 //! - [`connect`]: locate the points on the background, evaluate their basis, number the
-//!   active nodes, mark the constrained dofs; [`check_constraints`] before a first step.
+//!   active nodes, mark the constrained dofs; [`check_constraints`] (on grid planes and
+//!   inclined planes) and [`check_constraints_connected`] (bodies' too) before a first step.
 //! - [`gather_nodal`]: point → node transfer, node by node in ascending point order, so
 //!   that the sums are bitwise the same on any number of threads.
 //! - [`BandScatter`]: point → node transfer as a scatter into a dense grid field, bands of
@@ -27,7 +28,7 @@ mod pool;
 mod scatter;
 mod transfer;
 
-pub use connect::{check_constraints, connect};
+pub use connect::{check_constraints, check_constraints_connected, connect};
 pub use error::{ConnectError, InvalidSetting, RunError};
 pub use force::{gather_internal_force, internal_force};
 pub use load::{trial_vertices, LoadSupports};

@@ -71,6 +71,7 @@ pub fn update_point<R>(
     finish: impl FnOnce(PointUpdate<'_>) -> R,
 ) -> Result<R, ConstitutiveError> {
     let Committed { f, elastic_strain, history } = committed;
+    let (history, h_out) = own_history(law, history, h_out);
     let delta_f = Matrix3::identity() + grad_du;
     Ok(match kinematics {
         Kinematics::FiniteStrain => {
@@ -95,6 +96,22 @@ pub fn update_point<R>(
     })
 }
 
+/// The first `law.history_len()` of a point's history slots, committed and new: a store
+/// holds as many a point as the law that needs most, and a law is given its own (one
+/// given fewer reports the mismatch). The slots beyond carry their committed values over,
+/// so that a trial buffer holds no other point's leftovers.
+#[inline]
+fn own_history<'a, 'b>(
+    law: &dyn ConstitutiveLaw,
+    history: &'a [f64],
+    h_out: &'b mut [f64],
+) -> (&'a [f64], &'b mut [f64]) {
+    let slots = history.len().min(h_out.len());
+    let n = law.history_len().min(slots);
+    h_out[n..slots].copy_from_slice(&history[n..slots]);
+    (&history[..n], &mut h_out[..n])
+}
+
 /// A point's trial state without its tangent ([`update_point_stress`]).
 #[derive(Debug, Clone, Copy)]
 pub struct PointStress {
@@ -117,6 +134,7 @@ pub fn update_point_stress(
     h_out: &mut [f64],
 ) -> Result<PointStress, ConstitutiveError> {
     let Committed { f, elastic_strain, history } = committed;
+    let (history, h_out) = own_history(law, history, h_out);
     let delta_f = Matrix3::identity() + grad_du;
     Ok(match kinematics {
         Kinematics::FiniteStrain => {

@@ -1,5 +1,5 @@
-//! Constraints on the nodes of a plane of the background grid, and rollers on inclined
-//! planes held in a local frame at the nodes.
+//! Constraints on the nodes of a plane of the background grid, on the nodes a body's points
+//! reach, and rollers on inclined planes held in a local frame at the nodes.
 
 use nalgebra::{SMatrix, SVector};
 
@@ -35,6 +35,49 @@ impl PlaneConstraint {
     }
 
     /// Only the nodes of the plane inside the box [min, max].
+    pub fn within(mut self, min: [f64; 3], max: [f64; 3]) -> Self {
+        self.within = Some((min, max));
+        self
+    }
+
+    /// Whether the constraint prescribes a non-zero displacement.
+    pub fn is_displaced(&self) -> bool {
+        self.displacement.iter().zip(&self.fixed).any(|(d, &f)| f && *d != 0.0)
+    }
+}
+
+/// A constraint on a body (a footing or a pile pushed into the ground, a wall held, or
+/// the part of the soil inside a box): at every step, the nodes that the supports of the
+/// body's points inside `within` reach have the listed components prescribed — held, or
+/// displaced by `displacement` at full load in proportion to the load factor. Unlike a
+/// plane constraint it follows the body through the grid: every support node of a held
+/// point moves by the same increment, so the point moves by it too (partition of unity).
+#[derive(Debug, Clone, PartialEq)]
+pub struct BodyConstraint {
+    /// The body whose points it holds (`PointStore::body`).
+    pub body: u32,
+    /// Which displacement components are prescribed (first D entries used).
+    pub fixed: [bool; 3],
+    /// Prescribed displacement of the fixed components at full load (zero: held).
+    pub displacement: [f64; 3],
+    /// Only the body's points that started with min ≤ x ≤ max (per axis, to within 1e-9 of
+    /// a cell), if given: the same points at every step, wherever they go.
+    pub within: Option<([f64; 3], [f64; 3])>,
+}
+
+impl BodyConstraint {
+    /// Hold the `fixed` components of the nodes the points of `body` reach at zero.
+    pub fn new(body: u32, fixed: [bool; 3]) -> Self {
+        Self { body, fixed, displacement: [0.0; 3], within: None }
+    }
+
+    /// Prescribe `displacement` (at full load) on the fixed components instead of zero.
+    pub fn displaced(mut self, displacement: [f64; 3]) -> Self {
+        self.displacement = displacement;
+        self
+    }
+
+    /// Only the body's points that start inside the box [min, max].
     pub fn within(mut self, min: [f64; 3], max: [f64; 3]) -> Self {
         self.within = Some((min, max));
         self

@@ -9,6 +9,7 @@
 //! the constructors, and the analyses change the points' evolving state only through
 //! [`PointsMut`], which cannot add points or reassign their materials.
 
+mod body_constraints;
 mod constraint;
 mod energy;
 mod geostatic;
@@ -18,7 +19,7 @@ mod population;
 mod rigid;
 mod water;
 
-pub use constraint::{InclinedRoller, PlaneConstraint};
+pub use constraint::{BodyConstraint, InclinedRoller, PlaneConstraint};
 pub use energy::ExternalWork;
 pub use loads::{Load, LoadKind, LoadLevel, TimeFunction};
 pub use options::{AnalysisKind, ModelOption, Unaccepted};
@@ -27,7 +28,7 @@ pub use rigid::{FreeBody, RigidMode};
 pub use water::{PhreaticLevel, Water};
 
 use loam_constitutive::{ConstitutiveLaw, MaterialState};
-use loam_grid::{ActiveNodes, Background, BasisKind, FeMesh, Grid, NodeField, NodeLayout};
+use loam_grid::{ActiveNodes, Background, BasisKind, Connectivity, FeMesh, Grid, NodeField, NodeLayout};
 use loam_points::{PointStore, PointsError};
 pub use loam_points::{PointsMut, StateFields};
 use nalgebra::SVector;
@@ -129,6 +130,8 @@ pub enum ModelError {
     GeometricallyLinear(String),
     #[error("the saved state does not fit this model: {0}")]
     Restore(String),
+    #[error("body constraint {index}: {what}")]
+    BodyConstraint { index: usize, what: String },
     #[error("inclined roller: {0}")]
     InclinedRoller(String),
     #[error("removing points: {0}")]
@@ -162,6 +165,8 @@ pub struct Model<const D: usize> {
     constraints: Vec<PlaneConstraint>,
     /// Rollers on inclined planes, held in a local frame at the nodes.
     inclined: Vec<InclinedRoller<D>>,
+    /// Constraints on the nodes bodies' points reach.
+    body_constraints: Vec<BodyConstraint>,
     /// Body force per unit mass at full load.
     gravity: SVector<f64, D>,
     /// Force on each point at full load (empty: none).
@@ -219,6 +224,7 @@ impl<const D: usize> Model<D> {
             materials,
             constraints,
             inclined: Vec::new(),
+            body_constraints: Vec::new(),
             gravity,
             point_forces: Vec::new(),
             loads: Vec::new(),
@@ -552,7 +558,9 @@ impl<const D: usize> Model<D> {
             Kinematics::FiniteStrain => pts.stress()[p] * pts.deformation_gradient()[p].determinant(),
             Kinematics::SmallStrain => pts.stress()[p],
         };
-        MaterialState { stress, elastic_strain: &pts.elastic_strain()[p], history: pts.history(p) }
+        let history = pts.history(p);
+        let history = &history[..self.law(p).history_len().min(history.len())];
+        MaterialState { stress, elastic_strain: &pts.elastic_strain()[p], history }
     }
 
     /// Per material, its P-wave modulus where the law's stiffness is constant (`None`: it
@@ -648,20 +656,22 @@ impl<const D: usize> Model<D> {
 
     /// The prescribed displacement increments of a step from load factor `from` to `to`
     /// on the constrained dofs of every motion field of `layout` (zero elsewhere), into
-    /// `out` (sized like `constrained`).
-    pub fn prescribed_increment(&self, layout: &NodeLayout, active: &ActiveNodes, from: f64, to: f64, out: &mut [f64]) {
+    /// `out` (sized like `constrained`): the planes', then the bodies'.
+    pub fn prescribed_increment(
+        &self,
+        layout: &NodeLayout,
+        conn: &Connectivity<D>,
+        from: f64,
+        to: f64,
+        out: &mut [f64],
+    ) {
         out.iter_mut().for_each(|v| *v = 0.0);
+        let active = conn.active_nodes();
         for c in self.constraints.iter().filter(|c| c.is_displaced()) {
-            for (a, &g) in active.active_to_grid.iter().enumerate() {
-                if self.node_on_plane(g as usize, c) {
-                    for k in motion_fields(layout) {
-                        for i in (0..D).filter(|&i| c.fixed[i]) {
-                            out[layout.dof(a, k, i)] = (to - from) * c.displacement[i];
-                        }
-                    }
-                }
-            }
+            let nodes = self.constraint_nodes(active, c);
+            body_constraints::put_increment::<D>(layout, &nodes, (&c.fixed, &c.displacement), to - from, out);
         }
+        self.put_body_increments(layout, conn, (from, to), out);
     }
 
     /// The nodes (active indices) each constraint holds.

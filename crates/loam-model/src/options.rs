@@ -36,6 +36,10 @@ pub enum ModelOption {
     DisplacedConstraint { index: usize },
     /// A roller on an inclined plane.
     InclinedRoller { index: usize },
+    /// A constraint on a body that holds its nodes.
+    BodyConstraint { index: usize },
+    /// A constraint on a body that prescribes a non-zero displacement.
+    DisplacedBodyConstraint { index: usize },
 }
 
 /// One row of the table: the options it is about, whether the quasi-static, dynamic and
@@ -47,7 +51,7 @@ struct Acceptance {
 }
 
 /// Which analyses accept each option (the module docs).
-const ACCEPTED: [Acceptance; 6] = [
+const ACCEPTED: [Acceptance; 8] = [
     Acceptance {
         is: |o| matches!(o, ModelOption::BodyFittedMesh),
         by: [true, true, false],
@@ -78,6 +82,16 @@ const ACCEPTED: [Acceptance; 6] = [
         by: [true, false, false],
         why: "is a roller on an inclined plane, held in a local frame at the nodes; the quasi-static analysis takes it (the dynamic and explicit ones not yet)",
     },
+    Acceptance {
+        is: |o| matches!(o, ModelOption::BodyConstraint { .. }),
+        by: [true, true, false],
+        why: "holds the nodes its body's points reach, found step by step; the implicit analyses take it (the explicit one marks its constraints once, on grid planes)",
+    },
+    Acceptance {
+        is: |o| matches!(o, ModelOption::DisplacedBodyConstraint { .. }),
+        by: [true, false, false],
+        why: "prescribes a non-zero displacement; only quasi-static implicit analysis applies displacements (with the load factor)",
+    },
 ];
 
 /// An option the analysis does not accept, and why.
@@ -94,6 +108,9 @@ impl Unaccepted {
         match self.option {
             ModelOption::DisplacedConstraint { index } => format!("constraint {index} {}", self.why),
             ModelOption::InclinedRoller { index } => format!("inclined roller {index} {}", self.why),
+            ModelOption::BodyConstraint { index } | ModelOption::DisplacedBodyConstraint { index } => {
+                format!("body constraint {index} {}", self.why)
+            }
             _ => self.why.to_string(),
         }
     }
@@ -118,6 +135,10 @@ impl<const D: usize> Model<D> {
         let displaced = self.constraints.iter().enumerate().filter(|(_, c)| c.is_displaced());
         options.extend(displaced.map(|(index, _)| ModelOption::DisplacedConstraint { index }));
         options.extend((0..self.inclined.len()).map(|index| ModelOption::InclinedRoller { index }));
+        options.extend((self.body_constraints().iter().enumerate()).map(|(index, c)| match c.is_displaced() {
+            true => ModelOption::DisplacedBodyConstraint { index },
+            false => ModelOption::BodyConstraint { index },
+        }));
         options
     }
 

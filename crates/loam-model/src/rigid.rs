@@ -119,7 +119,7 @@ fn bodies<const D: usize>(conn: &Connectivity<D>) -> (Vec<usize>, usize) {
 }
 
 /// One body's nodes: their places and the directions they are held in (coordinate axes
-/// of grid-plane constraints, normals of inclined rollers).
+/// of grid-plane and body constraints, normals of inclined rollers).
 struct BodyNodes {
     x: Vec<Vector3<f64>>,
     held: Vec<Vec<Vector3<f64>>>,
@@ -134,9 +134,15 @@ impl<const D: usize> Model<D> {
         let (body, count) = bodies(conn);
         let mut nodes: Vec<BodyNodes> =
             (0..count).map(|_| BodyNodes { x: Vec::new(), held: Vec::new(), points: 0 }).collect();
+        let mut body_held = vec![[false; 3]; active.len()];
+        for (k, c) in self.body_constraints().iter().enumerate() {
+            for a in self.body_constraint_nodes(conn, k) {
+                (0..D).for_each(|i| body_held[a][i] |= c.fixed[i]);
+            }
+        }
         for (a, &g) in active.active_to_grid.iter().enumerate() {
             let x = self.background().node_reference_position(g as usize);
-            let mut axes = [false; 3];
+            let mut axes = body_held[a];
             for c in self.constraints().iter().filter(|c| self.node_on_plane(g as usize, c)) {
                 (0..D).for_each(|i| axes[i] |= c.fixed[i]);
             }

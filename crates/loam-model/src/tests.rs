@@ -311,3 +311,37 @@ fn a_law_may_state_its_stiffness_and_history_from_the_state() {
         assert!((model.p_wave_modulus(&moduli, p) / expected - 1.0).abs() < 1e-15, "point {p}");
     }
 }
+
+/// A body constraint is refused on a body without points, when it prescribes none of the
+/// model's components, and with a displacement or box that is not a number; accepted, it
+/// holds exactly the active nodes its body's points inside its box reach: with the linear
+/// basis the block's points in the cell [0, 1]² reach the 4 nodes of that cell.
+#[test]
+fn a_body_constraint_holds_the_nodes_its_points_reach() {
+    let model = || model_with(vec![]).unwrap();
+    let refused = |c: BodyConstraint| match model().with_body_constraints(vec![c]) {
+        Err(ModelError::BodyConstraint { index: 0, what }) => what,
+        other => panic!("{other:?}"),
+    };
+    assert!(refused(BodyConstraint::new(1, [true; 3])).contains("body 1 has no points"));
+    assert!(refused(BodyConstraint::new(0, [false, false, true])).contains("none of the 2"));
+    assert!(refused(BodyConstraint::new(0, [true; 3]).displaced([f64::NAN, 0.0, 0.0])).contains("finite"));
+    assert!(refused(BodyConstraint::new(0, [true; 3]).within([f64::NAN; 3], [1.0; 3])).contains("box"));
+    let held = BodyConstraint::new(0, [false, true, false]).within([0.0, 0.0, 0.0], [1.0, 1.0, 0.0]);
+    let model = model().with_body_constraints(vec![held]).unwrap();
+    let mut conn = Connectivity::new(BasisKind::Linear);
+    model.background().connect(&mut conn, model.configuration(), model.points().half_length()).unwrap();
+    let grid_nodes: Vec<u32> =
+        model.body_constraint_nodes(&conn, 0).iter().map(|&a| conn.active_nodes().active_to_grid[a]).collect();
+    // Nodes numbered x fastest on 5 nodes a row: (0,0), (1,0), (0,1), (1,1).
+    assert_eq!(grid_nodes, vec![0, 1, 5, 6]);
+    let layout = NodeLayout::motion(2);
+    let mut constrained = vec![false; layout.num_dofs(conn.active_nodes().len())];
+    model.mark_body_constrained_dofs(&layout, &conn, &mut constrained);
+    let held_dofs: Vec<usize> = (0..constrained.len()).filter(|&k| constrained[k]).collect();
+    let expected: Vec<usize> = [0u32, 1, 5, 6]
+        .iter()
+        .map(|&g| layout.dof(conn.active_nodes().grid_to_active[g as usize] as usize, 0, 1))
+        .collect();
+    assert_eq!(held_dofs, expected);
+}

@@ -104,9 +104,10 @@ impl Fields {
                 FieldSpec::Volume => out.scalars.push(("volume".into(), pts.volume().to_vec())),
                 FieldSpec::Mass => out.scalars.push(("mass".into(), pts.mass().to_vec())),
                 FieldSpec::Material => out.scalars.push(("material".into(), scalar(&|p| pts.material()[p] as f64))),
-                FieldSpec::PlasticStrain => out
-                    .scalars
-                    .push(("plastic_strain".into(), scalar(&|p| model.law(p).plastic_strain(pts.history(p))))),
+                FieldSpec::PlasticStrain => out.scalars.push((
+                    "plastic_strain".into(),
+                    scalar(&|p| model.law(p).plastic_strain(model.material_state(p).history)),
+                )),
                 FieldSpec::Yielding => {
                     out.scalars.push(("yielding".into(), scalar(&|p| f64::from(u8::from(yielding(model, p))))))
                 }
@@ -125,7 +126,8 @@ fn yielding<const D: usize>(model: &Model<D>, p: usize) -> bool {
 }
 
 /// Every history value the laws name, one field per name (the union over the materials);
-/// a point whose law lacks a name gets NaN there.
+/// a point whose law lacks a name gets 0 there — an elastic body has no plastic strain —
+/// not NaN, which the writers refuse as the sign of a run gone wrong.
 fn history_fields<const D: usize>(model: &Model<D>) -> Vec<(String, Vec<f64>)> {
     let pts = model.points();
     let mut names: Vec<&'static str> = Vec::new();
@@ -142,7 +144,7 @@ fn history_fields<const D: usize>(model: &Model<D>) -> Vec<(String, Vec<f64>)> {
             let values = (0..pts.len())
                 .map(|p| {
                     let law = model.law(p);
-                    law.history_names().iter().position(|&n| n == name).map_or(f64::NAN, |k| pts.history(p)[k])
+                    law.history_names().iter().position(|&n| n == name).map_or(0.0, |k| pts.history(p)[k])
                 })
                 .collect();
             (name.to_string(), values)

@@ -420,12 +420,39 @@ impl<'a, const D: usize> Outputs<'a, D> {
 /// `run_log.csv`: one row per step (load factor, Newton iterations, final residual, wall
 /// time, ...). Every constraint adds its reaction per held component (implicit analyses;
 /// NaN in explicit ones), a displaced one (a footing) its prescribed displacement before
-/// it: the load–displacement curve; every inclined roller its reaction per component.
+/// it: the load–displacement curve; every inclined roller its reaction per component;
+/// every body constraint, as a plane constraint does, its displacement and reaction.
 /// Every load adds its resultant at the step's load factor or time, per component.
 struct RunLog {
     writer: CsvWriter,
-    /// (constraint, component, prescribed displacement at full load if displaced).
-    held: Vec<(usize, usize, Option<f64>)>,
+    /// The planes' held components, then the bodies'.
+    planes: Vec<Held>,
+    bodies: Vec<Held>,
+}
+
+/// One held component of a constraint, as `RunLog` writes it: its columns' prefix, its
+/// constraint's index among the step's reactions, the component, and the prescribed
+/// displacement at full load if displaced.
+struct Held {
+    prefix: String,
+    reaction: usize,
+    axis: usize,
+    displacement: Option<f64>,
+}
+
+impl Held {
+    /// The held components of a constraint: `fixed` and `displacement` its own,
+    /// `displaced` whether it prescribes a displacement.
+    fn of(prefix: String, reaction: usize, fixed: &[bool], displacement: &[f64; 3], displaced: bool) -> Vec<Held> {
+        (fixed.iter().enumerate().filter(|(_, &f)| f))
+            .map(|(axis, _)| Held {
+                prefix: prefix.clone(),
+                reaction,
+                axis,
+                displacement: displaced.then_some(displacement[axis]),
+            })
+            .collect()
+    }
 }
 
 const AXES: [&str; 3] = ["x", "y", "z"];
@@ -450,26 +477,43 @@ impl RunLog {
 
     /// A new log of `model`, or the one a checkpoint left after `resume_at` bytes.
     fn open<const D: usize>(path: &Path, model: &Model<D>, resume_at: Option<u64>) -> Result<Self, OutputError> {
-        let held: Vec<(usize, usize, Option<f64>)> = (model.constraints().iter().enumerate())
+        let planes: Vec<Held> = (model.constraints().iter().enumerate())
+            .flat_map(|(k, c)| Held::of(format!("constraint{k}"), k, &c.fixed[..D], &c.displacement, c.is_displaced()))
+            .collect();
+        let first_body = model.constraints().len() + model.inclined_rollers().len();
+        let bodies: Vec<Held> = (model.body_constraints().iter().enumerate())
             .flat_map(|(k, c)| {
-                (0..D).filter(|&i| c.fixed[i]).map(move |i| (k, i, c.is_displaced().then_some(c.displacement[i])))
+                Held::of(
+                    format!("body_constraint{k}"),
+                    first_body + k,
+                    &c.fixed[..D],
+                    &c.displacement,
+                    c.is_displaced(),
+                )
             })
             .collect();
         let mut header: Vec<String> = Self::COLUMNS.iter().map(|s| s.to_string()).collect();
-        for &(k, i, u) in &held {
-            if u.is_some() {
-                header.push(format!("constraint{k}_displacement_{}", AXES[i]));
-            }
-            header.push(format!("constraint{k}_reaction_{}", AXES[i]));
-        }
+        Self::held_columns(&mut header, &planes);
         for k in 0..model.inclined_rollers().len() {
             header.extend(AXES[..D].iter().map(|a| format!("incline{k}_reaction_{a}")));
         }
+        Self::held_columns(&mut header, &bodies);
         for k in 0..model.loads().len() {
             header.extend(AXES[..D].iter().map(|a| format!("load{k}_{a}")));
         }
         let writer = CsvWriter::open(path, &header.iter().map(String::as_str).collect::<Vec<_>>(), resume_at)?;
-        Ok(Self { writer, held })
+        Ok(Self { writer, planes, bodies })
+    }
+
+    /// Per held component, its prescribed displacement's column (if displaced) and its
+    /// reaction's.
+    fn held_columns(header: &mut Vec<String>, held: &[Held]) {
+        for h in held {
+            if h.displacement.is_some() {
+                header.push(format!("{}_displacement_{}", h.prefix, AXES[h.axis]));
+            }
+            header.push(format!("{}_reaction_{}", h.prefix, AXES[h.axis]));
+        }
     }
 
     fn row<const D: usize>(&mut self, r: &Progress, model: &Model<D>) -> Result<(), OutputError> {
@@ -489,21 +533,28 @@ impl RunLog {
             CsvCell::Int(r.dofs as i64),
             CsvCell::Float(r.wall_time.as_secs_f64()),
         ];
-        for &(k, i, u) in &self.held {
-            if let Some(u) = u {
-                cells.push(CsvCell::Float(r.load_factor * u));
-            }
-            cells.push(CsvCell::Float(r.reactions.get(k).map_or(f64::NAN, |f| f[i])));
-        }
+        Self::held_cells(&mut cells, &self.planes, r);
         let planes = model.constraints().len();
         for k in 0..model.inclined_rollers().len() {
             let reaction = r.reactions.get(planes + k);
             cells.extend((0..D).map(|i| CsvCell::Float(reaction.map_or(f64::NAN, |f| f[i]))));
         }
+        Self::held_cells(&mut cells, &self.bodies, r);
         for (k, load) in model.loads().iter().enumerate() {
             cells.extend(load.resultant(model.load_scale(k, r.level)).iter().map(|&f| CsvCell::Float(f)));
         }
         self.writer.row_mixed(&cells)
+    }
+
+    /// Per held component, its prescribed displacement at the step (if displaced) and its
+    /// reaction (NaN where the analysis gives none).
+    fn held_cells(cells: &mut Vec<CsvCell>, held: &[Held], r: &Progress) {
+        for h in held {
+            if let Some(u) = h.displacement {
+                cells.push(CsvCell::Float(r.load_factor * u));
+            }
+            cells.push(CsvCell::Float(r.reactions.get(h.reaction).map_or(f64::NAN, |f| f[h.axis])));
+        }
     }
 }
 

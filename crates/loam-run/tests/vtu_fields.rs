@@ -89,3 +89,27 @@ fn a_scene_that_names_its_fields_gets_only_those() {
     let names: Vec<&str> = arrays.iter().map(|a| a.0.as_str()).collect();
     assert_eq!(names, ["plastic_strain", "p"]);
 }
+
+/// A scene of two materials, one without the other's history values (an elastic platen
+/// on the von Mises block), writes its frames: the platen's points get 0 for the block's
+/// equivalent plastic strain (an elastic body never yields), the block's points theirs.
+#[test]
+fn a_law_without_a_history_value_writes_zero_for_it() {
+    let two = BLOCK
+        .replace(
+            "law: VonMises(young: 1e4, poisson: 0.3, yield_stress: 10.0))],",
+            "law: VonMises(young: 1e4, poisson: 0.3, yield_stress: 10.0)),\n (name: \"platen\", density: 1.0, law: Elastic(young: 1e6, poisson: 0.3))],",
+        )
+        .replace(
+            "bodies: [(material: \"clay\", shape: Box(min: [0.0, 0.0], max: [1.0, 1.0]))],",
+            "bodies: [(material: \"clay\", shape: Box(min: [0.0, 0.0], max: [1.0, 0.75])), (material: \"platen\", shape: Box(min: [0.0, 0.75], max: [1.0, 1.0]))],",
+        );
+    assert_ne!(two, BLOCK);
+    let dir = tempfile::tempdir().unwrap();
+    run(&two, dir.path());
+    let (points, arrays) = point_data(&dir.path().join("points_00004.vtu"));
+    let field = |n: &str| &arrays.iter().find(|a| a.0 == n).unwrap().2;
+    let (material, plastic) = (field("material"), field("equivalent_plastic_strain"));
+    assert_eq!(plastic.len(), points);
+    assert!(material.iter().zip(plastic).all(|(&m, &e)| if m == 1.0 { e == 0.0 } else { e > 0.0 }), "{plastic:?}");
+}

@@ -123,6 +123,9 @@ impl LoadedScene {
     fn unaccepted(&self, refusal: &Unaccepted) -> SceneError {
         let at: Vec<Seg> = match refusal.option {
             ModelOption::InclinedRoller { index } => vec![Seg::Key("inclined_rollers"), Seg::Index(index)],
+            ModelOption::BodyConstraint { index } | ModelOption::DisplacedBodyConstraint { index } => {
+                vec![Seg::Key("body_constraints"), Seg::Index(index)]
+            }
             ModelOption::DisplacedConstraint { index } => vec![Seg::Key("constraints"), Seg::Index(index)],
             ModelOption::GhostPenalty => vec![Seg::Key("ghost_penalty")],
             ModelOption::GeometricallyLinear => vec![Seg::Key("geometrically_linear")],
@@ -161,6 +164,9 @@ impl LoadedScene {
             }
             Some(&ConnectError::InclinedRollerTouchesNoNode { index }) => {
                 self.error(&[Seg::Key("inclined_rollers"), Seg::Index(index)], e.to_string())
+            }
+            Some(&ConnectError::BodyConstraintTouchesNoNode { index }) => {
+                self.error(&[Seg::Key("body_constraints"), Seg::Index(index)], e.to_string())
             }
             Some(&ConnectError::LoadOffMaterial { load, .. }) => {
                 self.error(&[Seg::Key("loads"), Seg::Index(load)], e.to_string())

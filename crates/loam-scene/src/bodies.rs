@@ -25,6 +25,16 @@ impl LoadedScene {
                 "no bodies: add at least one Body(material: ..., shape: Box(min: [...], max: [...]))",
             ));
         }
+        let bodies = &self.scene.bodies;
+        for (i, b) in bodies.iter().enumerate() {
+            let named = |e: &BodySpec| !b.name.is_empty() && e.name == b.name;
+            if let Some(j) = bodies[..i].iter().position(named) {
+                return Err(self.error(
+                    &body_key(i, "name"),
+                    format!("body {i} is called {:?}, as body {j} is; body names must differ", b.name),
+                ));
+            }
+        }
         match self.scene.method {
             MethodSpec::Mpm => self.material_points(grid),
             MethodSpec::UpdatedLagrangianFem => self.fem_blocks(grid),

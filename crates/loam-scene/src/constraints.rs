@@ -1,11 +1,11 @@
-//! The loads and constraints part of a scene: gravity, and the plane constraints — rollers,
+//! The loads and constraints part of a scene: gravity, the plane constraints — rollers,
 //! fixed planes and prescribed displacements, each on a plane of grid nodes, optionally
-//! limited to a box.
+//! limited to a box — the rollers on inclined planes, and the constraints on named bodies.
 
 use super::locate::Seg;
-use super::{AnalysisSpec, Axis, ConstraintSpec, LoadedScene, RegionSpec, SceneError};
+use super::{AnalysisSpec, Axis, BodyConstraintSpec, ConstraintSpec, LoadedScene, RegionSpec, SceneError};
 use loam_grid::Grid;
-use loam_model::{InclinedRoller, PlaneConstraint};
+use loam_model::{BodyConstraint, InclinedRoller, PlaneConstraint};
 use nalgebra::SVector;
 
 impl LoadedScene {
@@ -46,6 +46,42 @@ impl LoadedScene {
             .collect()
     }
 
+    /// The constraints on bodies, each body found by its name; a prescribed displacement
+    /// is checked against the analysis by the model's table of options.
+    pub(super) fn body_constraints<const D: usize>(&self) -> Result<Vec<BodyConstraint>, SceneError> {
+        (self.scene.body_constraints.iter().enumerate()).map(|(k, c)| self.body_constraint::<D>(k, c)).collect()
+    }
+
+    /// Body constraint `k`.
+    fn body_constraint<const D: usize>(&self, k: usize, c: &BodyConstraintSpec) -> Result<BodyConstraint, SceneError> {
+        let (name, within) = match c {
+            BodyConstraintSpec::Fixed { body, within } | BodyConstraintSpec::Displacement { body, within, .. } => {
+                (body, within)
+            }
+        };
+        let bodies = &self.scene.bodies;
+        let Some(body) = bodies.iter().position(|b| !name.is_empty() && b.name == *name) else {
+            let names: Vec<&str> = bodies.iter().map(|b| b.name.as_str()).filter(|n| !n.is_empty()).collect();
+            return Err(self.error(&[Seg::Key("body_constraints"), Seg::Index(k), Seg::Key("body")], format!(
+                "body constraint {k} names body \"{name}\", but no body is called that; named bodies: {names:?} (name one with name: \"{name}\")"
+            )));
+        };
+        let constraint = match c {
+            BodyConstraintSpec::Fixed { .. } => BodyConstraint::new(body as u32, [true; 3]),
+            BodyConstraintSpec::Displacement { displacement, .. } => {
+                let (fixed, u) = self.prescribed::<D>(("body_constraints", k), displacement)?;
+                BodyConstraint::new(body as u32, fixed).displaced(u)
+            }
+        };
+        match within {
+            None => Ok(constraint),
+            Some(r) => {
+                let (min, max) = self.region_box::<D>(("body_constraints", k), r, None)?;
+                Ok(constraint.within(min, max))
+            }
+        }
+    }
+
     /// Constraint `i`, on a plane of grid nodes.
     fn constraint<const D: usize>(
         &self,
@@ -67,7 +103,7 @@ impl LoadedScene {
             }
             ConstraintSpec::Fixed { .. } => PlaneConstraint::new(a, plane, [true; 3]),
             ConstraintSpec::Displacement { displacement, .. } => {
-                let (fixed, u) = self.prescribed::<D>(i, displacement)?;
+                let (fixed, u) = self.prescribed::<D>(("constraints", i), displacement)?;
                 PlaneConstraint::new(a, plane, fixed).displaced(u)
             }
         };
@@ -108,15 +144,16 @@ impl LoadedScene {
     /// `D` entries, `Some(u)` (finite) prescribed or `None` free, at least one `Some`.
     fn prescribed<const D: usize>(
         &self,
-        i: usize,
+        (list, i): (&'static str, usize),
         displacement: &[Option<f64>],
     ) -> Result<([bool; 3], [f64; 3]), SceneError> {
         if displacement.len() != D
             || displacement.iter().flatten().any(|u| !u.is_finite())
             || displacement.iter().all(Option::is_none)
         {
-            return Err(self.error(&[Seg::Key("constraints"), Seg::Index(i), Seg::Key("displacement")], format!(
-                "constraint {i}: displacement needs {D} entries, Some(u) (finite) for a prescribed component or None for a free one, at least one Some; got {displacement:?}"
+            return Err(self.error(&[Seg::Key(list), Seg::Index(i), Seg::Key("displacement")], format!(
+                "{} {i}: displacement needs {D} entries, Some(u) (finite) for a prescribed component or None for a free one, at least one Some; got {displacement:?}",
+                label(list)
             )));
         }
         let mut fixed = [false; 3];
@@ -136,13 +173,25 @@ impl LoadedScene {
         r: &RegionSpec,
         constraint: PlaneConstraint,
     ) -> Result<PlaneConstraint, SceneError> {
-        let at_w = |key| [Seg::Key("constraints"), Seg::Index(i), Seg::Key("within"), Seg::Key(key)];
+        let (min, max) = self.region_box::<D>(("constraints", i), r, Some(constraint.axis))?;
+        Ok(constraint.within(min, max))
+    }
+
+    /// The box `r` of entry `i` of the list `list` as bounds on three axes (unbounded on
+    /// those beyond `D`); its bounds must be finite and ordered on every axis but `skip`.
+    fn region_box<const D: usize>(
+        &self,
+        (list, i): (&'static str, usize),
+        r: &RegionSpec,
+        skip: Option<usize>,
+    ) -> Result<([f64; 3], [f64; 3]), SceneError> {
+        let at_w = |key| [Seg::Key(list), Seg::Index(i), Seg::Key("within"), Seg::Key(key)];
         let lo = self.vector::<D>(&r.min, &at_w("min"), "within.min")?;
         let hi = self.vector::<D>(&r.max, &at_w("max"), "within.max")?;
-        if let Some(k) = (0..D).find(|&k| k != constraint.axis && lo[k] > hi[k]) {
+        if let Some(k) = (0..D).find(|&k| Some(k) != skip && lo[k] > hi[k]) {
             return Err(self.error(
                 &at_w("min"),
-                format!("constraint {i}: within.min[{k}] = {} exceeds within.max[{k}] = {}", lo[k], hi[k]),
+                format!("{} {i}: within.min[{k}] = {} exceeds within.max[{k}] = {}", label(list), lo[k], hi[k]),
             ));
         }
         let mut min = [f64::NEG_INFINITY; 3];
@@ -151,6 +200,11 @@ impl LoadedScene {
             min[k] = lo[k];
             max[k] = hi[k];
         }
-        Ok(constraint.within(min, max))
+        Ok((min, max))
     }
+}
+
+/// How a message names an entry of the list `list`: "constraint", "body constraint".
+fn label(list: &str) -> String {
+    list.trim_end_matches('s').replace('_', " ")
 }

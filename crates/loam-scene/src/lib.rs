@@ -53,6 +53,7 @@ pub use memory::{default_memory_limit, MemoryEstimate};
 pub use schema::*;
 
 use loam_analysis::Analysis;
+use loam_model::ModelError;
 use locate::{locate, Seg};
 use nalgebra::SVector;
 use std::io::Read;
@@ -181,12 +182,20 @@ impl LoadedScene {
         self.check_scales(&grid, &laws, &gravity)?;
         let constraints = self.constraints(&grid)?;
         let inclined = self.inclined_rollers::<D>()?;
+        let held_bodies = self.body_constraints::<D>()?;
         let loads = self.loads(&grid)?;
         let solver = self.solver()?;
         let model = self.model(grid, bodies, laws, constraints, gravity)?;
         let model = model
             .with_inclined_rollers(inclined)
-            .map_err(|e| self.error(&[Seg::Key("inclined_rollers")], e.to_string()))?;
+            .map_err(|e| self.error(&[Seg::Key("inclined_rollers")], e.to_string()))?
+            .with_body_constraints(held_bodies)
+            .map_err(|e| match e {
+                ModelError::BodyConstraint { index, .. } => {
+                    self.error(&[Seg::Key("body_constraints"), Seg::Index(index)], e.to_string())
+                }
+                _ => self.error(&[Seg::Key("body_constraints")], e.to_string()),
+            })?;
         let model = self.with_loads(model, loads)?;
         let mut analysis = self.analysis(model, solver)?;
         self.check_before_the_first_step(&mut analysis)?;

@@ -48,6 +48,11 @@ pub struct Scene {
     /// (QuasiStatic; default none).
     #[serde(default)]
     pub inclined_rollers: Vec<InclinedRollerSpec>,
+    /// Constraints on named bodies: the nodes each body's points (inside a box, if given)
+    /// reach, held or displaced; they follow the body through the grid (implicit
+    /// analyses; default none).
+    #[serde(default)]
+    pub body_constraints: Vec<BodyConstraintSpec>,
     /// Loads beside gravity: forces at points, tractions and pressures on the bodies'
     /// boundaries.
     #[serde(default)]
@@ -66,6 +71,28 @@ pub struct Scene {
     pub solver: SolverSpec,
     #[serde(default)]
     pub output: OutputSpec,
+}
+
+/// A constraint on a body, named by its `name`: the nodes that its points inside
+/// `within` (all of them if not given) reach.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub enum BodyConstraintSpec {
+    /// All displacement components are zero.
+    Fixed {
+        body: String,
+        #[serde(default)]
+        within: Option<RegionSpec>,
+    },
+    /// Prescribed displacement at full load: one entry per axis, `Some(u)` prescribed
+    /// (`Some(0.0)` held), `None` free. Applied with the load factor of a quasi-static
+    /// analysis (a rigid footing or a pile pushed into the ground).
+    Displacement {
+        body: String,
+        displacement: Vec<Option<f64>>,
+        #[serde(default)]
+        within: Option<RegionSpec>,
+    },
 }
 
 /// A roller on an inclined plane.
@@ -203,6 +230,9 @@ pub struct SofteningSpec {
 #[derive(Debug, Clone, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct BodySpec {
+    /// The body's name, by which a body constraint names it (default "": unnamed).
+    #[serde(default)]
+    pub name: String,
     /// Name of a material in `materials`.
     pub material: String,
     pub shape: ShapeSpec,

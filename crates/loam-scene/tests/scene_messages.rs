@@ -83,6 +83,12 @@ fn cases() -> Vec<(&'static str, usize, String)> {
     let small = "kinematics: SmallStrain,";
     let explicit = "Explicit(duration: 1.0)";
     let dynamic = "ImplicitDynamic(time_step: 0.1, duration: 1.0)";
+    // The column named "col", with `constraints` on it and `analysis`.
+    let held = |constraints: &[&str], analysis: &str| {
+        let named = edit(COLUMN, &[("(material: \"soil\", shape", "(name: \"col\", material: \"soil\", shape")]);
+        let at = format!("    body_constraints: [{}],\n    analysis: {analysis},", constraints.join(", "));
+        edit(&named, &[("    analysis: QuasiStatic(load_steps: 40),", &at)])
+    };
     let mut v: Vec<(&'static str, usize, String)> = vec![
         ("column", 2, c(&[])),
         ("syntax", 2, c(&[("cell_size: [0.3125, 0.3125]", "cell_size: [0.3125 0.3125]")])),
@@ -193,6 +199,17 @@ fn cases() -> Vec<(&'static str, usize, String)> {
         ("within max NaN", 2, c(&[(Y0, &within("(min: [0.0, 0.0], max: [0.0, NaN])"))])),
         ("within upside down", 2, c(&[(Y0, &within("(min: [0.0, 5.0], max: [0.0, 1.0])"))])),
         ("within across the plane", 2, c(&[(Y0, &within("(min: [1.0, 0.0], max: [0.0, 5.0])"))])),
+        ("body constraint", 2, held(&["Fixed(body: \"col\", within: Some((min: [0.0, 0.0], max: [0.3125, 0.5])))"], QS)),
+        ("body constraint on no body", 2, held(&["Fixed(body: \"wall\")"], QS)),
+        ("body constraint all free", 2, held(&["Displacement(body: \"col\", displacement: [None, None])"], QS)),
+        ("body constraint upside down", 2, held(&["Fixed(body: \"col\", within: Some((min: [0.0, 5.0], max: [0.3125, 1.0])))"], QS)),
+        ("body constraint outside its body", 2, held(&["Fixed(body: \"col\", within: Some((min: [0.0, 10.5], max: [0.3125, 11.0])))"], QS)),
+        ("body constraint in explicit", 2, held(&["Fixed(body: \"col\")"], explicit)),
+        ("displaced body constraint in dynamics", 2, held(&["Displacement(body: \"col\", displacement: [None, Some(-0.1)])"], dynamic)),
+        ("body names twice", 2, held(&["Fixed(body: \"col\")"], QS).replace(
+            "    ],\n    gravity",
+            "        (name: \"col\", material: \"soil\", shape: Box(min: [0.0, 10.0], max: [0.3125, 10.3])),\n    ],\n    gravity",
+        )),
         ("residual tolerance zero", 2, c(&[("residual_tolerance: 1e-9", "residual_tolerance: 0.0")])),
         ("residual tolerance one", 2, c(&[("residual_tolerance: 1e-9", "residual_tolerance: 1.0")])),
         (
