@@ -206,11 +206,86 @@ fn load_examples_run() {
 
     let footing = LoadedScene::read(Path::new("examples/footing_load_control.ron")).unwrap();
     let out = dir.path().join("footing");
-    let e = run_scene(&footing, &out, &mut |_| {}).unwrap_err();
-    assert!(e.to_string().contains("did not converge"), "{e}");
+    let summary = run_scene(&footing, &out, &mut |_| {}).unwrap();
+    let collapse = summary.collapse.expect("the strip collapses before its full load");
     let log = std::fs::read_to_string(out.join("run_log.csv")).unwrap();
     let last: Vec<f64> = log.lines().last().unwrap().split(',').map(|v| v.parse().unwrap()).collect();
-    let q = -last[last.len() - 1]; // load0_y over b = 1
+    let q_last_step = -last[last.len() - 1]; // load0_y over b = 1
+    let q_full = 1.25 * (2.0 + std::f64::consts::PI) * 10.0;
+    let q = collapse.load_factor * q_full;
+    // The collapse load is the most the strip carried: at or above the last completed
+    // step's, below the attempt that failed.
+    assert!(q >= q_last_step && collapse.load_factor < collapse.attempted, "{collapse:?} after {q_last_step}");
     let q_ref = (2.0 + std::f64::consts::PI) * 10.0;
     assert!((q / q_ref - 1.0).abs() < 0.01, "collapse {q} against {q_ref}");
+    assert!(out.join("points_final.csv").exists(), "the collapse state is written in full");
+}
+
+/// A scene that asks for the error at collapse (`at_collapse: Error`) gets it: the run
+/// stops with the step that could not go on, naming the load factor reached.
+#[test]
+fn a_collapse_can_be_an_error() {
+    let text = std::fs::read_to_string("examples/footing_load_control.ron").unwrap().replace(
+        "analysis: QuasiStatic(load_steps: 100),",
+        "analysis: QuasiStatic(load_steps: 100, at_collapse: Error),",
+    );
+    let footing = LoadedScene::parse(Path::new("footing.ron"), text).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let e = run_scene(&footing, dir.path(), &mut |_| {}).unwrap_err().to_string();
+    assert!(e.contains("step 81 did not converge: it reached 0.802969 and could not go on to 0.803008"), "{e}");
+}
+
+/// A monitoring point writes its point's state to `run_log.csv` every step: on the V1c
+/// column the top row's two points (x0 = 0.078125 and 0.234375) are equally near the top
+/// centre (0.15625, 10), and the one of least id (the left, filled first) is taken; its
+/// last row holds the displacement and stress `points_final.csv` writes for that point,
+/// to the last bit (two writers of one state).
+#[test]
+fn a_monitoring_point_follows_its_point() {
+    let text = std::fs::read_to_string("examples/column.ron").unwrap().replace(
+        "    analysis: QuasiStatic(load_steps: 40),",
+        "    monitor: [(name: \"top\", at: [0.15625, 10.0])],\n    analysis: QuasiStatic(load_steps: 40),",
+    );
+    let dir = tempfile::tempdir().unwrap();
+    run_scene(&LoadedScene::parse(Path::new("column.ron"), text).unwrap(), dir.path(), &mut |_| {}).unwrap();
+    let read = |name: &str| {
+        let text = std::fs::read_to_string(dir.path().join(name)).unwrap();
+        let header: Vec<String> = text.lines().next().unwrap().split(',').map(String::from).collect();
+        let rows: Vec<Vec<f64>> =
+            text.lines().skip(1).map(|l| l.split(',').map(|v| v.parse().unwrap()).collect()).collect();
+        (header, rows)
+    };
+    let (log_header, log) = read("run_log.csv");
+    let (pts_header, pts) = read("points_final.csv");
+    let at = |h: &[String], n: &str| h.iter().position(|c| c == n).unwrap_or_else(|| panic!("no {n}"));
+    let [x0, y0, y, syy] = ["x0", "y0", "y", "syy"].map(|c| at(&pts_header, c));
+    let top = pts.iter().filter(|r| r[y0] > 9.9).min_by(|a, b| a[x0].total_cmp(&b[x0])).unwrap();
+    let last = log.last().unwrap();
+    assert_eq!(last[at(&log_header, "monitor_top_uy")], top[y] - top[y0]);
+    assert_eq!(last[at(&log_header, "monitor_top_syy")], top[syy]);
+    assert_eq!(log.len(), 40);
+    assert!(dir.path().join("monitors.svg").exists());
+}
+
+/// A place equally near two points takes the one of least id (the first filled), whose
+/// place the model gives back for the id the scene resolves; a place above the body is
+/// refused.
+#[test]
+fn a_monitor_takes_the_nearest_point_of_least_id() {
+    let scene = |at: &str| {
+        let text = std::fs::read_to_string("examples/column.ron").unwrap().replace(
+            "    analysis: QuasiStatic(load_steps: 40),",
+            &format!("    monitor: [(name: \"m\", at: {at})],\n    analysis: QuasiStatic(load_steps: 40),"),
+        );
+        LoadedScene::parse(Path::new("column.ron"), text).unwrap()
+    };
+    let s = scene("[0.15625, 5.0]");
+    let analysis = s.build::<2>().unwrap();
+    let model = analysis.model();
+    let id = s.monitors(model).unwrap()[0].point;
+    let p = model.points().id().iter().position(|&i| i == id).unwrap();
+    // Points at x0 = 0.078125 and 0.234375, y0 = 4.921875 and 5.078125: four equally near.
+    assert_eq!(model.points().position0()[p].as_slice(), &[0.078125, 4.921875]);
+    let e = scene("[0.15625, 10.1]").build::<2>().err().unwrap().to_string();
+    assert!(e.contains("lies in no body"), "{e}");
 }

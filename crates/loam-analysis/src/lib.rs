@@ -27,6 +27,20 @@ pub enum AnalysisState {
     Explicit(ExplicitState),
 }
 
+/// A load-controlled quasi-static step that could not go on: the load factor reached is the
+/// most the model carries, the limit load (as close as the step's cut-backs resolve it).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Collapse {
+    /// The step that could not be completed.
+    pub step: usize,
+    /// The load factor reached, the last converged: the most the model carried.
+    pub load_factor: f64,
+    /// The load factor of the smallest attempt beyond it, which failed.
+    pub attempted: f64,
+    /// Why that attempt failed.
+    pub reason: String,
+}
+
 /// Why a step failed.
 #[derive(Debug, thiserror::Error)]
 pub enum AnalysisError {
@@ -248,6 +262,22 @@ impl<const D: usize> Analysis<D> {
         Ok(())
     }
 
+    /// The collapse `error` means, if it is one: a quasi-static step that could not go on
+    /// while a load follows the load factor ([`Model::load_controlled`]), after some of it
+    /// was carried. A failure at the first increment, under prescribed displacements, or
+    /// of another analysis, is no limit load.
+    pub fn collapse(&self, error: &AnalysisError) -> Option<Collapse> {
+        match (self, error) {
+            (
+                Analysis::QuasiStatic(a),
+                AnalysisError::Implicit(StepError::NotConverged { step, reached, load_factor, reason, .. }),
+            ) if a.model().load_controlled() && *reached > 0.0 => {
+                Some(Collapse { step: *step, load_factor: *reached, attempted: *load_factor, reason: reason.clone() })
+            }
+            _ => None,
+        }
+    }
+
     /// Advance one step.
     pub fn step(&mut self) -> Result<Progress, AnalysisError> {
         let before = self.time();
@@ -300,22 +330,19 @@ mod tests {
     /// A 2 × 2 m von Mises block (σ_y = 10, 2 × 2 points per 0.5 m cell) on rollers,
     /// under gravity.
     fn block() -> Model<2> {
+        block_under(Vector2::new(0.0, -10.0), vec![])
+    }
+
+    /// The block under gravity `g`, with `more` constraints beside its base.
+    fn block_under(g: Vector2<f64>, more: Vec<PlaneConstraint>) -> Model<2> {
         let grid = Grid::new(Vector2::zeros(), Vector2::new(0.5, 0.5), [6, 6]).unwrap();
         let mut points = PointStore::new();
         let shape = Shape::Box { min: Vector2::new(0.5, 0.0), max: Vector2::new(2.5, 2.0) };
         points.fill(&grid, &shape, 2, 1.0, 0).unwrap();
         let law = Arc::new(VonMises::new(Elastic::new(1e4, 0.3).unwrap(), 10.0, 0.0).unwrap());
         let base = PlaneConstraint::new(1, 0, [true, true, false]);
-        Model::new(
-            grid,
-            BasisKind::Gimp,
-            Kinematics::SmallStrain,
-            points,
-            vec![law],
-            vec![base],
-            Vector2::new(0.0, -10.0),
-        )
-        .unwrap()
+        let constraints = [vec![base], more].concat();
+        Model::new(grid, BasisKind::Gimp, Kinematics::SmallStrain, points, vec![law], constraints, g).unwrap()
     }
 
     fn quasi_static() -> Analysis<2> {
@@ -373,5 +400,47 @@ mod tests {
         assert_eq!(qs.change_points(PointChange::RemoveIn(top)).unwrap(), 16);
         let r = qs.step().unwrap();
         assert!((r.reactions[0][1].abs() - 7.5).abs() < 1e-6, "three quarters of the weight: {:?}", r.reactions);
+    }
+
+    /// A quasi-static step that cannot go on while gravity follows the load factor is a
+    /// collapse at the load factor it reached; the same failure of a block pushed by a
+    /// prescribed displacement (weightless or not), one at the first increment, another
+    /// error, or an explicit analysis's, is none.
+    #[test]
+    fn a_failed_step_is_a_collapse_only_under_load() {
+        let failed = || {
+            AnalysisError::Implicit(StepError::NotConverged {
+                step: 3,
+                reached: 0.61,
+                load_factor: 0.62,
+                cutbacks: 9,
+                reason: "indefinite".into(),
+                residuals: vec![],
+            })
+        };
+        let collapse = quasi_static().collapse(&failed()).unwrap();
+        assert_eq!((collapse.step, collapse.load_factor, collapse.attempted), (3, 0.61, 0.62));
+        assert_eq!(collapse.reason, "indefinite");
+        let top = PlaneConstraint::new(1, 4, [false, true, false]).displaced([0.0, -0.01, 0.0]);
+        let pushed = block_under(Vector2::zeros(), vec![top]);
+        let pushed = Analysis::QuasiStatic(QuasiStatic::new(pushed, QuasiStaticSettings::default()));
+        assert_eq!(pushed.collapse(&failed()), None);
+        let top = PlaneConstraint::new(1, 4, [false, true, false]).displaced([0.0, -0.01, 0.0]);
+        let heavy_and_pushed = block_under(Vector2::new(0.0, -10.0), vec![top]);
+        let heavy_and_pushed =
+            Analysis::QuasiStatic(QuasiStatic::new(heavy_and_pushed, QuasiStaticSettings::default()));
+        assert_eq!(heavy_and_pushed.collapse(&failed()), None, "mixed control is no limit load");
+        let at_once = AnalysisError::Implicit(StepError::NotConverged {
+            step: 1,
+            reached: 0.0,
+            load_factor: 0.001,
+            cutbacks: 8,
+            reason: "indefinite".into(),
+            residuals: vec![],
+        });
+        assert_eq!(quasi_static().collapse(&at_once), None, "nothing carried: no limit load");
+        assert_eq!(quasi_static().collapse(&AnalysisError::Implicit(StepError::Finished(4))), None);
+        let ex = Analysis::Explicit(Explicit::new(block(), ExplicitSettings::new(0.01)).unwrap());
+        assert_eq!(ex.collapse(&failed()), None);
     }
 }

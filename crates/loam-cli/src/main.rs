@@ -280,7 +280,8 @@ fn run_command(
 }
 
 /// The lines a finished run ends with: a warning if its plots could not be drawn, the
-/// factor of safety of a strength reduction, and what the run did.
+/// factor of safety of a strength reduction, the collapse load of a load-controlled run
+/// that reached it, and what the run did.
 fn print_summary(scene: &Path, summary: &RunSummary) {
     if let Err(e) = &summary.plots {
         eprintln!("warning: the plots of {} could not be drawn: {e}", summary.output_dir.display());
@@ -293,6 +294,12 @@ fn print_summary(scene: &Path, summary: &RunSummary) {
             fos.failed,
             fos.trials.len(),
             fos.stable
+        );
+    }
+    if let Some(c) = &summary.collapse {
+        println!(
+            "collapse: the model carried load factor λ = {:.6} at most; step {} could not go on to {:.6} ({})",
+            c.load_factor, c.step, c.attempted, c.reason
         );
     }
     println!(

@@ -6,6 +6,7 @@
 //!   time (explicit runs: the time step);
 //! - `load_displacement.svg`: each prescribed displacement's reaction against it (the
 //!   footing's load–settlement curve), where the run has one;
+//! - `monitors.svg`: each monitoring point's displacement against the load factor or time;
 //! - `energies.svg`: kinetic, strain and total energy and the external work against time;
 //! - `strength_reduction.svg`: the factor of each trial, held or failed.
 
@@ -13,7 +14,8 @@ use crate::output::plot::{Plot, Series};
 use std::path::{Path, PathBuf};
 
 /// The names of the plots, for the output folder's bookkeeping.
-pub const PLOT_FILES: [&str; 4] = ["run_log.svg", "load_displacement.svg", "energies.svg", "strength_reduction.svg"];
+pub const PLOT_FILES: [&str; 5] =
+    ["run_log.svg", "load_displacement.svg", "monitors.svg", "energies.svg", "strength_reduction.svg"];
 
 /// A CSV file of numbers: its header and its rows (a cell that is not a number reads NaN,
 /// and NaN is not drawn).
@@ -55,6 +57,7 @@ pub fn plot_run(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
     if let Some(log) = Table::read(&dir.join("run_log.csv"))? {
         plots.extend(steps_plot(&log).map(|p| ("run_log.svg", p)));
         plots.extend(load_displacement_plot(&log).map(|p| ("load_displacement.svg", p)));
+        plots.extend(monitors_plot(&log).map(|p| ("monitors.svg", p)));
     }
     if let Some(history) = Table::read(&dir.join("history.csv"))? {
         plots.extend(energies_plot(&history).map(|p| ("energies.svg", p)));
@@ -98,9 +101,27 @@ fn load_displacement_plot(log: &Table) -> Option<Plot> {
         let name = held.trim_end_matches(|c: char| c.is_ascii_digit());
         let label = format!("{} {}, {axis}", name.replace('_', " "), &held[name.len()..]);
         let (u, f) = (format!("{held}_displacement_{axis}"), format!("{held}_reaction_{axis}"));
-        plot.series.push(log.series(&label, &u, &f)?);
+        // A column that only looks like one (a monitor named so) has no pair: skip it.
+        let Some(series) = log.series(&label, &u, &f) else { continue };
+        plot.series.push(series);
     }
     (!plot.series.is_empty()).then_some(plot)
+}
+
+/// Each monitoring point's displacement components (`monitor_<name>_u<axis>`) against
+/// the load factor or time: a footing's load–settlement curve at its centre.
+fn monitors_plot(log: &Table) -> Option<Plot> {
+    let quasi_static = log.column("time")? == log.column("load_factor")?;
+    let x = if quasi_static { "load factor" } else { "time" };
+    let mut plot = Plot::new("Displacement of the monitoring points", x, "displacement");
+    for column in log.header.iter().filter(|h| h.starts_with("monitor_")) {
+        let Some((name, axis)) = column["monitor_".len()..].rsplit_once("_u") else { continue };
+        if !["x", "y", "z"].contains(&axis) {
+            continue;
+        }
+        plot.series.push(log.series(&format!("{name}, u{axis}"), "time", column)?);
+    }
+    (!plot.series.is_empty() && !log.rows.is_empty()).then_some(plot)
 }
 
 /// The energy balance against time.

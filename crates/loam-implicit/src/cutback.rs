@@ -120,6 +120,7 @@ impl CutBack {
         if self.depth >= self.max_cutbacks {
             return Err(StepError::NotConverged {
                 step,
+                reached: position,
                 load_factor,
                 cutbacks: self.done.cutbacks - 1,
                 reason: reason + &self.tiny_increment_hint(increment),

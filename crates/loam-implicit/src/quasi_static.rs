@@ -258,7 +258,7 @@ impl<const D: usize> QuasiStatic<D> {
         self.engine.connect(self.step + 1)?;
         let connectivity = t.elapsed();
         let (step, lambda) = self.prepare_next_step();
-        let not_converged = |reason: String| inspection_error(step, lambda, reason);
+        let not_converged = |reason: String| inspection_error(step, (self.load_factor, lambda), reason);
         let t = Instant::now();
         self.engine.update_points_and_residual(None).map_err(|e| not_converged(e.to_string()))?;
         let points_and_residual = t.elapsed();
@@ -297,7 +297,9 @@ impl<const D: usize> QuasiStatic<D> {
     pub fn start_tangent(&mut self) -> Result<(BlockPattern, Vec<f64>, Vec<bool>), StepError> {
         self.engine.connect(self.step + 1)?;
         let (step, lambda) = self.prepare_next_step();
-        self.engine.update_points_and_residual(None).map_err(|e| inspection_error(step, lambda, e.to_string()))?;
+        self.engine
+            .update_points_and_residual(None)
+            .map_err(|e| inspection_error(step, (self.load_factor, lambda), e.to_string()))?;
         self.engine.assemble(None);
         let e = &self.engine;
         Ok((e.pattern.clone(), e.matrix.to_columns(&e.pattern).into_owned(), e.constrained.clone()))
@@ -333,6 +335,6 @@ impl<const D: usize> QuasiStatic<D> {
 
 /// A failure while inspecting the next step's start (`profile_iteration`, `start_tangent`),
 /// reported like a step that did not converge, with nothing cut back or committed.
-fn inspection_error(step: usize, load_factor: f64, reason: String) -> StepError {
-    StepError::NotConverged { step, load_factor, cutbacks: 0, reason, residuals: vec![] }
+fn inspection_error(step: usize, (reached, load_factor): (f64, f64), reason: String) -> StepError {
+    StepError::NotConverged { step, reached, load_factor, cutbacks: 0, reason, residuals: vec![] }
 }

@@ -57,8 +57,12 @@ pub enum StepError {
     /// The points could not be connected to the background, or a constraint holds no node.
     #[error(transparent)]
     Connect(#[from] ConnectError),
-    #[error("step {step} did not converge at load factor {load_factor:.6} after {cutbacks} cut-backs: {reason}")]
-    NotConverged { step: usize, load_factor: f64, cutbacks: usize, reason: String, residuals: Vec<f64> },
+    /// Step `step` reached `reached` (its load factor, or time) and could not go on to
+    /// `load_factor` with the smallest increment allowed; `cutbacks` counts every halving
+    /// of the step, which may exceed `max_cutbacks` (a sub-step size doubles back after two
+    /// converged attempts).
+    #[error("step {step} did not converge: it reached {reached:.6} and could not go on to {load_factor:.6}, after {cutbacks} cut-backs in the step (the last one as small as max_cutbacks allows): {reason}")]
+    NotConverged { step: usize, reached: f64, load_factor: f64, cutbacks: usize, reason: String, residuals: Vec<f64> },
     #[error("analysis: {0}")]
     InvalidSettings(InvalidSetting),
     #[error("linear solver: {0}")]

@@ -603,6 +603,18 @@ impl<const D: usize> Model<D> {
         }
     }
 
+    /// Whether only forces follow the load factor of a quasi-static analysis — gravity
+    /// (unless a geostatic stress preloaded it), point forces or loads, and no prescribed
+    /// displacement — so that a step that cannot reach equilibrium is a collapse: the load
+    /// factor reached is the most the model carries.
+    pub fn load_controlled(&self) -> bool {
+        let weight = !self.gravity_preloaded && self.gravity.iter().any(|&g| g != 0.0);
+        let forces = self.point_forces.iter().any(|f| f.iter().any(|&v| v != 0.0));
+        let displaced =
+            self.constraints.iter().any(|c| c.is_displaced()) || self.body_constraints.iter().any(|c| c.is_displaced());
+        (weight || forces || !self.loads.is_empty()) && !displaced
+    }
+
     /// Body force per unit mass at full load.
     pub fn gravity(&self) -> &SVector<f64, D> {
         &self.gravity

@@ -3,6 +3,7 @@
 //! (`loam-format`), the per-point fields the outputs write (`point_fields`), and what a
 //! checkpoint holds of a run and how a run is put back from one (`restart`).
 
+mod monitor;
 mod point_fields;
 pub mod restart;
 pub mod runner;

@@ -177,6 +177,18 @@ pub(crate) fn write_frame<const D: usize>(
     pvd.add(time, &name)
 }
 
+/// The stress columns of `points_final.csv` (and of the run log's monitors): name and
+/// component, the in-plane ones and σ_zz in 2D, all six in 3D.
+pub(crate) fn stress_columns(dim: usize) -> &'static [(&'static str, usize, usize)] {
+    const ALL: [(&str, usize, usize); 6] =
+        [("sxx", 0, 0), ("syy", 1, 1), ("szz", 2, 2), ("sxy", 0, 1), ("syz", 1, 2), ("sxz", 0, 2)];
+    if dim == 3 {
+        &ALL
+    } else {
+        &ALL[..4]
+    }
+}
+
 /// `points_final.csv`: one row per point, in id order, with initial and current position, stress
 /// (xx, yy, zz, xy[, yz, xz]), initial and current volume and mass, then the `chosen`
 /// scalar fields beyond those (p, q, the plastic state, the pore pressure at gravity's
@@ -199,11 +211,7 @@ pub fn write_points_csv<const D: usize>(
         header.push(axes[a].to_string());
         columns.push(pts.position().iter().map(|x| x[a]).collect());
     }
-    let mut comps = vec![("sxx", 0, 0), ("syy", 1, 1), ("szz", 2, 2), ("sxy", 0, 1)];
-    if D == 3 {
-        comps.extend([("syz", 1, 2), ("sxz", 0, 2)]);
-    }
-    for (name, i, j) in comps {
+    for &(name, i, j) in stress_columns(D) {
         header.push(name.to_string());
         columns.push(pts.stress().iter().map(|s| s[(i, j)]).collect());
     }

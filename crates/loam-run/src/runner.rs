@@ -5,9 +5,10 @@
 //! a run writes a checkpoint between steps (`restart`), from which [`resume_scene`] goes on
 //! as if it had never stopped.
 
+use crate::monitor::MonitorColumns;
 use crate::point_fields::{default_fields, write_frame, write_points_csv};
 use crate::restart::{self, CheckpointEvery, CheckpointWritten, Checkpoints, OutputsState, Phase, RunTotals};
-use loam_analysis::{Analysis, AnalysisError, Progress};
+use loam_analysis::{Analysis, AnalysisError, Collapse, Progress};
 use loam_format::checkpoint::{Checkpoint, CheckpointError, CheckpointHeader};
 use loam_format::output::{CsvCell, CsvWriter, OutputError, PvdWriter};
 use loam_format::output_dir::{clear_output_dir, prepare_output_dir, remove_temp_files, OutputDirError};
@@ -15,7 +16,7 @@ use loam_format::run_plots::plot_run;
 use loam_implicit::{FactorOfSafety, QuasiStatic, StrengthReduction, StrengthReductionError, StrengthTrial};
 use loam_model::{ExternalWork, LoadLevel, Model, ModelError, PointChange};
 use loam_scene::FieldSpec;
-use loam_scene::{AnalysisSpec, Excavation, LoadedScene, OutputSpec, SceneError};
+use loam_scene::{AnalysisSpec, CollapseSpec, Excavation, LoadedScene, OutputSpec, SceneError};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
@@ -52,6 +53,9 @@ pub struct RunSummary {
     pub output_dir: PathBuf,
     /// The bracketed factor of safety, when the scene asked for strength reduction.
     pub factor_of_safety: Option<FactorOfSafety>,
+    /// The collapse a load-controlled quasi-static run ended with: the load factor it
+    /// carried at most.
+    pub collapse: Option<Collapse>,
     /// The plots drawn from the run's CSV files, or why they could not be (a run is not
     /// failed for its plots).
     pub plots: Result<Vec<PathBuf>, String>,
@@ -239,31 +243,20 @@ fn run_prepared<const D: usize>(
         Some((c, Phase::Steps)) => (None, Some(c)),
         None => (None, None),
     };
+    // The monitors are found on the model as the scene builds it, a resumed run's too.
+    let monitors = MonitorColumns::new(scene.monitors(analysis.model())?);
     let search = SearchContext { out_dir, searching, stepping, saver: &mut saver };
     let factor_of_safety = strength_reduction_first(scene, &mut analysis, search, progress)?;
     let (mut outputs, mut totals) = match stepping {
         Some(c) => {
             restart::resume_analysis(c, &mut analysis)?;
             progress(RunEvent::Resumed { step: analysis.steps_done(), trials: 0 });
-            (Outputs::resume(&scene.scene.output, &analysis, out_dir, c)?, restart::saved_totals(c)?)
+            (Outputs::resume(&scene.scene.output, &analysis, out_dir, c, monitors)?, restart::saved_totals(c)?)
         }
-        None => (Outputs::create(&scene.scene.output, &analysis, out_dir)?, RunTotals::default()),
+        None => (Outputs::create(&scene.scene.output, &analysis, out_dir, monitors)?, RunTotals::default()),
     };
-    let end_time = analysis.end_time();
-    let excavations = scene.excavations::<D>()?;
-    let stop = |a: &Analysis<D>| a.is_finished() || options.max_steps.is_some_and(|m| a.steps_done() >= m);
-    while !stop(&analysis) {
-        let r = analysis.step()?;
-        excavate(&mut analysis, &excavations, r.step, progress)?;
-        totals.add(&r);
-        outputs.record(&r, analysis.model(), stop(&analysis))?;
-        progress(RunEvent::Step { report: &r, end: end_time });
-        if saver.due_after_step(r.step) && !analysis.is_finished() {
-            let mut c = saver.start();
-            restart::save_steps(&mut c, &analysis, &outputs.state(), totals, factor_of_safety.as_ref());
-            progress(RunEvent::Checkpoint(saver.write(&c, r.step, 0)?));
-        }
-    }
+    let steps = Stepping { scene, options, factor_of_safety: factor_of_safety.as_ref() };
+    let collapse = steps.run(&mut analysis, &mut outputs, &mut totals, &mut saver, progress)?;
     outputs.finish(analysis.model(), analysis.load_level())?;
     Ok(RunSummary {
         analysis: analysis.name(),
@@ -276,8 +269,66 @@ fn run_prepared<const D: usize>(
         solver: analysis.solver(),
         output_dir: out_dir.to_owned(),
         factor_of_safety,
+        collapse,
         plots: Ok(Vec::new()),
     })
+}
+
+/// What the steps of a run need beside the analysis and its outputs.
+struct Stepping<'a> {
+    scene: &'a LoadedScene,
+    options: &'a RunOptions,
+    factor_of_safety: Option<&'a FactorOfSafety>,
+}
+
+impl Stepping<'_> {
+    /// Step to the end (or to `max_steps`), recording each step, excavating and writing
+    /// checkpoints when due. A load-controlled quasi-static step that cannot go on ends the
+    /// run with its collapse, its state written as the last frame, unless the scene asks for
+    /// the error (`at_collapse: Error`).
+    fn run<const D: usize>(
+        &self,
+        analysis: &mut Analysis<D>,
+        outputs: &mut Outputs<D>,
+        totals: &mut RunTotals,
+        saver: &mut Checkpoints,
+        progress: &mut dyn FnMut(RunEvent),
+    ) -> Result<Option<Collapse>, RunFailure> {
+        let (end_time, excavations) = (analysis.end_time(), self.scene.excavations::<D>()?);
+        let max_steps = self.options.max_steps;
+        let stop = |a: &Analysis<D>| a.is_finished() || max_steps.is_some_and(|m| a.steps_done() >= m);
+        while !stop(analysis) {
+            let r = match analysis.step() {
+                Ok(r) => r,
+                Err(e) => {
+                    let collapse = analysis.collapse(&e).filter(|_| self.reports_collapse());
+                    let Some(collapse) = collapse else { return Err(e.into()) };
+                    outputs.collapsed(analysis, collapse.step)?;
+                    return Ok(Some(collapse));
+                }
+            };
+            excavate(analysis, &excavations, r.step, progress)?;
+            totals.add(&r);
+            outputs.record(&r, analysis.model(), stop(analysis))?;
+            progress(RunEvent::Step { report: &r, end: end_time });
+            if saver.due_after_step(r.step) && !analysis.is_finished() {
+                let mut c = saver.start();
+                restart::save_steps(&mut c, analysis, &outputs.state(), *totals, self.factor_of_safety);
+                progress(RunEvent::Checkpoint(saver.write(&c, r.step, 0)?));
+            }
+        }
+        Ok(None)
+    }
+
+    /// Whether the scene takes a collapse as the run's result: the default, but not where
+    /// it asks for the error, nor in the run at a factor of safety found (which held).
+    fn reports_collapse(&self) -> bool {
+        !matches!(
+            self.scene.scene.analysis,
+            AnalysisSpec::QuasiStatic { at_collapse: CollapseSpec::Error, .. }
+                | AnalysisSpec::QuasiStatic { strength_reduction: Some(_), .. }
+        )
+    }
 }
 
 /// The excavation stages due after step `step`, in the scene's order: their points are
@@ -343,9 +394,14 @@ struct Outputs<'a, const D: usize> {
 impl<'a, const D: usize> Outputs<'a, D> {
     /// Create the files and write the state before the first step (frame 0, the first
     /// history row).
-    fn create(spec: &'a OutputSpec, analysis: &Analysis<D>, out_dir: &'a Path) -> Result<Self, OutputError> {
+    fn create(
+        spec: &'a OutputSpec,
+        analysis: &Analysis<D>,
+        out_dir: &'a Path,
+        monitors: MonitorColumns,
+    ) -> Result<Self, OutputError> {
         let model = analysis.model();
-        let log = RunLog::open(&out_dir.join("run_log.csv"), model, None)?;
+        let log = RunLog::open(&out_dir.join("run_log.csv"), model, monitors, None)?;
         let fields = spec.fields.clone().unwrap_or_else(|| default_fields(model));
         let mut pvd = if spec.vtu_every > 0 { Some(PvdWriter::create(out_dir.join("points.pvd"))?) } else { None };
         if let Some(pvd) = pvd.as_mut() {
@@ -367,10 +423,11 @@ impl<'a, const D: usize> Outputs<'a, D> {
         analysis: &Analysis<D>,
         out_dir: &'a Path,
         c: &Checkpoint,
+        monitors: MonitorColumns,
     ) -> Result<Self, RunFailure> {
         let model = analysis.model();
         let saved = restart::saved_outputs(c, spec.history_every > 0, spec.vtu_every > 0)?;
-        let log = RunLog::open(&out_dir.join("run_log.csv"), model, Some(saved.run_log_bytes))?;
+        let log = RunLog::open(&out_dir.join("run_log.csv"), model, monitors, Some(saved.run_log_bytes))?;
         let fields = spec.fields.clone().unwrap_or_else(|| default_fields(model));
         let pvd = saved.frames.map(|frames| PvdWriter::resume(out_dir.join("points.pvd"), frames)).transpose()?;
         let level = analysis.load_level();
@@ -408,6 +465,21 @@ impl<'a, const D: usize> Outputs<'a, D> {
         Ok(())
     }
 
+    /// The state a run ends in after step `step` could not be completed (a collapse): the
+    /// last history row and frame, as after a last step.
+    fn collapsed(&mut self, analysis: &Analysis<D>, step: usize) -> Result<(), OutputError> {
+        let (model, level) = (analysis.model(), analysis.load_level());
+        if let Some(h) = self.history.as_mut() {
+            h.advance(model, level);
+            h.row(model, analysis.time())?;
+        }
+        if let Some(pvd) = self.pvd.as_mut() {
+            let format = self.spec.vtu_format.into();
+            write_frame(model, &self.fields, format, level.body_factor(), pvd, step, analysis.time())?;
+        }
+        Ok(())
+    }
+
     /// After the last step: `points_final.csv`, if asked for.
     fn finish(&self, model: &Model<D>, level: LoadLevel) -> Result<(), OutputError> {
         if self.spec.final_csv {
@@ -422,12 +494,14 @@ impl<'a, const D: usize> Outputs<'a, D> {
 /// NaN in explicit ones), a displaced one (a footing) its prescribed displacement before
 /// it: the load–displacement curve; every inclined roller its reaction per component;
 /// every body constraint, as a plane constraint does, its displacement and reaction.
-/// Every load adds its resultant at the step's load factor or time, per component.
+/// Every load adds its resultant at the step's load factor or time, per component, and
+/// every monitoring point its displacement and stress.
 struct RunLog {
     writer: CsvWriter,
     /// The planes' held components, then the bodies'.
     planes: Vec<Held>,
     bodies: Vec<Held>,
+    monitors: MonitorColumns,
 }
 
 /// One held component of a constraint, as `RunLog` writes it: its columns' prefix, its
@@ -476,7 +550,12 @@ impl RunLog {
     ];
 
     /// A new log of `model`, or the one a checkpoint left after `resume_at` bytes.
-    fn open<const D: usize>(path: &Path, model: &Model<D>, resume_at: Option<u64>) -> Result<Self, OutputError> {
+    fn open<const D: usize>(
+        path: &Path,
+        model: &Model<D>,
+        monitors: MonitorColumns,
+        resume_at: Option<u64>,
+    ) -> Result<Self, OutputError> {
         let planes: Vec<Held> = (model.constraints().iter().enumerate())
             .flat_map(|(k, c)| Held::of(format!("constraint{k}"), k, &c.fixed[..D], &c.displacement, c.is_displaced()))
             .collect();
@@ -501,8 +580,9 @@ impl RunLog {
         for k in 0..model.loads().len() {
             header.extend(AXES[..D].iter().map(|a| format!("load{k}_{a}")));
         }
+        header.extend(monitors.header(D));
         let writer = CsvWriter::open(path, &header.iter().map(String::as_str).collect::<Vec<_>>(), resume_at)?;
-        Ok(Self { writer, planes, bodies })
+        Ok(Self { writer, planes, bodies, monitors })
     }
 
     /// Per held component, its prescribed displacement's column (if displaced) and its
@@ -543,6 +623,7 @@ impl RunLog {
         for (k, load) in model.loads().iter().enumerate() {
             cells.extend(load.resultant(model.load_scale(k, r.level)).iter().map(|&f| CsvCell::Float(f)));
         }
+        cells.extend(self.monitors.cells(model));
         self.writer.row_mixed(&cells)
     }
 

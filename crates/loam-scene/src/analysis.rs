@@ -27,7 +27,7 @@ impl LoadedScene {
         let Solver { newton, linear_solver, extrapolate } = solver;
         self.check_cutbacks()?;
         Ok(match self.scene.analysis {
-            AnalysisSpec::QuasiStatic { load_steps, max_cutbacks, strength_reduction } => {
+            AnalysisSpec::QuasiStatic { load_steps, max_cutbacks, strength_reduction, .. } => {
                 if load_steps == 0 {
                     return Err(self.error(&analysis_key("load_steps"), "load_steps is 0; it must be at least 1"));
                 }

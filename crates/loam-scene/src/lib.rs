@@ -43,6 +43,7 @@ mod locate;
 mod materials;
 mod memory;
 mod model;
+mod monitor;
 mod schema;
 mod solver;
 mod water;
@@ -50,6 +51,7 @@ mod water;
 pub use excavation::Excavation;
 pub use locate::SceneError;
 pub use memory::{default_memory_limit, MemoryEstimate};
+pub use monitor::Monitor;
 pub use schema::*;
 
 use loam_analysis::Analysis;
@@ -200,6 +202,7 @@ impl LoadedScene {
         let mut analysis = self.analysis(model, solver)?;
         self.check_before_the_first_step(&mut analysis)?;
         self.excavations::<D>()?;
+        self.monitors(analysis.model())?;
         Ok(analysis)
     }
 }

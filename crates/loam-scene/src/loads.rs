@@ -39,12 +39,20 @@ impl LoadedScene {
         load.map_err(|e| self.error(&[Seg::Key("loads"), Seg::Index(k)], format!("load {k}: {e}")))
     }
 
-    /// A point load must act on the material: `x` inside (or on) one of the bodies.
-    fn in_a_body<const D: usize>(&self, k: usize, x: &SVector<f64, D>) -> Result<(), SceneError> {
+    /// Whether `x` lies inside (or on) one of the bodies' shapes.
+    pub(super) fn in_some_body<const D: usize>(&self, x: &SVector<f64, D>) -> Result<bool, SceneError> {
         for (i, b) in self.scene.bodies.iter().enumerate() {
             if self.shape::<D>(i, b)?.contains(x) {
-                return Ok(());
+                return Ok(true);
             }
+        }
+        Ok(false)
+    }
+
+    /// A point load must act on the material: `x` inside (or on) one of the bodies.
+    fn in_a_body<const D: usize>(&self, k: usize, x: &SVector<f64, D>) -> Result<(), SceneError> {
+        if self.in_some_body(x)? {
+            return Ok(());
         }
         Err(self.error(&[Seg::Key("loads"), Seg::Index(k), Seg::Key("at")], format!(
             "load {k}: the point {:?} lies in no body; a point load acts on the material, so `at` must lie inside or on a body's shape",

@@ -63,6 +63,11 @@ pub struct Scene {
     #[serde(default)]
     pub water: Option<WaterSpec>,
     pub analysis: AnalysisSpec,
+    /// Monitoring points: each names the material point nearest `at` (where the points
+    /// start), whose displacement and stress `run_log.csv` writes every step (default
+    /// none).
+    #[serde(default)]
+    pub monitor: Vec<MonitorSpec>,
     /// Excavation stages: after step `after_step`, the points whose place lies in `region`
     /// are removed (default none).
     #[serde(default)]
@@ -71,6 +76,17 @@ pub struct Scene {
     pub solver: SolverSpec,
     #[serde(default)]
     pub output: OutputSpec,
+}
+
+/// What a load-controlled quasi-static run does at collapse.
+#[derive(Debug, Clone, Copy, Default, Deserialize, PartialEq, Eq)]
+#[serde(deny_unknown_fields)]
+pub enum CollapseSpec {
+    /// End the run with the collapse load as its result (exit status 0).
+    #[default]
+    Report,
+    /// Stop the run with the step's error (exit status 1).
+    Error,
 }
 
 /// A constraint on a body, named by its `name`: the nodes that its points inside
@@ -103,6 +119,16 @@ pub struct InclinedRollerSpec {
     pub point: Vec<f64>,
     /// The plane's normal, pointing into the material.
     pub normal: Vec<f64>,
+}
+
+/// A monitoring point.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct MonitorSpec {
+    /// Its name in the run log's columns: letters, digits and `_`.
+    pub name: String,
+    /// Where it is: the material point that starts nearest this place.
+    pub at: Vec<f64>,
 }
 
 /// One excavation stage.
@@ -457,6 +483,11 @@ pub enum AnalysisSpec {
         /// the largest factor that held, so the outputs show the state just before failure.
         #[serde(default)]
         strength_reduction: Option<StrengthReductionSpec>,
+        /// A step that cannot go on where a load follows the load factor: `Report` (the
+        /// default) ends the run with the load factor carried at most, its state written in
+        /// full; `Error` stops it with the step's error.
+        #[serde(default)]
+        at_collapse: CollapseSpec,
     },
     /// Implicit Newmark dynamics (Bossak with `bossak_alpha` < 0), loads applied in full at
     /// t = 0, Newton per time step, a failed step halved up to `max_cutbacks` times.
