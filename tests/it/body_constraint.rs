@@ -118,7 +118,7 @@ fn a_body_constraint_follows_its_body_through_the_grid() {
 }
 
 /// A body constraint that names no body, a duplicate body name, and an explicit
-/// analysis given a body constraint are refused, with a message that says why (their
+/// analysis given a displaced body constraint are refused, with a message that says why (their
 /// places in the file are pinned in loam-scene's tests/scene_messages.rs).
 #[test]
 fn body_constraints_are_refused_where_they_cannot_hold() {
@@ -151,8 +151,10 @@ fn body_constraints_are_refused_where_they_cannot_hold() {
     let message = error(scene(&two, "QuasiStatic(load_steps: 1)"));
     assert!(message.contains("body 1 is called \"soil\", as body 0 is"), "{message}");
     let wall = one.replace("\"soil\", material", "\"wall\", material");
-    let message = error(scene(&wall, "Explicit(duration: 0.1)"));
-    assert!(message.contains("body constraint 0 holds the nodes its body's points reach"), "{message}");
+    let pushed = scene(&wall, "Explicit(duration: 0.1)")
+        .replace("Fixed(body: \"wall\")", "Displacement(body: \"wall\", displacement: [None, Some(-0.1)])");
+    let message = error(pushed);
+    assert!(message.contains("body constraint 0 prescribes a non-zero displacement"), "{message}");
 }
 
 /// In a dynamic analysis a held body stays where it is, exactly, and carries what rests
@@ -196,4 +198,50 @@ fn a_held_body_carries_a_column_in_dynamics() {
     let reaction = column(&header, "body_constraint0_reaction_y");
     let mean = log.iter().map(|r| r[reaction]).sum::<f64>() / log.len() as f64;
     assert!((mean / weight - 1.0).abs() < 0.01, "mean reaction {mean} against the weight {weight}");
+}
+
+/// In an explicit run a held body is a rigid obstacle: an elastic block sliding at 2 m/s
+/// (SI) into a wall held by a body constraint bounces off it. The wall's points end
+/// exactly where they started, no point of the block passes the wall's face, and the
+/// momentum, +500 kg m/s at the start, is reversed (the wall's points at rest carry none);
+/// held only at a far corner, the wall is pushed instead.
+#[test]
+fn a_held_wall_turns_a_block_back_in_explicit_dynamics() {
+    let scene = |held: &str| {
+        format!(
+            r#"Scene(
+    dimension: 2,
+    grid: (origin: [0.0, 0.0], cell_size: [0.25, 0.25], cells: [10, 4]),
+    basis: Gimp,
+    kinematics: FiniteStrain,
+    materials: [(name: "rubber", density: 1000.0, law: Elastic(young: 1e6, poisson: 0.3))],
+    bodies: [
+        (material: "rubber", shape: Box(min: [0.25, 0.0], max: [0.75, 0.5]), velocity: Some(Uniform([2.0, 0.0]))),
+        (name: "wall", material: "rubber", shape: Box(min: [1.5, 0.0], max: [2.0, 1.0])),
+    ],
+    gravity: [0.0, 0.0],
+    constraints: [Roller(axis: Y, at: 0.0)],
+    body_constraints: [{held}],
+    analysis: Explicit(duration: 0.6),
+    output: (vtu_every: 0, final_csv: true, history_every: 1),
+)"#
+        )
+    };
+    let dir = run(scene(r#"Fixed(body: "wall")"#));
+    let (header, rows) = table(&dir.path().join("points_final.csv"));
+    let [x0, y0, x, y] = ["x0", "y0", "x", "y"].map(|c| column(&header, c));
+    for r in &rows {
+        if r[x0] > 1.5 {
+            assert_eq!((r[x], r[y]), (r[x0], r[y0]), "a wall point moved");
+        } else {
+            assert!(r[x] < 1.5, "a block point passed into the wall: {r:?}");
+        }
+    }
+    let (header, history) = table(&dir.path().join("history.csv"));
+    let momentum = column(&header, "momentum_x");
+    assert_eq!(history[0][momentum], 500.0);
+    assert!(history.last().unwrap()[momentum] < -100.0, "the block bounced: {:?}", history.last());
+    let free = run(scene(r#"Fixed(body: "wall", within: Some((min: [1.9, 0.9], max: [2.0, 1.0])))"#));
+    let (_, rows) = table(&free.path().join("points_final.csv"));
+    assert!(rows.iter().any(|r| r[x0] > 1.5 && r[x0] < 1.7 && r[x] > r[x0] + 1e-3), "a free wall is pushed");
 }

@@ -209,8 +209,15 @@ fn load_examples_run() {
     let summary = run_scene(&footing, &out, &mut |_| {}).unwrap();
     let collapse = summary.collapse.expect("the strip collapses before its full load");
     let log = std::fs::read_to_string(out.join("run_log.csv")).unwrap();
+    let header: Vec<&str> = log.lines().next().unwrap().split(',').collect();
     let last: Vec<f64> = log.lines().last().unwrap().split(',').map(|v| v.parse().unwrap()).collect();
-    let q_last_step = -last[last.len() - 1]; // load0_y over b = 1
+    let column = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let q_last_step = -last[column("load0_y")]; // over b = 1
+                                                // The strip's centre settles, more with every step towards collapse.
+    let settlement: Vec<f64> = (log.lines().skip(1))
+        .map(|l| l.split(',').nth(column("monitor_centre_uy")).unwrap().parse().unwrap())
+        .collect();
+    assert!(settlement.windows(2).all(|w| w[1] < w[0]) && settlement[0] < 0.0, "{settlement:?}");
     let q_full = 1.25 * (2.0 + std::f64::consts::PI) * 10.0;
     let q = collapse.load_factor * q_full;
     // The collapse load is the most the strip carried: at or above the last completed

@@ -113,6 +113,8 @@ struct NodalScratch {
     strain_velocity: Vec<f64>,
     /// The loads on surfaces and at points (D per node with mass; empty without loads).
     loads: Vec<f64>,
+    /// Per node, 1 where a held body's point reaches it (empty without body constraints).
+    held: Vec<f64>,
 }
 
 /// Per-point trial state of one step, committed only when the whole step succeeded.
@@ -175,9 +177,12 @@ pub struct Explicit<const D: usize> {
     basis: AxisBasis<D>,
     /// The points grouped for the deterministic scatter.
     bands: BandScatter,
-    /// The constrained dofs of every grid node (D per node): the constraints of an explicit
-    /// run hold still, so they are marked once.
+    /// The constrained dofs of every grid node (D per node): the grid planes', marked
+    /// once, and the held bodies', marked again every step.
     constrained: Vec<bool>,
+    /// The grid planes' constrained dofs (empty without body constraints, when
+    /// `constrained` is all there is).
+    on_planes: Vec<bool>,
     /// The nodes with mass of the step, numbered for the loads and the constraint check.
     loaded: ActiveNodes,
     /// The load vertices on the nodes of `loaded`.
@@ -207,6 +212,7 @@ impl<const D: usize> Explicit<D> {
         let mut constrained = Vec::new();
         let every_node = ActiveNodes::all(model.grid().num_nodes());
         model.constrained_dofs(&NodeLayout::motion(D), &every_node, &mut constrained);
+        let on_planes = if model.body_constraints().is_empty() { Vec::new() } else { constrained.clone() };
         Ok(Self {
             basis: AxisBasis::new(model.basis()),
             model,
@@ -216,6 +222,7 @@ impl<const D: usize> Explicit<D> {
             p_wave,
             bands: BandScatter::default(),
             constrained,
+            on_planes,
             loaded: ActiveNodes::default(),
             loads: LoadSupports::default(),
             active_nodes: 0,
@@ -410,6 +417,7 @@ impl<const D: usize> Explicit<D> {
             &mut self.points,
         );
         moved.map_err(|e| self.failure(step, e))?;
+        self.stop_held_points();
         let to_points = clock.lap();
         self.update_stress_last(step, dt, m_min)?;
         let stress = clock.lap();
@@ -434,7 +442,59 @@ impl<const D: usize> Explicit<D> {
     /// Stage 1: the basis of every point at its start-of-step place, and the points grouped
     /// for the scatter.
     fn connect(&mut self, step: usize) -> Result<(), ExplicitError> {
-        locate(&self.model, &mut self.basis, &mut self.bands, step)
+        locate(&self.model, &mut self.basis, &mut self.bands, step)?;
+        match self.hold_bodies() {
+            Some(index) => Err(ConnectError::BodyConstraintTouchesNoNode { index }.into()),
+            None => Ok(()),
+        }
+    }
+
+    /// With body constraints, mark the grid planes' dofs and those of the nodes each held
+    /// body's points reach (a scatter of a flag: deterministic); the first constraint
+    /// that holds no node, if any.
+    fn hold_bodies(&mut self) -> Option<usize> {
+        let (model, basis, bands) = (&self.model, &self.basis, &self.bands);
+        if model.body_constraints().is_empty() {
+            return None;
+        }
+        self.constrained.copy_from_slice(&self.on_planes);
+        let held = &mut self.nodes.held;
+        held.resize(model.grid().num_nodes(), 0.0);
+        let mut empty = None;
+        for (k, c) in model.body_constraints().iter().enumerate() {
+            bands.scatter(1, held, |p, window| {
+                if model.body_constraint_holds(k, p) {
+                    basis.for_each_node(p, |node, _, _| window.node(node)[0] = 1.0);
+                }
+            });
+            if !held.par_iter().any(|&h| h > 0.0) {
+                empty.get_or_insert(k);
+            }
+            let fixed = c.fixed;
+            (self.constrained.par_chunks_mut(D).zip(held.par_iter())).filter(|(_, &h)| h > 0.0).for_each(
+                |(dofs, _)| {
+                    (0..D).for_each(|i| dofs[i] |= fixed[i]);
+                },
+            );
+        }
+        empty
+    }
+
+    /// With body constraints, the held components of the held points' new velocities are
+    /// zero, as their nodes' are: every node a held point reaches is held, so the grid
+    /// carries it nowhere, and FLIP would keep what those nodes' momentum was before.
+    fn stop_held_points(&mut self) {
+        let model = &self.model;
+        if model.body_constraints().is_empty() {
+            return;
+        }
+        self.points.fields.velocity.par_iter_mut().enumerate().for_each(|(p, v)| {
+            for (k, c) in model.body_constraints().iter().enumerate() {
+                if model.body_constraint_holds(k, p) {
+                    (0..D).filter(|&i| c.fixed[i]).for_each(|i| v[i] = 0.0);
+                }
+            }
+        });
     }
 
     /// Size the nodal and point scratch to the grid and the points.

@@ -107,8 +107,14 @@ fn own_history<'a, 'b>(
     h_out: &'b mut [f64],
 ) -> (&'a [f64], &'b mut [f64]) {
     let slots = history.len().min(h_out.len());
+    if slots == 0 {
+        // No law of the model keeps a history (the common elastic case): nothing to give.
+        return (history, h_out);
+    }
     let n = law.history_len().min(slots);
-    h_out[n..slots].copy_from_slice(&history[n..slots]);
+    if n < slots {
+        h_out[n..slots].copy_from_slice(&history[n..slots]);
+    }
     (&history[..n], &mut h_out[..n])
 }
 

@@ -48,7 +48,8 @@ impl<const D: usize> Model<D> {
     }
 
     /// Whether body constraint `k` holds point `p`: one of its body that started in its box.
-    fn body_constraint_holds(&self, k: usize, p: usize) -> bool {
+    #[inline]
+    pub fn body_constraint_holds(&self, k: usize, p: usize) -> bool {
         let c = &self.body_constraints[k];
         let x0 = &self.points.position0()[p];
         self.points.body()[p] == c.body && c.within.as_ref().is_none_or(|b| self.background.in_box(x0, b, None))

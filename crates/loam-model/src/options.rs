@@ -84,13 +84,13 @@ const ACCEPTED: [Acceptance; 8] = [
     },
     Acceptance {
         is: |o| matches!(o, ModelOption::BodyConstraint { .. }),
-        by: [true, true, false],
-        why: "holds the nodes its body's points reach, found step by step; the implicit analyses take it (the explicit one marks its constraints once, on grid planes)",
+        by: [true, true, true],
+        why: "",
     },
     Acceptance {
         is: |o| matches!(o, ModelOption::DisplacedBodyConstraint { .. }),
         by: [true, false, false],
-        why: "prescribes a non-zero displacement; only quasi-static implicit analysis applies displacements (with the load factor)",
+        why: "prescribes a non-zero displacement; only quasi-static implicit analysis applies displacements (with the load factor); the dynamic and explicit analyses hold a body (Fixed, or Displacement with Some(0.0))",
     },
 ];
 

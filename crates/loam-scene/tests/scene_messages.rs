@@ -205,6 +205,7 @@ fn cases() -> Vec<(&'static str, usize, String)> {
         ("body constraint upside down", 2, held(&["Fixed(body: \"col\", within: Some((min: [0.0, 5.0], max: [0.3125, 1.0])))"], QS)),
         ("body constraint outside its body", 2, held(&["Fixed(body: \"col\", within: Some((min: [0.0, 10.5], max: [0.3125, 11.0])))"], QS)),
         ("body constraint in explicit", 2, held(&["Fixed(body: \"col\")"], explicit)),
+        ("displaced body constraint in explicit", 2, held(&["Displacement(body: \"col\", displacement: [None, Some(-0.1)])"], explicit)),
         ("displaced body constraint in dynamics", 2, held(&["Displacement(body: \"col\", displacement: [None, Some(-0.1)])"], dynamic)),
         ("monitor", 2, c(&[(QS, &format!("{QS},\n    monitor: [(name: \"top\", at: [0.15, 9.9])]"))])),
         ("monitor name", 2, c(&[(QS, &format!("{QS},\n    monitor: [(name: \"top point\", at: [0.15, 9.9])]"))])),
