@@ -739,9 +739,11 @@ fn scatter_grid<const D: usize>(
     out: &mut [f64],
 ) {
     let pts = model.points();
+    let axisymmetric = model.axisymmetric();
     bands.scatter(NodeRecord::<D>::WIDTH, out, |p, window| {
         let (m, v, load) = (pts.mass()[p], &pts.velocity()[p], model.point_load(p));
         let (volume, stress) = (pts.volume()[p], &pts.stress()[p]);
+        let inv_r = axisymmetric.then(|| 1.0 / pts.position()[p][0]);
         basis.for_each_node(p, |node, n, grad| {
             // Cut to the record's width, which D fixes, and indexed by the record's own
             // constants (not locals the closure would capture): the indexing below then
@@ -755,7 +757,7 @@ fn scatter_grid<const D: usize>(
             }
             if with_internal {
                 // f_ext − f_int, point by point in one sum.
-                let f = internal_force(volume, stress, &grad, None);
+                let f = internal_force(volume, stress, &grad, None, inv_r.map(|i| n * i));
                 for i in 0..D {
                     o[NodeRecord::<D>::FORCE + i] -= f[i];
                 }
@@ -775,12 +777,14 @@ fn negative_internal_force<const D: usize>(
     out: &mut [f64],
 ) {
     let finite = model.kinematics() == Kinematics::FiniteStrain;
-    let pts = model.points();
+    let (pts, axisymmetric) = (model.points(), model.axisymmetric());
     bands.scatter(D, out, |p, window| {
         let v = if finite { sc.fields.volume[p] } else { pts.volume()[p] };
         let stress = &sc.fields.stress[p];
-        basis.for_each_node(p, |node, _, grad| {
-            let f = -internal_force(v, stress, &grad, None);
+        // The hoop force on the start-of-step radius, as the gradients are (USF).
+        let inv_r = axisymmetric.then(|| 1.0 / pts.position()[p][0]);
+        basis.for_each_node(p, |node, n, grad| {
+            let f = -internal_force(v, stress, &grad, None, inv_r.map(|i| n * i));
             let o = &mut window.node(node)[..D]; // of the field's width (`scatter_grid`)
             for i in 0..D {
                 o[i] += f[i];
@@ -1003,7 +1007,11 @@ fn point_stress<const D: usize>(
         let v = SVector::<f64, D>::from_column_slice(&velocity[node * D..(node + 1) * D]);
         l += v * g.transpose();
     });
-    let grad_du = embed(&(l * dt));
+    let mut grad_du = embed(&(l * dt));
+    if model.axisymmetric() {
+        // The hoop strain increment Δt v_r / r (docs/theory.md §20).
+        grad_du[(2, 2)] = dt * carried(basis, velocity, p)[0] / model.points().position()[p][0];
+    }
     let df = Matrix3::identity() + grad_du;
     if !df.iter().all(|c| c.is_finite()) {
         return Err("non-finite velocity gradient".into());

@@ -43,7 +43,8 @@ impl<'a, const D: usize> CellAverage<'a, D> {
 }
 
 /// B-bar's b̄ of every point's support slot: Σ_q v_q ∂N_a(x_q) / Σ_q v_q over the points q
-/// of its averaging group, `stride` per point, into `out`. Points are grouped by sorting on
+/// of its averaging group (in axisymmetry the dilatation operator ∂N_a + (N_a / r) e_r in
+/// place of ∂N_a, docs/theory.md §20), `stride` per point, into `out`. Points are grouped by sorting on
 /// the group, so the sums run in a fixed order (deterministic).
 pub(crate) fn cell_averaged_gradients<const D: usize>(
     model: &Model<D>,
@@ -58,16 +59,23 @@ pub(crate) fn cell_averaged_gradients<const D: usize>(
     out.clear();
     out.resize(n * stride, SVector::zeros());
     let mut sums: Vec<(u32, SVector<f64, D>)> = Vec::new();
+    let axisymmetric = model.axisymmetric();
     for group in order.chunk_by(|a, b| a.0 == b.0) {
         sums.clear();
         let mut volume = 0.0;
         for &(_, p) in group {
             let v = pts.volume()[p];
             volume += v;
-            for (&node, g) in conn.support_nodes(p).iter().zip(conn.support_gradients(p)) {
+            let inv_r = if axisymmetric { 1.0 / model.configuration()[p][0] } else { 0.0 };
+            for (a, (&node, g)) in conn.support_nodes(p).iter().zip(conn.support_gradients(p)).enumerate() {
+                // The dilatation operator: ∂N_a, and in axisymmetry (N_a / r) e_r beside it.
+                let mut d = *g;
+                if axisymmetric {
+                    d[0] += conn.support_values(p)[a] * inv_r;
+                }
                 match sums.iter_mut().find(|(m, _)| *m == node) {
-                    Some((_, s)) => *s += g * v,
-                    None => sums.push((node, g * v)),
+                    Some((_, s)) => *s += d * v,
+                    None => sums.push((node, d * v)),
                 }
             }
         }

@@ -338,13 +338,14 @@ impl<const D: usize> Dynamic<D> {
         let e = &mut self.engine;
         let (conn, pts) = (&e.conn, e.model.points());
         let average = CellAverage::of(&e.model, e.cell_gradients());
-        let stride = conn.stride();
+        let (stride, axisymmetric, x) = (conn.stride(), e.model.axisymmetric(), e.model.configuration());
         let mut f_int = vec![0.0; e.f_ext.len()];
         gather_internal_force(conn, &mut f_int, |p, a| {
             let k = p * stride + a;
             let g = &conn.support_gradients(p)[a];
             let c = average.map_or(*g, |avg| avg.strain_gradient(k, g));
-            internal_force(pts.volume()[p], &pts.stress()[p], &c, average.map(|avg| avg.average(k)))
+            let hoop = axisymmetric.then(|| conn.support_values(p)[a] / x[p][0]);
+            internal_force(pts.volume()[p], &pts.stress()[p], &c, average.map(|avg| avg.average(k)), hoop)
         });
         for (k, a) in self.acceleration.iter_mut().enumerate() {
             let m = self.inertia.nodal_mass[k / D];

@@ -402,6 +402,7 @@ impl<const D: usize> Engine<D> {
             mass: self.model.points().mass(),
             water_force: if self.model.kinematics() == Kinematics::FiniteStrain { &self.water_force } else { &[] },
             committed_volume: self.model.points().volume(),
+            axisymmetric: self.model.axisymmetric(),
         };
         let reference = residual(&inputs, &self.trial, inertia, &self.du, &mut self.residual, &mut self.reaction);
         if self.frames.is_empty() {
@@ -421,6 +422,7 @@ impl<const D: usize> Engine<D> {
             constrained: self.frames.assembly_mask(&self.constrained),
             mass: self.model.points().mass(),
             water_force: if self.model.kinematics() == Kinematics::FiniteStrain { &self.water_force } else { &[] },
+            axisymmetric: self.model.axisymmetric(),
         };
         assemble(&inputs, &self.trial, inertia, &mut self.matrix);
         if has_follower(self.model.loads()) {

@@ -38,6 +38,10 @@ pub(crate) struct TrialState<const D: usize> {
     /// the point's tangent that the averaged dilatation couples through (v I : D : I is
     /// the trace of the first).
     pub volumetric: Vec<(Matrix3<f64>, Matrix3<f64>)>,
+    /// Axisymmetry only: 1 / r, r the point's radius in the trial configuration, so that
+    /// N_a / r is the hoop strain of a unit radial increment at node a (docs/theory.md
+    /// §20); the tangent's θθ row and column are then its index 4 (D = 2).
+    pub inv_radius: Vec<f64>,
 }
 
 impl<const D: usize> TrialState<D> {
@@ -51,6 +55,7 @@ impl<const D: usize> TrialState<D> {
         self.tangent.resize(n_points, SMatrix::zeros());
         self.grad_x.resize(n_points * stride, SVector::zeros());
         self.volumetric.resize(n_points, (Matrix3::zeros(), Matrix3::zeros()));
+        self.inv_radius.resize(n_points, 0.0);
     }
 }
 
@@ -64,6 +69,7 @@ struct TrialSlot<'a, const D: usize> {
     grad_x: &'a mut [SVector<f64, D>],
     volumetric: &'a mut (Matrix3<f64>, Matrix3<f64>),
     history: &'a mut [f64],
+    inv_radius: &'a mut f64,
 }
 
 /// What every point's update reads: the model's committed state, the step's connectivity,
@@ -75,6 +81,10 @@ pub(crate) struct PointInputs<'a, const D: usize> {
     pub average: Option<CellAverage<'a, D>>,
     pub du: &'a [f64],
 }
+
+/// The index of the θθ row and column of a 2D point's tangent in axisymmetry
+/// ([`TrialState::tangent`]).
+pub(crate) const HOOP: usize = 4;
 
 /// Update every point's trial state for the increment `inputs.du`; the first failing point
 /// (lowest index) is reported.
@@ -94,21 +104,24 @@ pub(crate) fn update_points<const D: usize>(
         t.grad_x.par_chunks_mut(stride),
     )
         .into_par_iter()
-        .zip(t.history.par_chunks_mut(hs.max(1)).zip(t.volumetric.par_iter_mut()))
+        .zip((t.history.par_chunks_mut(hs.max(1)), t.volumetric.par_iter_mut(), t.inv_radius.par_iter_mut()))
         .enumerate()
-        .filter_map(|(p, ((delta_f, stress, elastic_strain, volume, tangent, grad_x), (history, volumetric)))| {
-            let slot = TrialSlot {
-                delta_f,
-                stress,
-                elastic_strain,
-                volume,
-                tangent,
-                grad_x,
-                volumetric,
-                history: &mut history[..hs],
-            };
-            update_trial_point(inputs, p, slot).err()
-        })
+        .filter_map(
+            |(p, ((delta_f, stress, elastic_strain, volume, tangent, grad_x), (history, volumetric, inv_radius)))| {
+                let slot = TrialSlot {
+                    delta_f,
+                    stress,
+                    elastic_strain,
+                    volume,
+                    tangent,
+                    grad_x,
+                    volumetric,
+                    history: &mut history[..hs],
+                    inv_radius,
+                };
+                update_trial_point(inputs, p, slot).err()
+            },
+        )
         .min_by_key(|e| e.point);
     first_error.map_or(Ok(()), Err)
 }
@@ -141,14 +154,41 @@ fn update_trial_point<const D: usize>(
         let u = SVector::<f64, D>::from_fn(|i, _| du[node as usize * D + i]);
         g += u * strain_grads[a].transpose();
     }
+    let hoop = model.axisymmetric().then(|| hoop_increment(model, conn, p, du));
     let failed = |source| PointUpdateError { point: p, source };
     match model.kinematics() {
-        Kinematics::FiniteStrain => finite_strain_point(model, p, &g, grads, slot).map_err(failed),
+        Kinematics::FiniteStrain => finite_strain_point(model, p, &g, hoop, grads, slot).map_err(failed),
         Kinematics::SmallStrain => {
             let theta_bar = average.map(|avg| averaged_dilatation(&avg, nodes, first, du));
-            small_strain_point(model, p, &g, theta_bar, grads, slot).map_err(failed)
+            small_strain_point(model, p, &g, hoop, theta_bar, grads, slot).map_err(failed)
         }
     }
+}
+
+/// A point's hoop increment in axisymmetry (docs/theory.md §20): the strain Δu_r / r with
+/// Δu_r = Σ_a N_a Δu_a,r, and the radius r it is on.
+#[derive(Debug, Clone, Copy)]
+struct HoopIncrement {
+    strain: f64,
+    radius: f64,
+}
+
+fn hoop_increment<const D: usize>(model: &Model<D>, conn: &Connectivity<D>, p: usize, du: &[f64]) -> HoopIncrement {
+    let radius = model.configuration()[p][0];
+    let nodes = conn.support_nodes(p).iter();
+    let u_r: f64 = nodes.zip(conn.support_values(p)).map(|(&node, &n)| n * du[node as usize * D]).sum();
+    HoopIncrement { strain: u_r / radius, radius }
+}
+
+/// The 3×3 increment gradient of the in-plane `g`, with the hoop strain as its θθ (zz)
+/// entry in axisymmetry.
+#[inline]
+fn increment_gradient<const D: usize>(g: &SMatrix<f64, D, D>, hoop: Option<HoopIncrement>) -> Matrix3<f64> {
+    let mut g3 = embed(g);
+    if let Some(h) = hoop {
+        g3[(2, 2)] = h.strain;
+    }
+    g3
 }
 
 /// Finite strain (docs/theory.md §2): ΔF = I + g on the point's current volume, the
@@ -157,19 +197,23 @@ fn finite_strain_point<const D: usize>(
     model: &Model<D>,
     p: usize,
     g: &SMatrix<f64, D, D>,
+    hoop: Option<HoopIncrement>,
     grads: &[SVector<f64, D>],
     slot: TrialSlot<'_, D>,
 ) -> Result<(), ConstitutiveError> {
     let pts = model.points();
-    let TrialSlot { delta_f, stress, elastic_strain, volume, tangent, grad_x, history, .. } = slot;
-    let det_df =
-        update_point(Kinematics::FiniteStrain, model.law(p), &embed(g), Committed::of(pts, p), history, |u| {
-            let det_df = u.delta_f.determinant();
-            (*delta_f, *stress, *elastic_strain) = (*u.delta_f, *u.stress, *u.elastic_strain);
-            *volume = det_df * pts.volume()[p];
-            *tangent = in_plane::<D>(u.tangent, *volume);
-            det_df
-        })?;
+    let TrialSlot { delta_f, stress, elastic_strain, volume, tangent, grad_x, history, inv_radius, .. } = slot;
+    let g3 = increment_gradient(g, hoop);
+    let det_df = update_point(Kinematics::FiniteStrain, model.law(p), &g3, Committed::of(pts, p), history, |u| {
+        let det_df = u.delta_f.determinant();
+        (*delta_f, *stress, *elastic_strain) = (*u.delta_f, *u.stress, *u.elastic_strain);
+        *volume = det_df * pts.volume()[p];
+        *tangent = in_plane::<D>(u.tangent, *volume, hoop.is_some());
+        det_df
+    })?;
+    if let Some(h) = hoop {
+        *inv_radius = 1.0 / (h.radius + h.strain * h.radius);
+    }
     // det ΔF > 0 was checked by the update, so ΔF is invertible unless it is numerically
     // singular: an error, not a case to paper over.
     let inv = (SMatrix::<f64, D, D>::identity() + g)
@@ -196,20 +240,25 @@ fn small_strain_point<const D: usize>(
     model: &Model<D>,
     p: usize,
     g: &SMatrix<f64, D, D>,
+    hoop: Option<HoopIncrement>,
     theta_bar: Option<f64>,
     grads: &[SVector<f64, D>],
     slot: TrialSlot<'_, D>,
 ) -> Result<(), ConstitutiveError> {
     let pts = model.points();
-    let mut g3 = embed(g);
+    let mut g3 = increment_gradient(g, hoop);
     if let Some(theta_bar) = theta_bar {
-        g3 += Matrix3::identity() * ((theta_bar - g.trace()) / 3.0);
+        let theta = if hoop.is_some() { g3.trace() } else { g.trace() };
+        g3 += Matrix3::identity() * ((theta_bar - theta) / 3.0);
     }
-    let TrialSlot { delta_f, stress, elastic_strain, volume, tangent, grad_x, volumetric, history } = slot;
+    let TrialSlot { delta_f, stress, elastic_strain, volume, tangent, grad_x, volumetric, history, inv_radius } = slot;
+    if let Some(h) = hoop {
+        *inv_radius = 1.0 / h.radius;
+    }
     update_point(Kinematics::SmallStrain, model.law(p), &g3, Committed::of(pts, p), history, |u| {
         (*delta_f, *stress, *elastic_strain) = (*u.delta_f, *u.stress, *u.elastic_strain);
         *volume = pts.volume()[p];
-        *tangent = in_plane::<D>(u.tangent, *volume);
+        *tangent = in_plane::<D>(u.tangent, *volume, hoop.is_some());
         if theta_bar.is_some() {
             let (a, v) = (u.tangent, *volume);
             let id = Matrix3::from_fn(|k, l| v * (0..3).map(|m| a[(4 * m, 3 * k + l)]).sum::<f64>());
@@ -224,12 +273,24 @@ fn small_strain_point<const D: usize>(
 }
 
 /// In-plane block (i·D + j, k·D + l) of a full 9×9 tensor, scaled; unused entries zero.
+/// With `hoop` (axisymmetry, D = 2) also the θθ row and column, a_θθkl and a_ijθθ, at
+/// index 4.
 #[inline]
-fn in_plane<const D: usize>(a: &Tensor4, scale: f64) -> SMatrix<f64, 9, 9> {
+fn in_plane<const D: usize>(a: &Tensor4, scale: f64, hoop: bool) -> SMatrix<f64, 9, 9> {
     if D == 3 {
         return a * scale;
     }
     let mut out = SMatrix::<f64, 9, 9>::zeros();
+    if hoop {
+        const THETA: usize = 8; // θθ of the full tensor: 3·2 + 2
+        for i in 0..D {
+            for j in 0..D {
+                out[(HOOP, i * D + j)] = scale * a[(THETA, 3 * i + j)];
+                out[(i * D + j, HOOP)] = scale * a[(3 * i + j, THETA)];
+            }
+        }
+        out[(HOOP, HOOP)] = scale * a[(THETA, THETA)];
+    }
     for i in 0..D {
         for j in 0..D {
             for k in 0..D {

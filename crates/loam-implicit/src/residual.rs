@@ -23,6 +23,8 @@ pub(crate) struct ResidualInputs<'a, const D: usize> {
     /// volume, so the residual takes its change (empty otherwise).
     pub water_force: &'a [SVector<f64, D>],
     pub committed_volume: &'a [f64],
+    /// Whether the model is axisymmetric: the hoop stress's radial force joins f_int.
+    pub axisymmetric: bool,
 }
 
 /// The residual at the increment `du` of the trial state `trial` into `r`, the support
@@ -43,7 +45,9 @@ pub(crate) fn residual<const D: usize>(
     let (conn, water) = (inputs.conn, inputs.water_force);
     gather_internal_force(conn, r, |p, a| {
         let k = p * stride + a;
-        let f = internal_force(trial.volume[p], &trial.stress[p], &trial.grad_x[k], average.map(|c| c.average(k)));
+        let hoop = inputs.axisymmetric.then(|| conn.support_values(p)[a] * trial.inv_radius[p]);
+        let bbar = average.map(|c| c.average(k));
+        let f = internal_force(trial.volume[p], &trial.stress[p], &trial.grad_x[k], bbar, hoop);
         let dv = trial.volume[p] - inputs.committed_volume[p];
         f - water_body_force(water, p, dv, conn.support_values(p)[a])
     });

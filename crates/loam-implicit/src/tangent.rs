@@ -6,7 +6,7 @@
 use crate::cell_average::CellAverage;
 use crate::ghost::add_ghost_tangent;
 use crate::inertia::Inertia;
-use crate::points::TrialState;
+use crate::points::{TrialState, HOOP};
 use loam_grid::{Connectivity, GhostFace};
 use loam_solve::{BlockPattern, Couplings, SystemMatrix};
 
@@ -37,6 +37,8 @@ pub(crate) struct TangentInputs<'a, const D: usize> {
     /// Finite strain with water: the water's force per unit volume, whose force on the
     /// current volume changes with it (empty otherwise).
     pub water_force: &'a [nalgebra::SVector<f64, D>],
+    /// Whether the model is axisymmetric: the hoop strain's terms join each block.
+    pub axisymmetric: bool,
 }
 
 /// Assemble the tangent at the trial state into `matrix` (on the pattern, in its layout).
@@ -58,10 +60,18 @@ pub(crate) fn assemble<const D: usize>(
         }
         let ga = &trial.grad_x[p * stride + a];
         let gb = &trial.grad_x[p * stride + b];
+        // In axisymmetry, the hoop entries N / r of the radial dofs' strain operators.
+        let hoop = inputs.axisymmetric.then(|| {
+            let (n, r_inv) = (conn.support_values(p), trial.inv_radius[p]);
+            (n[a] * r_inv, n[b] * r_inv)
+        });
         if let Some(avg) = average {
-            let da = avg.average(p * stride + a) - ga;
-            let db = avg.average(p * stride + b) - gb;
-            add_averaged_terms::<D>(&trial.volumetric[p], ga, gb, &da, &db, out);
+            let mut da = avg.average(p * stride + a) - ga;
+            let mut db = avg.average(p * stride + b) - gb;
+            if let Some((ha, hb)) = hoop {
+                (da[0], db[0]) = (da[0] - ha, db[0] - hb);
+            }
+            add_averaged_terms::<D>(&trial.volumetric[p], (ga, gb), (&da, &db), hoop, out);
         }
         let t = &trial.tangent[p];
         for i in 0..D {
@@ -74,6 +84,9 @@ pub(crate) fn assemble<const D: usize>(
                 }
                 out[i * D + k] += s;
             }
+        }
+        if let Some((ha, hb)) = hoop {
+            add_hoop_terms::<D>(t, ga, gb, ha, hb, out);
         }
         if let Some(bw) = inputs.water_force.get(p) {
             // −N_a b v with δv = v ∇·δu: K_ab,ik = −N_a b_i v ∂N_b/∂x_k.
@@ -88,16 +101,38 @@ pub(crate) fn assemble<const D: usize>(
     add_ghost_tangent::<D>(inputs.ghost, inputs.pattern, inputs.constrained, matrix);
 }
 
-/// With E_a,i = e_i ⊗ c_a + ⅓ d_a,i I, d = b̄ − c (c the strain gradients `ga`, `gb`): the
-/// cross and volumetric terms of E_a,i : D : E_b,k beside the plain one, from the point's
+/// Axisymmetry (docs/theory.md §20): the strain operator of radial dof a,0 has the hoop
+/// entry h_a = N_a / r beside e_0 ⊗ ∂N_a, so the block gains h_a a_θθkl ∂N_b,l on row 0,
+/// ∂N_a,j a_ijθθ h_b on column 0 and h_a a_θθθθ h_b at (0, 0) (`t` holds v a with θθ at
+/// index [`HOOP`]).
+#[inline]
+fn add_hoop_terms<const D: usize>(
+    t: &nalgebra::SMatrix<f64, 9, 9>,
+    ga: &nalgebra::SVector<f64, D>,
+    gb: &nalgebra::SVector<f64, D>,
+    ha: f64,
+    hb: f64,
+    out: &mut [f64],
+) {
+    for k in 0..D {
+        out[k] += ha * (0..D).map(|l| t[(HOOP, k * D + l)] * gb[l]).sum::<f64>();
+    }
+    for i in 0..D {
+        out[i * D] += hb * (0..D).map(|j| ga[j] * t[(i * D + j, HOOP)]).sum::<f64>();
+    }
+    out[0] += ha * t[(HOOP, HOOP)] * hb;
+}
+
+/// With E_a,i = e_i ⊗ c_a + ⅓ d_a,i I, d = b̄ − c (c the strain gradients `ga`, `gb`; in
+/// axisymmetry d = b̄ − c − h e_r and E_a,0 has the hoop entry h_a, `hoop`): the cross and
+/// volumetric terms of E_a,i : D : E_b,k beside the plain one, from the point's
 /// volumetric contractions (v I : D, v D : I).
 #[inline]
 fn add_averaged_terms<const D: usize>(
     volumetric: &(nalgebra::Matrix3<f64>, nalgebra::Matrix3<f64>),
-    ga: &nalgebra::SVector<f64, D>,
-    gb: &nalgebra::SVector<f64, D>,
-    da: &nalgebra::SVector<f64, D>,
-    db: &nalgebra::SVector<f64, D>,
+    (ga, gb): (&nalgebra::SVector<f64, D>, &nalgebra::SVector<f64, D>),
+    (da, db): (&nalgebra::SVector<f64, D>, &nalgebra::SVector<f64, D>),
+    hoop: Option<(f64, f64)>,
     out: &mut [f64],
 ) {
     let (id, di) = volumetric;
@@ -110,6 +145,15 @@ fn add_averaged_terms<const D: usize>(
                 s += db[k] * ga[l] * di[(i, l)] / 3.0;
             }
             out[i * D + k] += s;
+        }
+    }
+    if let Some((ha, hb)) = hoop {
+        // (I : D)_θθ h_b on the radial column, h_a (D : I)_θθ on the radial row.
+        for i in 0..D {
+            out[i * D] += da[i] * id[(2, 2)] * hb / 3.0;
+        }
+        for k in 0..D {
+            out[k] += db[k] * ha * di[(2, 2)] / 3.0;
         }
     }
 }

@@ -1,22 +1,35 @@
-//! The internal force f_int,I = Σ_p v_p σ_p ∂N_I/∂x (docs/theory.md §1): one kernel for the
+//! The internal force f_int,I = Σ_p v_p σ_p ∂N_I/∂x (docs/theory.md §1), with the hoop
+//! stress's radial share v_p σ_θθ N_I / r_p in axisymmetry (§20): one kernel for the
 //! implicit residual, the dynamic start and the explicit grid update.
 
 use crate::gather_nodal;
 use loam_grid::Connectivity;
 use nalgebra::{Matrix3, SVector};
 
-/// Internal force of a point at one support node, v σ ∂N_a, and with B-bar (b̄_a given)
-/// also σ : (⅓ (b̄_a − ∂N_a) ⊗ e_i) I = v (tr σ / 3)(b̄_a − ∂N_a).
+/// Internal force of a point at one support node, v σ ∂N_a; with B-bar (b̄_a given)
+/// also σ : (⅓ (b̄_a − ∂N_a) ⊗ e_i) I = v (tr σ / 3)(b̄_a − ∂N_a); in axisymmetry
+/// (`hoop` = N_a / r given) also v σ_θθ N_a / r on the radial (x) component, σ_θθ the
+/// out-of-plane σ_zz, and the point's dilatation operator in B-bar's term is
+/// ∂N_a + (N_a / r) e_r.
 #[inline]
 pub fn internal_force<const D: usize>(
     volume: f64,
     stress: &Matrix3<f64>,
     grad: &SVector<f64, D>,
     bbar: Option<&SVector<f64, D>>,
+    hoop: Option<f64>,
 ) -> SVector<f64, D> {
     let mut f = SVector::<f64, D>::from_fn(|i, _| volume * (0..D).map(|j| stress[(i, j)] * grad[j]).sum::<f64>());
     if let Some(b) = bbar {
-        f += (b - grad) * (volume * stress.trace() / 3.0);
+        // b̄_a less the point's own dilatation operator, which has the hoop part too.
+        let mut d = b - grad;
+        if let Some(n_over_r) = hoop {
+            d[0] -= n_over_r;
+        }
+        f += d * (volume * stress.trace() / 3.0);
+    }
+    if let Some(n_over_r) = hoop {
+        f[0] += volume * stress[(2, 2)] * n_over_r;
     }
     f
 }

@@ -9,6 +9,7 @@
 //! the constructors, and the analyses change the points' evolving state only through
 //! [`PointsMut`], which cannot add points or reassign their materials.
 
+mod axisymmetry;
 mod body_constraints;
 mod constraint;
 mod energy;
@@ -140,6 +141,8 @@ pub enum ModelError {
     Append(String),
     #[error("basis: {0}")]
     Basis(String),
+    #[error("axisymmetry: {0}")]
+    Axisymmetry(String),
 }
 
 /// What an analysis changes in a model as it advances: the points' state, the places of
@@ -180,6 +183,7 @@ pub struct Model<const D: usize> {
     gravity_preloaded: bool,
     ghost_penalty: Option<f64>,
     geometrically_linear: bool,
+    axisymmetric: bool,
 }
 
 impl<const D: usize> Model<D> {
@@ -233,6 +237,7 @@ impl<const D: usize> Model<D> {
             gravity_preloaded: false,
             ghost_penalty: None,
             geometrically_linear: false,
+            axisymmetric: false,
         })
     }
 
@@ -322,6 +327,9 @@ impl<const D: usize> Model<D> {
             if load.is_follower() && self.kinematics != Kinematics::FiniteStrain {
                 return error("a follower pressure turns with the deformed surface, a finite-strain notion; use kinematics FiniteStrain or a dead pressure".into());
             }
+            if load.is_follower() && self.axisymmetric {
+                return error("follower pressures are not implemented in axisymmetry; use a dead pressure".into());
+            }
             let (lo, hi, h) = (grid.origin(), grid.extent_max(), grid.cell_size());
             let inside = |x: &SVector<f64, D>| (0..D).all(|a| x[a] >= lo[a] && x[a] <= hi[a] + 1e-9 * h[a]);
             if let Some(x) = load.positions().iter().find(|x| !inside(x)) {
@@ -337,6 +345,9 @@ impl<const D: usize> Model<D> {
         let positions = self.points.position0();
         for load in &mut self.loads {
             load.attach(grid, positions);
+            if self.axisymmetric {
+                load.revolve();
+            }
         }
         self.update_load_vertices();
         Ok(self)
@@ -430,7 +441,7 @@ impl<const D: usize> Model<D> {
             ));
         }
         self.ghost_penalty = Some(gamma);
-        Ok(self)
+        self.still_axisymmetric(ModelError::GhostPenalty)
     }
 
     /// The same model on the grid's `basis` instead (the points' GIMP domains kept, used by
@@ -489,7 +500,7 @@ impl<const D: usize> Model<D> {
             }
         }
         self.anti_locking = anti_locking;
-        Ok(self)
+        self.still_axisymmetric(ModelError::AntiLocking)
     }
 
     pub fn background(&self) -> &Background<D> {
@@ -704,11 +715,13 @@ impl<const D: usize> Model<D> {
 
     /// Mark the constrained dofs of the active nodes in `layout`: a constraint holds its
     /// components of every motion field at the nodes of its plane.
+    /// (In axisymmetry the nodes on the axis are held radially too.)
     pub fn constrained_dofs(&self, layout: &NodeLayout, active: &ActiveNodes, out: &mut Vec<bool>) {
         out.clear();
         out.resize(layout.num_dofs(active.len()), false);
+        let axis = self.axisymmetric.then(axisymmetry::axis_roller);
         for (a, &g) in active.active_to_grid.iter().enumerate() {
-            for c in &self.constraints {
+            for c in self.constraints.iter().chain(&axis) {
                 if self.node_on_plane(g as usize, c) {
                     for k in motion_fields(layout) {
                         for i in 0..D {

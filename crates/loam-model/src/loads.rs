@@ -132,6 +132,9 @@ pub struct Load<const D: usize> {
     /// put on a model).
     carrier: Vec<u32>,
     offset: Vec<SVector<f64, D>>,
+    /// Whether the surface is the meridian of a surface of revolution (an axisymmetric
+    /// model's, [`Load::revolve`]).
+    revolved: bool,
 }
 
 impl<const D: usize> Load<D> {
@@ -177,6 +180,7 @@ impl<const D: usize> Load<D> {
             dead: Vec::new(),
             carrier: Vec::new(),
             offset: Vec::new(),
+            revolved: false,
         };
         let mut dead = Vec::new();
         load.forces_on(&load.surface.vertices, &mut dead);
@@ -215,7 +219,11 @@ impl<const D: usize> Load<D> {
     /// Per vertex, the force at full value with the vertices at `x`: a traction's facet load
     /// shared equally among the facet's vertices; a pressure's vertex v takes p_v a_e / D of
     /// each facet e around it (the lumped load of a linearly varying pressure: the
-    /// resultant exact, the moment to the facet size). Dead loads ignore `x`.
+    /// resultant exact, the moment to the facet size). On a surface of revolution
+    /// ([`Load::revolve`]) a facet is a ring of area 2π r̄ a_e, and vertex v takes
+    /// 2π (2 r_v + r_w) / 6 of a_e, r_w the radius of the facet's other vertex: the
+    /// consistent load of a uniform traction, whose resultant is exact. Dead loads ignore
+    /// `x`.
     pub fn forces_on(&self, x: &[SVector<f64, D>], out: &mut Vec<SVector<f64, D>>) {
         out.clear();
         out.resize(self.surface.vertices.len(), SVector::zeros());
@@ -225,20 +233,42 @@ impl<const D: usize> Load<D> {
             LoadKind::Traction(t) => {
                 for facet in &self.surface.facets {
                     let area = area_vector(&facet.map(|v| x[v as usize])).norm();
-                    for &v in facet {
-                        out[v as usize] += t * (area / D as f64);
+                    for (k, &v) in facet.iter().enumerate() {
+                        out[v as usize] += t * self.portion(area, facet, k, x);
                     }
                 }
             }
             LoadKind::Pressure { values, .. } => {
                 for facet in &self.surface.facets {
                     let a = area_vector(&facet.map(|v| x[v as usize]));
-                    for &v in facet {
-                        out[v as usize] -= a * (values[v as usize] / D as f64);
+                    for (k, &v) in facet.iter().enumerate() {
+                        out[v as usize] -= a * self.portion(values[v as usize], facet, k, x);
                     }
                 }
             }
         }
+    }
+
+    /// The part of `amount` (a facet's area, or a pressure on it) that the facet's vertex
+    /// `k` takes: amount / D, or amount 2π (2 r_v + r_w) / 6 on a surface of revolution
+    /// ([`Load::forces_on`]).
+    #[inline]
+    fn portion(&self, amount: f64, facet: &[u32; D], k: usize, x: &[SVector<f64, D>]) -> f64 {
+        if !self.revolved {
+            return amount / D as f64;
+        }
+        let (r_v, r_w) = (x[facet[k] as usize][0], x[facet[1 - k] as usize][0]);
+        amount * std::f64::consts::TAU * (2.0 * r_v + r_w) / 6.0
+    }
+
+    /// Read the surface as the meridian of a surface of revolution about the y axis (an
+    /// axisymmetric model's, x the radius): each facet a ring (2D only).
+    pub(crate) fn revolve(&mut self) {
+        debug_assert_eq!(D, 2, "a surface of revolution has a 2D meridian");
+        self.revolved = true;
+        let mut dead = Vec::new();
+        self.forces_on(&self.surface.vertices, &mut dead);
+        self.dead = dead;
     }
 
     /// The load's resultant on the current vertices at `scale` times its full value.

@@ -131,6 +131,15 @@ impl<const D: usize> Model<D> {
         check_unstrained(&points)?;
         check_materials(&points, &self.materials)?;
         start_unstrained(&mut points, self.kinematics, &self.materials);
+        if self.axisymmetric() {
+            if let Some(p) = (0..points.len()).find(|&p| points.position()[p][0] <= 0.0) {
+                return fail(format!(
+                    "point {p} lies at radius {} ≤ 0; the points lie at x > 0",
+                    points.position()[p][0]
+                ));
+            }
+            points.revolve();
+        }
         let first = self.points.append(&points)?;
         if !self.point_forces.is_empty() {
             self.point_forces.resize(self.points.len(), SVector::zeros());

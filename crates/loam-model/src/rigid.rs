@@ -143,6 +143,10 @@ impl<const D: usize> Model<D> {
         for (a, &g) in active.active_to_grid.iter().enumerate() {
             let x = self.background().node_reference_position(g as usize);
             let mut axes = body_held[a];
+            // A body of revolution has one rigid motion, along its axis: a radial
+            // translation or an in-plane rotation strains its rings (u_r / r ≠ 0), so in
+            // axisymmetry every node counts as held radially.
+            axes[0] |= self.axisymmetric();
             for c in self.constraints().iter().filter(|c| self.node_on_plane(g as usize, c)) {
                 (0..D).for_each(|i| axes[i] |= c.fixed[i]);
             }

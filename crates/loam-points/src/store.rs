@@ -538,6 +538,18 @@ impl<const D: usize> PointStore<D> {
         Ok(first)
     }
 
+    /// Make every point the ring it sweeps about the y axis, x its radius: its mass and
+    /// volumes times 2π x at its place (an axisymmetric model's points, whose volumes were
+    /// areas of the meridian plane).
+    pub fn revolve(&mut self) {
+        for p in 0..self.len() {
+            let ring = std::f64::consts::TAU * self.position[p][0];
+            self.mass[p] *= ring;
+            self.volume0[p] *= ring;
+            self.volume[p] *= ring;
+        }
+    }
+
     /// The order of the points by ascending id (what outputs are written in), or `None`
     /// where they are in it already.
     pub fn id_order(&self) -> Option<Vec<usize>> {

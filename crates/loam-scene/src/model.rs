@@ -106,12 +106,16 @@ impl LoadedScene {
         })
     }
 
-    /// Anti-locking, geometric linearity (implicit only), the ghost penalty (implicit only),
-    /// the groundwater (implicit only) and the initial stress, in that order.
-    fn model_options<const D: usize>(&self, model: Model<D>) -> Result<Model<D>, SceneError> {
+    /// Axisymmetry, anti-locking, geometric linearity (implicit only), the ghost penalty
+    /// (implicit only), the groundwater (implicit only) and the initial stress, in that
+    /// order.
+    fn model_options<const D: usize>(&self, mut model: Model<D>) -> Result<Model<D>, SceneError> {
         let s = &self.scene;
         let explicit = matches!(s.analysis, AnalysisSpec::Explicit { .. });
         let refused = |key: &'static str| move |e: ModelError| self.error(&[Seg::Key(key)], e.to_string());
+        if s.axisymmetric {
+            model = model.with_axisymmetry().map_err(refused("axisymmetric"))?;
+        }
         let mut model = model.with_anti_locking(s.anti_locking.into()).map_err(refused("anti_locking"))?;
         if s.geometrically_linear {
             if explicit {

@@ -13,8 +13,12 @@ pub struct Scene {
     /// One line saying what the scene is.
     #[serde(default)]
     pub title: String,
-    /// 2 (plane strain) or 3.
+    /// 2 (plane strain, or axisymmetric with `axisymmetric: true`) or 3.
     pub dimension: usize,
+    /// A 2D scene read as the meridian plane of a body of revolution about the y axis, x
+    /// the radius (docs/theory.md §20; default false).
+    #[serde(default)]
+    pub axisymmetric: bool,
     pub grid: GridSpec,
     #[serde(default = "default_basis")]
     pub basis: BasisSpec,

@@ -260,6 +260,27 @@ fn cases() -> Vec<(&'static str, usize, String)> {
         ("ghost penalty", 2, c(&[(PLANE, &option("ghost_penalty: Some(0.1),"))])),
         ("ghost penalty negative", 2, c(&[(PLANE, &option("ghost_penalty: Some(-1.0),"))])),
         ("ghost penalty explicit", 2, c(&[(PLANE, &option("ghost_penalty: Some(0.1),")), (QS, explicit)])),
+        ("axisymmetric", 2, c(&[(PLANE, &option("axisymmetric: true,"))])),
+        ("axisymmetric 3D", 3, edit(CUBE, &[("dimension: 3,", "dimension: 3,\n    axisymmetric: true,")])),
+        (
+            "axisymmetric off the axis",
+            2,
+            c(&[
+                (PLANE, &option("axisymmetric: true,")),
+                ("origin: [0.0, 0.0]", "origin: [-0.3125, 0.0]"),
+                ("cells: [1, 33]", "cells: [2, 33]"),
+            ]),
+        ),
+        ("axisymmetric ghost penalty", 2, c(&[(PLANE, &option("axisymmetric: true,\n    ghost_penalty: Some(0.1),"))])),
+        (
+            "axisymmetric assumed strain",
+            2,
+            c(&[
+                (PLANE, &option("axisymmetric: true,\n    anti_locking: AssumedStrain(stabilization: 0.1),")),
+                ("kinematics: FiniteStrain,", small),
+                ("Gimp", "Linear"),
+            ]),
+        ),
         ("geostatic", 2, c(&[(PLANE, &option("initial_stress: Geostatic(k0: 0.5),"))])),
         ("geostatic negative", 2, c(&[(PLANE, &option("initial_stress: Geostatic(k0: -0.5),"))])),
         ("load steps zero", 2, c(&[("load_steps: 40", "load_steps: 0")])),

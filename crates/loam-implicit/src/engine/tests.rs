@@ -11,13 +11,15 @@ use nalgebra::Vector2;
 use std::sync::Arc;
 
 /// A 2×2-cell block on a 5×5 grid, pre-loaded by gravity to a stressed state. With a
-/// ghost penalty the block is shifted 0.3 cells along x, so that it cuts cells.
+/// ghost penalty the block is shifted 0.3 cells along x, so that it cuts cells;
+/// `axisymmetric`, it is a ring of radii 1 to 3 about the grid's x = 0 axis.
 fn stressed_block_with(
     kinematics: Kinematics,
     basis: BasisKind,
     anti_locking: AntiLocking,
     ghost: Option<f64>,
     law: Arc<dyn ConstitutiveLaw>,
+    axisymmetric: bool,
 ) -> Model<2> {
     let grid = Grid::new(Vector2::zeros(), Vector2::new(1.0, 1.0), [5, 5]).unwrap();
     let mut points = PointStore::new();
@@ -27,10 +29,12 @@ fn stressed_block_with(
         points.position_mut().iter_mut().for_each(|x| x[0] += 0.3);
     }
     let fixed = PlaneConstraint::new(1, 0, [true, true, false]);
-    let mut model = Model::new(grid, basis, kinematics, points, vec![law], vec![fixed], Vector2::new(3.0, -10.0))
-        .unwrap()
-        .with_anti_locking(anti_locking)
-        .unwrap();
+    let mut model =
+        Model::new(grid, basis, kinematics, points, vec![law], vec![fixed], Vector2::new(3.0, -10.0)).unwrap();
+    if axisymmetric {
+        model = model.with_axisymmetry().unwrap();
+    }
+    let mut model = model.with_anti_locking(anti_locking).unwrap();
     if let Some(gamma) = ghost {
         model = model.with_ghost_penalty(gamma).unwrap();
     }
@@ -94,18 +98,24 @@ fn assembled_tangent_is_the_derivative_of_the_residual() {
     let mohr_coulomb: Arc<dyn ConstitutiveLaw> = Arc::new(MohrCoulomb::from_degrees(elastic, 8e3, 30.0, 30.0).unwrap());
     let assumed = AntiLocking::AssumedStrain { stabilization: 0.2 };
     let cases = [
-        (Kinematics::FiniteStrain, BasisKind::Gimp, AntiLocking::None, None, &linear),
-        (Kinematics::SmallStrain, BasisKind::Gimp, AntiLocking::None, None, &linear),
-        (Kinematics::SmallStrain, BasisKind::Linear, AntiLocking::BBar, None, &linear),
-        (Kinematics::SmallStrain, BasisKind::Linear, assumed, None, &linear),
-        (Kinematics::SmallStrain, BasisKind::Linear, AntiLocking::BBar, None, &von_mises),
-        (Kinematics::SmallStrain, BasisKind::Linear, assumed, None, &von_mises),
-        (Kinematics::SmallStrain, BasisKind::Linear, assumed, None, &mohr_coulomb),
-        (Kinematics::FiniteStrain, BasisKind::Gimp, AntiLocking::None, Some(1.0), &linear),
+        (Kinematics::FiniteStrain, BasisKind::Gimp, AntiLocking::None, None, &linear, false),
+        (Kinematics::SmallStrain, BasisKind::Gimp, AntiLocking::None, None, &linear, false),
+        (Kinematics::SmallStrain, BasisKind::Linear, AntiLocking::BBar, None, &linear, false),
+        (Kinematics::SmallStrain, BasisKind::Linear, assumed, None, &linear, false),
+        (Kinematics::SmallStrain, BasisKind::Linear, AntiLocking::BBar, None, &von_mises, false),
+        (Kinematics::SmallStrain, BasisKind::Linear, assumed, None, &von_mises, false),
+        (Kinematics::SmallStrain, BasisKind::Linear, assumed, None, &mohr_coulomb, false),
+        (Kinematics::FiniteStrain, BasisKind::Gimp, AntiLocking::None, Some(1.0), &linear, false),
+        // Axisymmetric (docs/theory.md §20): the hoop rows and B-bar's hoop dilatation.
+        (Kinematics::FiniteStrain, BasisKind::Gimp, AntiLocking::None, None, &linear, true),
+        (Kinematics::SmallStrain, BasisKind::Gimp, AntiLocking::None, None, &mohr_coulomb, true),
+        (Kinematics::SmallStrain, BasisKind::Linear, AntiLocking::BBar, None, &linear, true),
+        (Kinematics::SmallStrain, BasisKind::Linear, AntiLocking::BBar, None, &von_mises, true),
+        (Kinematics::FiniteStrain, BasisKind::Gimp, AntiLocking::None, None, &von_mises, true),
     ];
-    for (kinematics, basis, anti_locking, ghost, law) in cases {
+    for (kinematics, basis, anti_locking, ghost, law, axisymmetric) in cases {
         let plastic = !Arc::ptr_eq(law, &linear);
-        let model = stressed_block_with(kinematics, basis, anti_locking, ghost, law.clone());
+        let model = stressed_block_with(kinematics, basis, anti_locking, ghost, law.clone(), axisymmetric);
         let mut engine = Engine::new(model, NewtonSettings::default(), loam_solve::LinearSolverChoice::Auto);
         engine.connect(1).unwrap();
         assert_eq!(engine.ghost.is_empty(), ghost.is_none(), "the shifted block must cut cells");
@@ -153,13 +163,13 @@ fn assembled_tangent_is_the_derivative_of_the_residual() {
         let scale: f64 = kv.iter().map(|k| k * k).sum::<f64>().sqrt();
         assert!(
             diff <= 1e-6 * scale,
-            "{kinematics:?} {anti_locking:?} plastic {plastic}: |Kv - FD| / |Kv| = {:e}",
+            "{kinematics:?} {anti_locking:?} plastic {plastic} axisymmetric {axisymmetric}: |Kv - FD| / |Kv| = {:e}",
             diff / scale
         );
         // Hyperelastic (Hencky), linear elastic and associated tangents are symmetric
         // as a whole.
         let asym = engine.matrix.asymmetry(&engine.pattern);
-        assert!(asym < 1e-10, "{kinematics:?}: asymmetry {asym:e}");
+        assert!(asym < 1e-10, "{kinematics:?} axisymmetric {axisymmetric}: asymmetry {asym:e}");
     }
 }
 
@@ -172,7 +182,7 @@ fn assembled_tangent_is_the_derivative_of_the_residual() {
 fn follower_pressure_tangent_is_the_derivative_of_the_residual() {
     use loam_model::{Load, LoadLevel, TimeFunction};
     let law: Arc<dyn ConstitutiveLaw> = Arc::new(Elastic::new(1e5, 0.3).unwrap());
-    let model = stressed_block_with(Kinematics::FiniteStrain, BasisKind::Gimp, AntiLocking::None, None, law);
+    let model = stressed_block_with(Kinematics::FiniteStrain, BasisKind::Gimp, AntiLocking::None, None, law, false);
     let faces = Shape::Box { min: Vector2::new(1.0, 0.0), max: Vector2::new(3.0, 2.0) }
         .boundary(0.25)
         .unwrap()
@@ -219,7 +229,7 @@ fn follower_pressure_tangent_is_the_derivative_of_the_residual() {
 fn water_force_tangent_is_the_derivative_of_the_residual() {
     use loam_model::{PhreaticLevel, Water};
     let law: Arc<dyn ConstitutiveLaw> = Arc::new(Elastic::new(1e5, 0.3).unwrap());
-    let model = stressed_block_with(Kinematics::FiniteStrain, BasisKind::Gimp, AntiLocking::None, None, law);
+    let model = stressed_block_with(Kinematics::FiniteStrain, BasisKind::Gimp, AntiLocking::None, None, law, false);
     let water = Water::new(5e3, PhreaticLevel::Horizontal(1.0), &Vector2::new(0.0, -10.0)).unwrap();
     let model = model.with_water(water).unwrap();
     let mut engine = Engine::new(model, NewtonSettings::default(), loam_solve::LinearSolverChoice::Auto);
