@@ -5,7 +5,7 @@
 //! the way. On a shared machine whose timings wander, the instruction count of
 //! `valgrind --tool=cachegrind` is a measure that does not: the difference between two
 //! step counts, divided by the steps and points, is the instructions per point-step
-//! (docs/verification.md, Explicit speed).
+//! (docs/benchmarks.md, Explicit speed).
 //!
 //! ```text
 //! cargo run --release --example explicit_block -- DIM CELLS STEPS [gimp|bspline]

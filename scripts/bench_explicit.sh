@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# loam's explicit MPM against the Taichi peer, side by side in one sitting (docs/verification.md,
+# loam's explicit MPM against the Taichi peer, side by side in one sitting (docs/benchmarks.md,
 # Explicit speed): the criterion bench of the 2D (256 x 256 cells) and 3D (32^3) elastic blocks,
 # then, when taichi is installed (pip install taichi), the peer's MLS-MPM on the same blocks with
 # as many threads, and the ratio of the medians. Usage: scripts/bench_explicit.sh [OUT_DIR]

@@ -2,19 +2,24 @@
 //! ramped on the footing width until Newton fails, against Prandtl), and V6, the
 //! thick-walled cylinder under internal pressure (docs/verification.md §V6) — the radial
 //! displacements at the bore and the outer radius against Lamé on three meshes (small
-//! strain, dead pressure), and Newton under a follower pressure of a tenth of E in finite
-//! strain, with the residual sequence of its hardest load step.
+//! strain, dead pressure), Newton under a follower pressure of a tenth of E in finite
+//! strain, with the residual sequence of its hardest load step, and the cylinder posed
+//! axisymmetrically, against Lamé and its limit pressure.
 
+use crate::columns::observed_rate;
 use crate::report::{Report, Row};
 use crate::soil::{self, COHESION, POISSON, YOUNG};
 use anyhow::Result;
 use loam::constitutive::Elastic;
 use loam::implicit::{AntiLocking, Kinematics, QuasiStatic, QuasiStaticSettings};
 use loam::model::Model;
-use loam_verification::cylinder::bounds::{FOLLOWER_NEWTON_ITERATIONS, RADIAL_DISPLACEMENT};
+use loam_verification::cylinder::bounds::{
+    FOLLOWER_NEWTON_ITERATIONS, RADIAL_DISPLACEMENT, RING_LAME, RING_LAME_ORDER, RING_LIMIT,
+};
 use loam_verification::footing::bounds::LOAD_CONTROLLED_COLLAPSE;
 use loam_verification::{footing_load_model, prandtl_nc, Cylinder};
 use std::fmt::Write as _;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// Load steps of the follower-pressure run.
@@ -135,5 +140,44 @@ fn follower(quick: bool, report: &mut Report) -> Result<()> {
     let name = format!("V6 follower {cells} cells");
     report.rows.push(Row::checked(&name, "max_newton_iterations_per_step", most as f64, FOLLOWER_NEWTON_ITERATIONS));
     report.rows.push(Row::info(&name, "bore_mean_radius", bore));
+    ring(quick, report)
+}
+
+/// Load steps and full pressure over the limit of the axisymmetric ring's collapse run.
+const RING_STEPS: usize = 30;
+const RING_OVERLOAD: f64 = 1.1;
+
+/// V6 posed axisymmetrically: the ring against Lamé on three meshes, then its collapse
+/// pressure (von Mises, B-bar) against 2 c_u ln(b/a).
+fn ring(quick: bool, report: &mut Report) -> Result<()> {
+    let meshes: &[usize] = if quick { &[8, 16, 32] } else { &[8, 16, 32, 64] };
+    let c = Cylinder::REFERENCE;
+    writeln!(report.md, "## V6 axisymmetric ring\n\nThe same cylinder as an axisymmetric ring between smooth planes (x the radius), cells across b − a, two high, linear basis, B-bar, 2×2 points per cell, small strain, geometrically linear. Lamé: E = {}, ν = {}, p = {}; point-wise: the largest |u_r − Lamé| / Lamé(a); rate: least-squares slope of ln error against ln h. Collapse: von Mises, c_u = {COHESION}, E = {YOUNG:e}, ν = {POISSON}, the pressure ramped to {RING_OVERLOAD} × 2 c_u ln(b/a) in {RING_STEPS} load steps (each halved up to 8 times), the last converged pressure.\n", c.young, c.poisson, c.pressure)?;
+    report.mark_table("V6-ring")?;
+    writeln!(report.md, "| cells across b − a | points | Lamé point-wise | collapse / 2 c_u ln(b/a) − 1 | wall [s] |\n|---:|---:|---:|---:|---:|")?;
+    let (mut runs, mut limit) = (Vec::new(), 0.0);
+    let law = soil::undrained(Elastic::new(YOUNG, POISSON)?, COHESION)?;
+    for &cells in meshes {
+        eprintln!("verify: V6 axisymmetric ring, {cells} cells");
+        let t = Instant::now();
+        let elastic = Arc::new(Elastic::new(c.young, c.poisson)?);
+        let (model, _, _) = solve(c.ring(cells, elastic), 1)?;
+        let error = c.ring_error(model.points());
+        let p_lim = c.limit_pressure(COHESION);
+        let plastic = Cylinder { pressure: RING_OVERLOAD * p_lim, ..c };
+        let settings = QuasiStaticSettings { load_steps: RING_STEPS, ..Default::default() };
+        let mut qs = QuasiStatic::new(plastic.ring(cells, law.clone()), settings);
+        while !qs.is_finished() && qs.step().is_ok() {}
+        limit = qs.load_factor() * RING_OVERLOAD - 1.0;
+        let n = model.points().len();
+        writeln!(report.md, "| {cells} | {n} | {error:.3e} | {limit:+.2e} | {:.2} |", t.elapsed().as_secs_f64())?;
+        runs.push((cells, error));
+    }
+    writeln!(report.md)?;
+    let (cells, error) = *runs.last().expect("at least one mesh");
+    let name = format!("V6 axisymmetric ring {cells} cells");
+    report.rows.push(Row::checked(&name, "lame_pointwise_error", error, RING_LAME));
+    report.rows.push(Row::checked(&name, "lame_rate", observed_rate(&runs), RING_LAME_ORDER));
+    report.rows.push(Row::checked(&name, "|collapse/p_lim - 1|", limit.abs(), RING_LIMIT));
     Ok(())
 }

@@ -5,11 +5,18 @@
 //! The run is measured by the radial displacements at the inner and outer radius of the
 //! least-squares fit of A r + B / r to every point's radial displacement (the points do not
 //! sit on the radii), and by the largest point-wise error of u_r against Lamé's.
+//!
+//! The same cylinder is also posed axisymmetrically ([`Cylinder::ring`], docs/theory.md
+//! §20): the ring a < r < b between smooth planes, whose grid fits it exactly, elastic
+//! against Lamé and perfectly plastic (von Mises) against its limit pressure
+//! p_lim = 2 c_u ln(b/a) (Hill 1950, plane strain along the axis: at collapse the plastic
+//! flow is incompressible and ε_z = 0, so σ_z is the mean of σ_r and σ_θ and the von
+//! Mises cylinder yields at σ_θ − σ_r = 2 c_u, c_u = σ_y / √3).
 
 use crate::bound::Bound;
-use loam_constitutive::Elastic;
+use loam_constitutive::{ConstitutiveLaw, Elastic};
 use loam_grid::{BasisKind, Grid};
-use loam_model::{Kinematics, Load, Model, PlaneConstraint, TimeFunction};
+use loam_model::{AntiLocking, Kinematics, Load, Model, PlaneConstraint, TimeFunction};
 use loam_points::{PointStore, Shape};
 use nalgebra::Vector2;
 use std::sync::Arc;
@@ -24,6 +31,15 @@ pub mod bounds {
     /// Newton corrections per load step under the follower pressure in finite strain.
     pub const FOLLOWER_NEWTON_ITERATIONS: Bound =
         Bound::upper(6.0, "docs/verification.md §V6: <= 6 Newton iterations per load step, follower pressure");
+    /// The axisymmetric ring's largest point-wise error against Lamé at the finest mesh.
+    pub const RING_LAME: Bound =
+        Bound::upper(1e-3, "docs/verification.md §V6: axisymmetric ring within 0.1 % of Lamé at the finest mesh");
+    /// The observed order of the ring's point-wise error (the bilinear basis: h²).
+    pub const RING_LAME_ORDER: Bound =
+        Bound::lower(1.8, "docs/verification.md §V6: axisymmetric ring converges as h^2 to Lamé");
+    /// The axisymmetric ring's collapse pressure against 2 c_u ln(b/a) at the finest mesh.
+    pub const RING_LIMIT: Bound =
+        Bound::upper(0.005, "docs/verification.md §V6: axisymmetric collapse pressure within 0.5 % of 2 c_u ln(b/a)");
 }
 
 /// A thick-walled cylinder: inner and outer radius, elastic constants, internal pressure.
@@ -115,6 +131,49 @@ impl Cylinder {
             inner_value: at(self.inner),
             pointwise: worst / self.radial_displacement(self.inner).abs(),
         }
+    }
+}
+
+impl Cylinder {
+    /// The cylinder's limit pressure 2 c_u ln(b/a) for undrained strength `c_u` (module
+    /// docs).
+    pub fn limit_pressure(&self, c_u: f64) -> f64 {
+        2.0 * c_u * (self.outer / self.inner).ln()
+    }
+
+    /// The cylinder as an axisymmetric ring of `law` (module docs): `cells` square cells
+    /// across b − a, two high, the grid from the axis to a cell beyond b, 2×2 points per
+    /// cell, the linear basis with B-bar (whose averaged dilatation keeps incompressible
+    /// plastic flow from locking), small strain on the initial configuration, smooth
+    /// planes top and bottom, and the dead pressure `self.pressure` on the bore.
+    pub fn ring(&self, cells: usize, law: Arc<dyn ConstitutiveLaw>) -> Model<2> {
+        let h = (self.outer - self.inner) / cells as f64;
+        let across = (self.outer / h).round() as usize + 1;
+        let grid = Grid::new(Vector2::zeros(), Vector2::new(h, h), [across, 2]).expect("valid grid");
+        let shape = Shape::Box { min: Vector2::new(self.inner, 0.0), max: Vector2::new(self.outer, 2.0 * h) };
+        let mut points = PointStore::new();
+        points.fill(&grid, &shape, 2, 1.0, 0).expect("the ring fits the grid");
+        let planes =
+            vec![PlaneConstraint::new(1, 0, [false, true, false]), PlaneConstraint::new(1, 2, [false, true, false])];
+        let model =
+            Model::new(grid, BasisKind::Linear, Kinematics::SmallStrain, points, vec![law], planes, Vector2::zeros())
+                .and_then(Model::with_axisymmetry)
+                .and_then(Model::with_geometrically_linear)
+                .and_then(|m| m.with_anti_locking(AntiLocking::BBar))
+                .expect("valid ring model");
+        let bore = (shape.boundary(h / 2.0).expect("valid outline")).select(|c| c[0] < self.inner + 0.25 * h);
+        let n = bore.vertices.len();
+        let load = Load::pressure(bore, vec![self.pressure; n], false, TimeFunction::Constant).expect("valid load");
+        model.with_loads(vec![load]).expect("the bore lies in the grid")
+    }
+
+    /// The largest point-wise |u_r − Lamé(r)| of an axisymmetric ring's points, relative to
+    /// Lamé(a).
+    pub fn ring_error(&self, points: &PointStore<2>) -> f64 {
+        let worst = (points.position0().iter().zip(points.position()))
+            .map(|(x0, x)| (x[0] - x0[0] - self.radial_displacement(x0[0])).abs())
+            .fold(0.0, f64::max);
+        worst / self.radial_displacement(self.inner).abs()
     }
 }
 
