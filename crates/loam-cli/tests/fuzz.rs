@@ -30,11 +30,12 @@ const MAX_MEMORY: &str = "2G";
 
 /// The examples small enough to run a few steps of in CI (the strength-reduction scenes
 /// search their factor of safety before the first step; `loam check` takes every example).
-const RUNNABLE: [&str; 8] = [
+const RUNNABLE: [&str; 9] = [
     "column.ron",
     "column_fem.ron",
     "disks.ron",
     "vibrating_bar.ron",
+    "footing_circular.ron",
     "footing_load_control.ron",
     "footing_von_mises.ron",
     "slope_runout_explicit.ron",
