@@ -249,3 +249,50 @@ fn a_loaded_cylinder_settles_to_uniaxial_stress_in_explicit_dynamics() {
         assert!(r[szz].abs() < 0.005 * q, "σ_θθ {}", r[szz]);
     }
 }
+
+/// Geostatic stress and static water in axisymmetry: soil (R = 1 m, H = 4 m, ρ = 2000)
+/// in a smooth tube, the water table 1 m below its top, K0 = 0.6 from the effective
+/// weight. The rings' weights and their σ_v ∂N/∂z share the same radial quadrature, and
+/// σ_rr = σ_θθ balance radially (the tube test above), so the geostatic state is in
+/// equilibrium: a load step moves no point by more than 1e-6 of the settlement that
+/// gravity loading from zero gives the same ground (as the plane-strain geostatic test
+/// asks), and the stresses stay K0's.
+#[test]
+fn a_geostatic_ground_with_water_stays_in_equilibrium() {
+    let scene = |initial: &str| {
+        format!(
+            r#"Scene(
+    dimension: 2,
+    axisymmetric: true,
+    grid: (origin: [0.0, 0.0], cell_size: [0.25, 0.25], cells: [4, 17]),
+    basis: Linear,
+    kinematics: SmallStrain,
+    initial_stress: {initial},
+    materials: [(name: "soil", density: 2000.0, law: Elastic(young: 1e7, poisson: 0.3))],
+    bodies: [(material: "soil", shape: Box(min: [0.0, 0.0], max: [1.0, 4.0]))],
+    gravity: [0.0, -10.0],
+    constraints: [Roller(axis: X, at: 1.0), Fixed(axis: Y, at: 0.0)],
+    water: Some((unit_weight: 1e4, level: Horizontal(3.0))),
+    analysis: QuasiStatic(load_steps: 1),
+    solver: (residual_tolerance: 1e-12),
+    output: (vtu_every: 0, final_csv: true),
+)"#
+        )
+    };
+    let largest_move = |dir: &tempfile::TempDir| {
+        let (header, rows) = table(&dir.path().join("points_final.csv"));
+        let (x0, x, y0, y) = (column(&header, "x0"), column(&header, "x"), column(&header, "y0"), column(&header, "y"));
+        rows.iter().map(|r| (r[x] - r[x0]).hypot(r[y] - r[y0])).fold(0.0, f64::max)
+    };
+    let loaded = largest_move(&run(&scene("None")));
+    let dir = run(&scene("Geostatic(k0: 0.6)"));
+    let moved = largest_move(&dir);
+    assert!(loaded > 1e-4, "gravity loading settles the ground: {loaded}");
+    assert!(moved < 1e-6 * loaded, "the geostatic ground moved {moved} (gravity loading: {loaded})");
+    let (header, rows) = table(&dir.path().join("points_final.csv"));
+    let (sxx, syy, szz) = (column(&header, "sxx"), column(&header, "syy"), column(&header, "szz"));
+    for r in &rows {
+        assert!((r[sxx] - 0.6 * r[syy]).abs() <= 1e-6 * r[syy].abs(), "σ_rr {} against K0 σ_v {}", r[sxx], r[syy]);
+        assert!((r[szz] - r[sxx]).abs() <= 1e-6 * r[syy].abs(), "σ_θθ {} against σ_rr {}", r[szz], r[sxx]);
+    }
+}

@@ -7,7 +7,7 @@ use nalgebra::Matrix3;
 impl<const D: usize> Model<D> {
     /// Put the points in a geostatic initial stress: the vertical effective stress is the
     /// weight of the material above each point in its grid column, σ′_v = −Σ (|g| m − γ_w V)
-    /// / A (A the column's horizontal area; points at the same height count half; the
+    /// / A (A the column's horizontal area, a ring's in axisymmetry; points at the same height count half; the
     /// buoyancy γ_w V only below the water table), the horizontal ones K0 σ′_v,
     /// with the elastic strain that carries it (small strain ε^e = C⁻¹σ, finite strain
     /// b^e = exp(2 C⁻¹σ)). Gravity then acts in full from the start
@@ -57,7 +57,7 @@ impl<const D: usize> Model<D> {
     }
 
     /// σ_v of every point: the (effective) weight of the material above it in its grid
-    /// column over the column's area, points at the same height (within 1e-9 of a cell)
+    /// column over the column's area (its ring's in axisymmetry), points at the same height (within 1e-9 of a cell)
     /// counting half. Gravity `g` acts along axis `vertical`; "above" is against it.
     fn overburden(&self, vertical: usize, g: f64) -> Vec<f64> {
         let up = -g.signum();
@@ -78,6 +78,14 @@ impl<const D: usize> Model<D> {
         let tol = 1e-9 * h[vertical];
         let mut sigma_v = vec![0.0; pts.len()];
         for col in order.chunk_by(|a, b| a.0 == b.0) {
+            // In axisymmetry the column is a ring of radius r_c (its cells' centre), whose
+            // points' weights are those of their rings (docs/theory.md §20).
+            let area = if self.axisymmetric() {
+                let origin = self.grid().origin()[0];
+                std::f64::consts::TAU * (origin + (col[0].0[0] as f64 + 0.5) * h[0]) * area
+            } else {
+                area
+            };
             let mut above = 0.0;
             // The rows of the column: points at the same height, top down.
             for row in col
