@@ -30,7 +30,8 @@ const MAX_MEMORY: &str = "2G";
 
 /// The examples small enough to run a few steps of in CI (the strength-reduction scenes
 /// search their factor of safety before the first step; `loam check` takes every example).
-const RUNNABLE: [&str; 9] = [
+const RUNNABLE: [&str; 10] = [
+    "cavity_sphere.ron",
     "column.ron",
     "column_fem.ron",
     "disks.ron",

@@ -20,19 +20,36 @@ pub(crate) fn scaled_ghost_faces<const D: usize>(
     let (mut fill, mut modulus) = (vec![0.0; grid.num_cells()], vec![0.0f64; grid.num_cells()]);
     let moduli = model.constant_p_wave_moduli();
     let pts = model.points();
+    let axisymmetric = model.axisymmetric();
     for (p, (x, v)) in model.configuration().iter().zip(pts.volume()).enumerate() {
         let c = grid.cell_index(grid.cell_coords(x));
-        fill[c] += v / grid.cell_volume();
+        if axisymmetric {
+            fill[c] += v / (grid.cell_volume() * ring(model, c));
+        } else {
+            fill[c] += v / grid.cell_volume();
+        }
         modulus[c] = modulus[c].max(model.p_wave_modulus(&moduli, p));
     }
     let to_active = &conn.active_nodes().grid_to_active;
     let mut faces = ghost_faces(grid, &fill, |g| to_active[g] != INACTIVE);
     for face in &mut faces {
-        let m = modulus[face.cells[0]].max(modulus[face.cells[1]]);
+        let mut m = modulus[face.cells[0]].max(modulus[face.cells[1]]);
+        if axisymmetric {
+            // The face is a ring through the midpoint of its cells' centres.
+            m *= 0.5 * (ring(model, face.cells[0]) + ring(model, face.cells[1]));
+        }
         face.nodes.iter_mut().for_each(|g| *g = to_active[*g as usize]);
         face.matrix.iter_mut().for_each(|v| *v *= gamma * m);
     }
     faces
+}
+
+/// 2π r_c of cell `c` (axisymmetry, docs/theory.md §20): a point's ring volume over its
+/// cell's ring volume is its cell fill, and a face's penalty acts on its ring.
+fn ring<const D: usize>(model: &Model<D>, c: usize) -> f64 {
+    let grid = model.grid();
+    let i = c % grid.cells()[0];
+    std::f64::consts::TAU * (grid.origin()[0] + (i as f64 + 0.5) * grid.cell_size()[0])
 }
 
 /// The node couplings the ghost faces add to the sparsity pattern: every node of a face

@@ -12,8 +12,8 @@ impl<const D: usize> Model<D> {
     /// Read the model as axisymmetric (module docs): 2D, on a grid whose origin lies on the
     /// axis (x = 0), before any point has moved; the points become rings and the nodes on
     /// the axis are held radially (`Model::constrained_dofs`). Not with a body-fitted FEM
-    /// mesh, the ghost penalty, assumed strain or follower pressures (not implemented in
-    /// axisymmetry); B-bar averages the dilatation with its hoop part.
+    /// mesh, assumed strain or follower pressures (not implemented in axisymmetry); B-bar
+    /// averages the dilatation with its hoop part, the ghost penalty acts on rings.
     pub fn with_axisymmetry(mut self) -> Result<Self, ModelError> {
         let fail = |what: String| Err(ModelError::Axisymmetry(what));
         if D != 2 {
@@ -61,9 +61,6 @@ impl<const D: usize> Model<D> {
 
     /// Why the model's options do not go with axisymmetry, if they do not.
     pub(crate) fn unsupported_in_axisymmetry(&self) -> Option<String> {
-        if self.ghost_penalty.is_some() {
-            return Some("the ghost penalty is not implemented in axisymmetry; remove it".into());
-        }
         if let AntiLocking::AssumedStrain { .. } = self.anti_locking {
             return Some(
                 "assumed strain is not implemented in axisymmetry (its averaged strain has no hoop part); use BBar"

@@ -271,7 +271,7 @@ fn cases() -> Vec<(&'static str, usize, String)> {
                 ("cells: [1, 33]", "cells: [2, 33]"),
             ]),
         ),
-        ("axisymmetric ghost penalty", 2, c(&[(PLANE, &option("axisymmetric: true,\n    ghost_penalty: Some(0.1),"))])),
+        ("axisymmetric follower pressure", 2, c(&[(PLANE, &option("axisymmetric: true,")), (Y0, &load("Pressure(within: Some((min: [0.0, 9.9], max: [0.3125, 10.1])), pressure: Uniform(1.0), follower: true)"))])),
         (
             "axisymmetric assumed strain",
             2,
