@@ -40,17 +40,12 @@ pub(crate) fn residual<const D: usize>(
     r: &mut [f64],
     reaction: &mut Vec<f64>,
 ) -> f64 {
-    let stride = inputs.conn.stride();
-    let average = inputs.average;
-    let (conn, water) = (inputs.conn, inputs.water_force);
-    gather_internal_force(conn, r, |p, a| {
-        let k = p * stride + a;
-        let hoop = inputs.axisymmetric.then(|| conn.support_values(p)[a] * trial.inv_radius[p]);
-        let bbar = average.map(|c| c.average(k));
-        let f = internal_force(trial.volume[p], &trial.stress[p], &trial.grad_x[k], bbar, hoop);
-        let dv = trial.volume[p] - inputs.committed_volume[p];
-        f - water_body_force(water, p, dv, conn.support_values(p)[a])
-    });
+    // Compiled once for each, so that a plane model's forces carry no hoop test.
+    if inputs.axisymmetric {
+        internal_forces::<D, true>(inputs, trial, r);
+    } else {
+        internal_forces::<D, false>(inputs, trial, r);
+    }
     add_ghost_force::<D>(inputs.ghost, du, r);
     // In dynamics the internal and inertial forces join the reference, with the momentum
     // force as a floor (`Inertia::add_to_residual`).
@@ -73,6 +68,26 @@ pub(crate) fn residual<const D: usize>(
         }
     }
     reference.sqrt()
+}
+
+/// f_int less the change of the water's force into `r`, with the hoop force when
+/// `AXISYMMETRIC`.
+fn internal_forces<const D: usize, const AXISYMMETRIC: bool>(
+    inputs: &ResidualInputs<'_, D>,
+    trial: &TrialState<D>,
+    r: &mut [f64],
+) {
+    let stride = inputs.conn.stride();
+    let average = inputs.average;
+    let (conn, water) = (inputs.conn, inputs.water_force);
+    gather_internal_force(conn, r, |p, a| {
+        let k = p * stride + a;
+        let hoop = AXISYMMETRIC.then(|| conn.support_values(p)[a] * trial.inv_radius[p]);
+        let bbar = average.map(|c| c.average(k));
+        let f = internal_force(trial.volume[p], &trial.stress[p], &trial.grad_x[k], bbar, hoop);
+        let dv = trial.volume[p] - inputs.committed_volume[p];
+        f - water_body_force(water, p, dv, conn.support_values(p)[a])
+    });
 }
 
 /// The water's force on point `p` at the node of weight `n`: N v (−∇p_w), zero without

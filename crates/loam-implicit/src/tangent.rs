@@ -48,6 +48,22 @@ pub(crate) fn assemble<const D: usize>(
     inertia: Option<&Inertia>,
     matrix: &mut SystemMatrix,
 ) {
+    // Compiled once for each, so that a plane model's blocks carry no hoop test.
+    if inputs.axisymmetric {
+        assemble_blocks::<D, true>(inputs, trial, inertia, matrix);
+    } else {
+        assemble_blocks::<D, false>(inputs, trial, inertia, matrix);
+    }
+    add_ghost_tangent::<D>(inputs.ghost, inputs.pattern, inputs.constrained, matrix);
+}
+
+/// The points' blocks of [`assemble`], with the hoop terms when `AXISYMMETRIC`.
+fn assemble_blocks<const D: usize, const AXISYMMETRIC: bool>(
+    inputs: &TangentInputs<'_, D>,
+    trial: &TrialState<D>,
+    inertia: Option<&Inertia>,
+    matrix: &mut SystemMatrix,
+) {
     let conn = inputs.conn;
     let stride = conn.stride();
     let average = inputs.average;
@@ -61,7 +77,7 @@ pub(crate) fn assemble<const D: usize>(
         let ga = &trial.grad_x[p * stride + a];
         let gb = &trial.grad_x[p * stride + b];
         // In axisymmetry, the hoop entries N / r of the radial dofs' strain operators.
-        let hoop = inputs.axisymmetric.then(|| {
+        let hoop = AXISYMMETRIC.then(|| {
             let (n, r_inv) = (conn.support_values(p), trial.inv_radius[p]);
             (n[a] * r_inv, n[b] * r_inv)
         });
@@ -98,7 +114,6 @@ pub(crate) fn assemble<const D: usize>(
             }
         }
     });
-    add_ghost_tangent::<D>(inputs.ghost, inputs.pattern, inputs.constrained, matrix);
 }
 
 /// Axisymmetry (docs/theory.md §20): the strain operator of radial dof a,0 has the hoop
