@@ -3,7 +3,8 @@
 //! sequence, plain, with B-bar and with the assumed strain (β = 0.1). The 5 % bound is
 //! checked for every law with the assumed strain on the finest mesh (16 cells per b, full
 //! sweep), and every curve's rise to its plateau is checked for drops. The load–settlement
-//! curves go to `footing_curves.csv` and `footing_curves.svg`.
+//! curves go to `footing_curves.csv` and `footing_curves.svg`. Then the circular footing,
+//! axisymmetric, rough and smooth, on Tresca soil.
 
 use crate::report::{Report, Row};
 use crate::soil::{self, COHESION, POISSON, YOUNG};
@@ -12,8 +13,8 @@ use loam::constitutive::{ConstitutiveLaw, Elastic, MohrCoulomb};
 use loam::format::output::plot::{Plot, Series};
 use loam::format::output::{CsvCell, CsvWriter};
 use loam::implicit::{AntiLocking, QuasiStatic, QuasiStaticSettings, StepReport};
-use loam_verification::footing::bounds::{LARGEST_DROP, NEWTON_CORRECTIONS, Q_U, RUNS_STOPPED};
-use loam_verification::{footing_model, prandtl_nc};
+use loam_verification::footing::bounds::{CIRCULAR_Q_U, LARGEST_DROP, NEWTON_CORRECTIONS, Q_U, RUNS_STOPPED};
+use loam_verification::{circular_footing_model, footing_model, prandtl_nc};
 use std::fmt::Write as _;
 use std::path::Path;
 use std::sync::Arc;
@@ -249,7 +250,61 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
         report.rows.push(Row::checked(&every, "largest_drop_over_q_ref", law_drop, LARGEST_DROP));
         report.rows.push(Row::checked(&every, "runs_stopped_before_0.1B", stopped as f64, RUNS_STOPPED));
     }
-    sweep.finish(report)
+    sweep.finish(report)?;
+    circular(report)
+}
+
+/// Load steps of the circular footing (its curve is flat soon after 0.01 R).
+const CIRCULAR_STEPS: usize = 40;
+
+/// The circular footing on Tresca soil (Mohr–Coulomb with φ = ψ = 0), axisymmetric,
+/// rough and smooth, against Eason & Shield's 6.05 and Shield's 5.69: q at 0.2 R.
+fn circular(report: &mut Report) -> Result<()> {
+    let tresca: Arc<dyn ConstitutiveLaw> =
+        Arc::new(MohrCoulomb::from_degrees(Elastic::new(YOUNG, POISSON)?, COHESION, 0.0, 0.0)?);
+    writeln!(report.md, "## V3 circular footing, axisymmetric\n\nA rigid footing of radius R = 1 on the V3 soil as Tresca (Mohr–Coulomb, c = {COHESION}, φ = ψ = 0), 6 R wide and 5 R deep, linear basis, B-bar, 2×2 points per cell, small strain, geometrically linear, pushed {SETTLEMENT} R in {CIRCULAR_STEPS} steps (extrapolated start); rough: the footing's nodes held radially. q = footing force / π R² at 0.2 R; references N_c = 6.05 rough (Eason & Shield 1960), 5.69 smooth (Shield 1955).\n")?;
+    report.mark_table("V3-circular")?;
+    writeln!(
+        report.md,
+        "| footing | cells per R | q/c | / N_c − 1 | cut-backs | wall [s] |\n|---|---:|---:|---:|---:|---:|"
+    )?;
+    for (rough, nc) in [(true, 6.05), (false, 5.69)] {
+        let kind = if rough { "rough" } else { "smooth" };
+        for cells in [4, 8, 16] {
+            eprintln!("verify: V3 circular footing, {kind}, {cells} cells per R");
+            let t = Instant::now();
+            let model = circular_footing_model(tresca.clone(), cells, SETTLEMENT, rough);
+            let settings = QuasiStaticSettings { load_steps: CIRCULAR_STEPS, extrapolate: true, ..Default::default() };
+            let mut qs = QuasiStatic::new(model, settings);
+            let (mut q, mut cutbacks, mut failure) = (f64::NAN, 0, None);
+            while !qs.is_finished() {
+                match qs.step() {
+                    Ok(r) => {
+                        q = -r.reactions[0][1] / (std::f64::consts::PI * COHESION);
+                        cutbacks += r.cutbacks;
+                    }
+                    Err(e) => {
+                        failure = Some(format!("stopped at step {}: {e}", qs.steps_done() + 1));
+                        break;
+                    }
+                }
+            }
+            let wall = t.elapsed().as_secs_f64();
+            let error = if failure.is_some() { f64::NAN } else { q / nc - 1.0 };
+            let shown = failure
+                .as_deref()
+                .map_or(format!("{q:.3} | {error:+.4}"), |f| format!("— | {}", f.split(':').next().unwrap_or(f)));
+            writeln!(report.md, "| {kind} | {cells} | {shown} | {cutbacks} | {wall:.2} |")?;
+            let name = format!("V3 circular {kind} {cells} cells per R");
+            if rough && cells == 16 {
+                report.rows.push(Row::checked(&name, "|q/c/N_c - 1|", error.abs(), CIRCULAR_Q_U));
+            } else {
+                report.rows.push(Row::info(&name, "q/c/N_c - 1", error));
+            }
+        }
+    }
+    writeln!(report.md)?;
+    Ok(())
 }
 
 /// One law with one treatment on its meshes: the table rows, the observed order of q_u

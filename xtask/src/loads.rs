@@ -17,7 +17,8 @@ use loam_verification::cylinder::bounds::{
     FOLLOWER_NEWTON_ITERATIONS, RADIAL_DISPLACEMENT, RING_LAME, RING_LAME_ORDER, RING_LIMIT,
 };
 use loam_verification::footing::bounds::LOAD_CONTROLLED_COLLAPSE;
-use loam_verification::{footing_load_model, prandtl_nc, Cylinder};
+use loam_verification::sphere::bounds::{SPHERE_LAME, SPHERE_LIMIT};
+use loam_verification::{footing_load_model, prandtl_nc, Cylinder, ThickSphere};
 use std::fmt::Write as _;
 use std::sync::Arc;
 use std::time::Instant;
@@ -179,5 +180,58 @@ fn ring(quick: bool, report: &mut Report) -> Result<()> {
     report.rows.push(Row::checked(&name, "lame_pointwise_error", error, RING_LAME));
     report.rows.push(Row::checked(&name, "lame_rate", observed_rate(&runs), RING_LAME_ORDER));
     report.rows.push(Row::checked(&name, "|collapse/p_lim - 1|", limit.abs(), RING_LIMIT));
+    sphere(quick, report)
+}
+
+/// Ghost penalty of the thick sphere's collapse runs: its curved faces cut the cells.
+const SPHERE_GHOST: f64 = 0.1;
+
+/// V6's thick sphere, axisymmetric: Lamé on three meshes, then the collapse pressure
+/// (von Mises, B-bar, ghost penalty) against 2 σ_y ln(b/a).
+fn sphere(quick: bool, report: &mut Report) -> Result<()> {
+    let meshes: &[usize] = &[16, 32, 64];
+    let s = ThickSphere::REFERENCE;
+    writeln!(report.md, "## V6 thick sphere, axisymmetric\n\na = {}, b = {}, a quarter of the meridian plane, its arcs polygons of 64 sides, linear basis, B-bar, 2×2 points per cell, small strain, geometrically linear, cells across b − a. Lamé: E = {}, ν = {}, p = {}; u_ρ(a), u_ρ(b) from the least-squares fit of A ρ + B/ρ² to the points' radial displacements. Collapse: von Mises, c_u = {COHESION} (σ_y = √3 c_u), E = {YOUNG:e}, ν = {POISSON}, ghost penalty γ = {SPHERE_GHOST}, the pressure ramped to {RING_OVERLOAD} × 2 σ_y ln(b/a) in {RING_STEPS} load steps, the last converged pressure.\n", s.inner, s.outer, s.young, s.poisson, s.pressure)?;
+    report.mark_table("V6-sphere")?;
+    writeln!(report.md, "| cells across b − a | points | u_ρ(a) error | u_ρ(b) error | collapse / 2 σ_y ln(b/a) − 1 | wall [s] |\n|---:|---:|---:|---:|---:|---:|")?;
+    let law = soil::undrained(Elastic::new(YOUNG, POISSON)?, COHESION)?;
+    let p_lim = s.limit_pressure(3f64.sqrt() * COHESION);
+    let (mut errors, mut limit) = ((0.0, 0.0), None);
+    for &cells in meshes {
+        eprintln!("verify: V6 thick sphere, {cells} cells");
+        let t = Instant::now();
+        let elastic = Arc::new(Elastic::new(s.young, s.poisson)?);
+        let (model, _, _) = solve(s.model(cells, elastic, None), 1)?;
+        errors = s.measure(model.points());
+        // The collapse run on the finer meshes only (the full sweep's finest too).
+        let collapse = (cells == 32 || (cells == 64 && !quick)).then(|| {
+            let plastic = ThickSphere { pressure: RING_OVERLOAD * p_lim, ..s };
+            let settings = QuasiStaticSettings { load_steps: RING_STEPS, ..Default::default() };
+            let mut qs = QuasiStatic::new(plastic.model(cells, law.clone(), Some(SPHERE_GHOST)), settings);
+            while !qs.is_finished() && qs.step().is_ok() {}
+            qs.load_factor() * RING_OVERLOAD - 1.0
+        });
+        let shown = collapse.map_or("—".to_string(), |c| format!("{c:+.2e}"));
+        let n = model.points().len();
+        writeln!(
+            report.md,
+            "| {cells} | {n} | {:.3e} | {:.3e} | {shown} | {:.2} |",
+            errors.0,
+            errors.1,
+            t.elapsed().as_secs_f64()
+        )?;
+        limit = collapse.map(|c| (cells, c)).or(limit);
+    }
+    writeln!(report.md)?;
+    let name = format!("V6 thick sphere {} cells", meshes[meshes.len() - 1]);
+    report.rows.push(Row::checked(&name, "u_rho(a)_error", errors.0, SPHERE_LAME));
+    report.rows.push(Row::checked(&name, "u_rho(b)_error", errors.1, SPHERE_LAME));
+    let (cells, c) = limit.expect("a collapse run");
+    report.rows.push(Row::checked(
+        format!("V6 thick sphere collapse {cells} cells"),
+        "|collapse/p_lim - 1|",
+        c.abs(),
+        SPHERE_LIMIT,
+    ));
     Ok(())
 }

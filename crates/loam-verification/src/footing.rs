@@ -27,6 +27,9 @@ pub mod bounds {
         Bound::upper(1e-6, "docs/verification.md §V3: the curve is monotone to the plateau");
     /// Runs that stopped before 0.1 B: such a run has no q_u and hides the rest of its
     /// curve from the monotonicity check.
+    /// The rough circular footing (axisymmetric, Tresca) at 16 cells per R.
+    pub const CIRCULAR_Q_U: Bound =
+        Bound::upper(0.05, "docs/verification.md §V3: rough circular footing within 5 % of 6.05 c at 16 cells per R");
     pub const RUNS_STOPPED: Bound = Bound::upper(0.0, "docs/verification.md §V3: every run reaches 0.1 B");
     /// Under load control (a pressure on the footing width ramped until Newton fails),
     /// |collapse pressure / q_ref − 1| on the finest mesh of the full sweep.
@@ -62,6 +65,26 @@ pub fn footing_model(
         .displaced([0.0, -settlement, 0.0])
         .within([0.0, top, 0.0], [b, top, 0.0]);
     footing_soil(law, cells_per_b, width, depth, Some(footing), anti_locking)
+}
+
+/// V3's soil under a rigid circular footing of radius R = b, axisymmetric (docs/theory.md
+/// §20; x the radius): 6 R wide and 5 R deep, B-bar, the footing's nodes pushed down
+/// `settlement` at full load and, when `rough`, held radially. Its reaction is the whole
+/// footing's force.
+pub fn circular_footing_model(
+    law: Arc<dyn ConstitutiveLaw>,
+    cells_per_r: usize,
+    settlement: f64,
+    rough: bool,
+) -> Model<2> {
+    let (width, depth) = (6, 5);
+    let top = depth as f64;
+    let footing = PlaneConstraint::new(1, depth * cells_per_r, [rough, true, false])
+        .displaced([0.0, -settlement, 0.0])
+        .within([0.0, top, 0.0], [1.0, top, 0.0]);
+    footing_soil(law, cells_per_r, width, depth, Some(footing), AntiLocking::BBar)
+        .with_axisymmetry()
+        .expect("the footing's soil starts on the axis")
 }
 
 /// The soil of V3 on its grid and supports (rollers on x = 0 and the far side, the base
