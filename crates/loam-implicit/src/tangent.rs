@@ -112,6 +112,12 @@ fn assemble_blocks<const D: usize, const AXISYMMETRIC: bool>(
                     out[i * D + k] -= na * bw[i] * trial.volume[p] * gb[k];
                 }
             }
+            if let Some((_, hb)) = hoop {
+                // The volume's hoop part: δv = v (∇·δu + δu_r / r).
+                for i in 0..D {
+                    out[i * D] -= na * bw[i] * trial.volume[p] * hb;
+                }
+            }
         }
     });
 }

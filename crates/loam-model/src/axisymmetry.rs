@@ -10,7 +10,7 @@ use crate::{AntiLocking, LoadKind, Model, ModelError, PlaneConstraint};
 
 impl<const D: usize> Model<D> {
     /// Read the model as axisymmetric (module docs): 2D, on a grid whose origin lies on the
-    /// axis (x = 0), before any point has moved; the points become rings and the nodes on
+    /// axis (x = 0), with gravity along the axis (y), before any point has moved; the points become rings and the nodes on
     /// the axis are held radially (`Model::constrained_dofs`). Not with a body-fitted FEM
     /// mesh, assumed strain or follower pressures (not implemented in axisymmetry); B-bar
     /// averages the dilatation with its hoop part, the ghost penalty acts on rings.
@@ -32,6 +32,12 @@ impl<const D: usize> Model<D> {
         if let Some(unsupported) = self.unsupported_in_axisymmetry() {
             return fail(unsupported);
         }
+        if self.gravity[0] != 0.0 {
+            return fail(format!(
+                "gravity has a radial (x) component {}; a body of revolution's gravity acts along its axis, y",
+                self.gravity[0]
+            ));
+        }
         let pts = &self.points;
         if let Some(p) = (0..pts.len()).find(|&p| pts.position()[p] != pts.position0()[p]) {
             return fail(format!("point {p} has moved; a model is made axisymmetric before it is analysed"));
@@ -40,7 +46,7 @@ impl<const D: usize> Model<D> {
             return fail(format!("point {p} lies at radius {} ≤ 0; the points lie at x > 0", pts.position()[p][0]));
         }
         self.points.revolve();
-        self.loads.iter_mut().for_each(|l| l.revolve());
+        self.loads.iter_mut().for_each(|l| l.revolve(true));
         self.update_load_vertices();
         self.axisymmetric = true;
         Ok(self)

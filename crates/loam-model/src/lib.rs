@@ -345,9 +345,7 @@ impl<const D: usize> Model<D> {
         let positions = self.points.position0();
         for load in &mut self.loads {
             load.attach(grid, positions);
-            if self.axisymmetric {
-                load.revolve();
-            }
+            load.revolve(self.axisymmetric);
         }
         self.update_load_vertices();
         Ok(self)

@@ -262,10 +262,11 @@ impl<const D: usize> Load<D> {
     }
 
     /// Read the surface as the meridian of a surface of revolution about the y axis (an
-    /// axisymmetric model's, x the radius): each facet a ring (2D only).
-    pub(crate) fn revolve(&mut self) {
-        debug_assert_eq!(D, 2, "a surface of revolution has a 2D meridian");
-        self.revolved = true;
+    /// axisymmetric model's, x the radius), each facet a ring (2D only), or, `revolved`
+    /// false, as a plane surface again.
+    pub(crate) fn revolve(&mut self, revolved: bool) {
+        debug_assert!(D == 2 || !revolved, "a surface of revolution has a 2D meridian");
+        self.revolved = revolved;
         let mut dead = Vec::new();
         self.forces_on(&self.surface.vertices, &mut dead);
         self.dead = dead;

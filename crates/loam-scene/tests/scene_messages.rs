@@ -271,6 +271,12 @@ fn cases() -> Vec<(&'static str, usize, String)> {
                 ("cells: [1, 33]", "cells: [2, 33]"),
             ]),
         ),
+        ("axisymmetric radial gravity", 2, c(&[(PLANE, &option("axisymmetric: true,")), ("gravity: [0.0, -10.0]", "gravity: [1.0, -10.0]")])),
+        (
+            "axisymmetric material at r < 0",
+            2,
+            c(&[(PLANE, &option("axisymmetric: true,")), (COLUMN_BOX, "shape: Box(min: [-0.3125, 0.0], max: [0.3125, 10.0])")]),
+        ),
         ("axisymmetric follower pressure", 2, c(&[(PLANE, &option("axisymmetric: true,")), (Y0, &load("Pressure(within: Some((min: [0.0, 9.9], max: [0.3125, 10.1])), pressure: Uniform(1.0), follower: true)"))])),
         (
             "axisymmetric assumed strain",
