@@ -1,30 +1,11 @@
 //! Axisymmetric analyses (docs/theory.md §20): a 2D scene read as the meridian plane of a
 //! body of revolution, x the radius and y the axis, against closed forms.
 
+use crate::support::{column, run, table};
 use loam::run::run_scene;
 use loam::scene::LoadedScene;
 use std::f64::consts::PI;
 use std::path::Path;
-
-/// Rows of a CSV file as (header, rows).
-fn table(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
-    let text = std::fs::read_to_string(path).unwrap();
-    let mut lines = text.lines();
-    let header = lines.next().unwrap().split(',').map(String::from).collect();
-    (header, lines.map(|l| l.split(',').map(|v| v.parse().unwrap()).collect()).collect())
-}
-
-fn column(header: &[String], name: &str) -> usize {
-    header.iter().position(|h| h == name).unwrap_or_else(|| panic!("no column {name}"))
-}
-
-/// Run `text` as a scene into a temporary directory, which is returned.
-fn run(text: &str) -> tempfile::TempDir {
-    let dir = tempfile::tempdir().unwrap();
-    let scene = LoadedScene::parse(Path::new("scene.ron"), text.to_string()).unwrap();
-    run_scene(&scene, dir.path(), &mut |_| {}).unwrap();
-    dir
-}
 
 /// A solid elastic cylinder (radius R = 1 m, height 2 m; E = 10 MPa, ν = 0.3, no weight)
 /// on a smooth base, its smooth top pushed down δ = 1 cm, its side free: uniaxial stress.

@@ -1,29 +1,9 @@
 //! Constraints on bodies: the nodes a body's points reach, held or displaced, found again
 //! at every step so that they follow the body through the grid.
 
-use loam::run::run_scene;
+use crate::support::{column, run, table};
 use loam::scene::LoadedScene;
 use std::path::Path;
-
-/// Rows of a CSV file as (header, rows).
-fn table(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
-    let text = std::fs::read_to_string(path).unwrap();
-    let mut lines = text.lines();
-    let header = lines.next().unwrap().split(',').map(String::from).collect();
-    (header, lines.map(|l| l.split(',').map(|v| v.parse().unwrap()).collect()).collect())
-}
-
-fn column(header: &[String], name: &str) -> usize {
-    header.iter().position(|h| h == name).unwrap_or_else(|| panic!("no column {name}"))
-}
-
-/// Run `text` as a scene into a temporary directory, which is returned.
-fn run(text: String) -> tempfile::TempDir {
-    let dir = tempfile::tempdir().unwrap();
-    let scene = LoadedScene::parse(Path::new("scene.ron"), text).unwrap();
-    run_scene(&scene, dir.path(), &mut |_| {}).unwrap();
-    dir
-}
 
 /// Confined compression by a platen (SI units), in the linear theory (geometrically
 /// linear, two load steps): an elastic soil column 2 m wide and 4 m high (E = 10 MPa,
@@ -39,7 +19,7 @@ fn run(text: String) -> tempfile::TempDir {
 #[test]
 fn a_platen_pushed_by_a_body_constraint_compresses_the_soil_uniformly() {
     let delta = 0.01;
-    let dir = run(format!(
+    let dir = run(&format!(
         r#"Scene(
     dimension: 2,
     grid: (origin: [0.0, 0.0], cell_size: [1.0, 1.0], cells: [2, 7]),
@@ -106,8 +86,7 @@ fn a_body_constraint_follows_its_body_through_the_grid() {
                                     within: Some((min: [1.0, 3.5], max: [2.0, 4.5])))],
     analysis: QuasiStatic(load_steps: 5),
     output: (vtu_every: 0, final_csv: true),
-)"#
-    .into());
+)"#);
     let (header, rows) = table(&dir.path().join("points_final.csv"));
     let [x0, y0, x, y, sxx, syy, sxy] = ["x0", "y0", "x", "y", "sxx", "syy", "sxy"].map(|c| column(&header, c));
     assert_eq!(rows.len(), 16);
@@ -182,8 +161,7 @@ fn a_held_body_carries_a_column_in_dynamics() {
     body_constraints: [Fixed(body: "slab")],
     analysis: ImplicitDynamic(time_step: 0.002, duration: 0.506),
     output: (vtu_every: 0, final_csv: true),
-)"#
-    .into());
+)"#);
     let (header, rows) = table(&dir.path().join("points_final.csv"));
     let [y0, x, y, x0] = ["y0", "x", "y", "x0"].map(|c| column(&header, c));
     let weight: f64 = rows.iter().map(|r| r[column(&header, "mass")] * 10.0).sum();
@@ -227,7 +205,7 @@ fn a_held_wall_turns_a_block_back_in_explicit_dynamics() {
 )"#
         )
     };
-    let dir = run(scene(r#"Fixed(body: "wall")"#));
+    let dir = run(&scene(r#"Fixed(body: "wall")"#));
     let (header, rows) = table(&dir.path().join("points_final.csv"));
     let [x0, y0, x, y] = ["x0", "y0", "x", "y"].map(|c| column(&header, c));
     for r in &rows {
@@ -241,7 +219,7 @@ fn a_held_wall_turns_a_block_back_in_explicit_dynamics() {
     let momentum = column(&header, "momentum_x");
     assert_eq!(history[0][momentum], 500.0);
     assert!(history.last().unwrap()[momentum] < -100.0, "the block bounced: {:?}", history.last());
-    let free = run(scene(r#"Fixed(body: "wall", within: Some((min: [1.9, 0.9], max: [2.0, 1.0])))"#));
+    let free = run(&scene(r#"Fixed(body: "wall", within: Some((min: [1.9, 0.9], max: [2.0, 1.0])))"#));
     let (_, rows) = table(&free.path().join("points_final.csv"));
     assert!(rows.iter().any(|r| r[x0] > 1.5 && r[x0] < 1.7 && r[x] > r[x0] + 1e-3), "a free wall is pushed");
 }

@@ -20,4 +20,5 @@ mod run_scenes;
 mod scene_errors;
 mod slope;
 mod solvers;
+mod support;
 mod ul_fem;

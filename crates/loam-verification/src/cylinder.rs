@@ -106,23 +106,9 @@ impl Cylinder {
     /// Fit u_r = A r + B / r to the points' radial displacements (least squares) and return
     /// the fitted (u_r(a), u_r(b)), with the largest point-wise |u_r − Lamé| / Lamé(a).
     pub fn measure(&self, points: &PointStore<2>) -> CylinderErrors {
-        let (mut m, mut rhs) = ([[0.0; 2]; 2], [0.0; 2]);
-        let mut worst = 0.0f64;
-        for (x0, x) in points.position0().iter().zip(points.position()) {
-            let r = x0.norm();
-            let u = (x - x0).dot(&(x0 / r));
-            let phi = [r, 1.0 / r];
-            for i in 0..2 {
-                for j in 0..2 {
-                    m[i][j] += phi[i] * phi[j];
-                }
-                rhs[i] += phi[i] * u;
-            }
-            worst = worst.max((u - self.radial_displacement(r)).abs());
-        }
-        let det = m[0][0] * m[1][1] - m[0][1] * m[1][0];
-        let a_fit = (rhs[0] * m[1][1] - rhs[1] * m[0][1]) / det;
-        let b_fit = (m[0][0] * rhs[1] - m[1][0] * rhs[0]) / det;
+        let radial = radial_displacements(points);
+        let worst = radial.iter().map(|&(r, u)| (u - self.radial_displacement(r)).abs()).fold(0.0, f64::max);
+        let [a_fit, b_fit] = least_squares(radial.iter().map(|&(r, u)| ([r, 1.0 / r], u)));
         let at = |r: f64| a_fit * r + b_fit / r;
         let rel = |r: f64| (at(r) - self.radial_displacement(r)).abs() / self.radial_displacement(r).abs();
         CylinderErrors {
@@ -175,6 +161,32 @@ impl Cylinder {
             .fold(0.0, f64::max);
         worst / self.radial_displacement(self.inner).abs()
     }
+}
+
+/// Every point's (initial distance from the origin, displacement along it).
+pub(crate) fn radial_displacements(points: &PointStore<2>) -> Vec<(f64, f64)> {
+    (points.position0().iter().zip(points.position()))
+        .map(|(x0, x)| {
+            let r = x0.norm();
+            (r, (x - x0).dot(&(x0 / r)))
+        })
+        .collect()
+}
+
+/// The coefficients [c₀, c₁] of c₀ φ₀ + c₁ φ₁ that fit the samples (φ, u) best in least
+/// squares (the 2×2 normal equations).
+pub(crate) fn least_squares(samples: impl Iterator<Item = ([f64; 2], f64)>) -> [f64; 2] {
+    let (mut m, mut rhs) = ([[0.0; 2]; 2], [0.0; 2]);
+    for (phi, u) in samples {
+        for i in 0..2 {
+            for j in 0..2 {
+                m[i][j] += phi[i] * phi[j];
+            }
+            rhs[i] += phi[i] * u;
+        }
+    }
+    let det = m[0][0] * m[1][1] - m[0][1] * m[1][0];
+    [(rhs[0] * m[1][1] - rhs[1] * m[0][1]) / det, (m[0][0] * rhs[1] - m[1][0] * rhs[0]) / det]
 }
 
 /// A cylinder run measured against Lamé.

@@ -7,6 +7,7 @@
 //! von Mises and Tresca are one, σ_θ − σ_ρ = σ_y.
 
 use crate::bound::Bound;
+use crate::cylinder::{least_squares, radial_displacements};
 use loam_constitutive::ConstitutiveLaw;
 use loam_grid::{BasisKind, Grid};
 use loam_model::{AntiLocking, Kinematics, Load, Model, PlaneConstraint, TimeFunction};
@@ -96,21 +97,8 @@ impl ThickSphere {
     /// Fit u_ρ = A ρ + B / ρ² to the points' radial displacements (least squares) and
     /// return the relative errors of the fit at a and b against Lamé's.
     pub fn measure(&self, points: &PointStore<2>) -> (f64, f64) {
-        let (mut m, mut rhs) = ([[0.0; 2]; 2], [0.0; 2]);
-        for (x0, x) in points.position0().iter().zip(points.position()) {
-            let rho = x0.norm();
-            let u = (x - x0).dot(&(x0 / rho));
-            let phi = [rho, 1.0 / (rho * rho)];
-            for i in 0..2 {
-                for j in 0..2 {
-                    m[i][j] += phi[i] * phi[j];
-                }
-                rhs[i] += phi[i] * u;
-            }
-        }
-        let det = m[0][0] * m[1][1] - m[0][1] * m[1][0];
-        let a_fit = (rhs[0] * m[1][1] - rhs[1] * m[0][1]) / det;
-        let b_fit = (m[0][0] * rhs[1] - m[1][0] * rhs[0]) / det;
+        let radial = radial_displacements(points);
+        let [a_fit, b_fit] = least_squares(radial.iter().map(|&(rho, u)| ([rho, 1.0 / (rho * rho)], u)));
         let rel = |r: f64| {
             let exact = self.radial_displacement(r);
             (a_fit * r + b_fit / (r * r) - exact).abs() / exact.abs()
