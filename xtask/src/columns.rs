@@ -22,9 +22,11 @@ use std::time::Instant;
 /// table shows 160 and 320 steps agreeing within a few percent).
 const LARGE_DEFORMATION_STEPS: usize = 160;
 
-/// Every case runs with these, in this order (V1a-small skips the linear basis).
-const METHODS: [Method; 4] = [
+/// Every case runs with these, in this order (V1a-small skips the linear basis; the
+/// axisymmetric column runs for the 2D cases).
+const METHODS: [Method; 5] = [
     Method::Mpm(BasisKind::Gimp),
+    Method::Axisymmetric,
     Method::Mpm(BasisKind::QuadraticBSpline),
     Method::Mpm(BasisKind::Linear),
     Method::Fem,
@@ -147,6 +149,9 @@ fn cases() -> [Case; 6] {
 #[derive(Clone, Copy, PartialEq)]
 enum Method {
     Mpm(BasisKind),
+    /// GIMP on the column read as a cylinder of radius one cell (docs/theory.md §20), in a
+    /// smooth tube: with ν = 0 the same closed form.
+    Axisymmetric,
     Fem,
 }
 
@@ -154,6 +159,7 @@ impl Method {
     fn name(self) -> &'static str {
         match self {
             Method::Mpm(basis) => basis_name(basis),
+            Method::Axisymmetric => "GIMP axisymmetric",
             Method::Fem => "UL-FEM",
         }
     }
@@ -161,6 +167,9 @@ impl Method {
     fn column<const D: usize>(self, case: &Case, width: f64, cells: usize) -> Model<D> {
         match self {
             Method::Mpm(basis) => column_model::<D>(&case.column, width, cells, 2, basis, case.kinematics),
+            Method::Axisymmetric => column_model::<D>(&case.column, width, cells, 2, BasisKind::Gimp, case.kinematics)
+                .with_axisymmetry()
+                .expect("a 2D column on the axis"),
             Method::Fem => column_fem_model::<D>(&case.column, width, cells, 2, case.kinematics),
         }
     }
@@ -238,6 +247,9 @@ pub(crate) fn verify(quick: bool, report: &mut Report) -> Result<()> {
             if case.id == "V1a-small" && method == Method::Mpm(BasisKind::Linear) {
                 continue;
             }
+            if method == Method::Axisymmetric && case.dim != 2 {
+                continue;
+            }
             // The surcharged columns check the loads, which one basis does; the FEM
             // reference takes no surface loads yet.
             if case.column.surcharge != 0.0 && method != GIMP {
@@ -297,7 +309,8 @@ fn case_section(quick: bool, report: &mut Report, case: &Case, method: Method) -
 /// The bounds table's rows of one case and method: GIMP's rate and e_σ at 64 cells are
 /// checked where the case is bounded, V1c's Newton iterations always.
 fn push_rows(report: &mut Report, name: &str, case: &Case, method: Method, runs: &[ColumnRun], rate: f64) {
-    let gimp_bounded = case.bounded && method == GIMP;
+    // The axisymmetric column is held to the plane GIMP column's bounds.
+    let gimp_bounded = case.bounded && (method == GIMP || method == Method::Axisymmetric);
     let rows = &mut report.rows;
     rows.push(Row::new(name, "rate_e_sigma", rate, gimp_bounded.then_some(GIMP_RATE)));
     if let Some(r64) = runs.iter().find(|r| r.cells == 64) {
