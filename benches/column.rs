@@ -2,7 +2,8 @@
 //!
 //! - `v1c_column_64_cells_40_steps`: the V1c column, GIMP, 64 cells high, 2x2 points per
 //!   cell, 40 load steps, from model construction to the last step (issue target ≤ 50 ms;
-//!   the AMPLE peer takes about 90 s on that size).
+//!   the AMPLE peer takes about 90 s on that size); and the same column read as a cylinder
+//!   (`_axisymmetric`, docs/theory.md §20), the hoop terms' cost beside it.
 //! - `block_256_one_iteration`: a 256 × 256-cell elastic block, 2x2 points per cell, under
 //!   gravity: one Newton iteration (point update + residual + assembly + symbolic and
 //!   numeric factorisation + solve), target ≤ 2 s. The phase split is printed first.
@@ -14,17 +15,25 @@ use loam_verification::{column_model, elastic_block, Column};
 use std::hint::black_box;
 
 fn column(c: &mut Criterion) {
-    let col = Column::V1C;
-    c.bench_function("v1c_column_64_cells_40_steps", |b| {
-        b.iter(|| {
-            let m = column_model::<2>(&col, col.height / 64.0, 64, 2, BasisKind::Gimp, Kinematics::FiniteStrain);
-            let mut qs = QuasiStatic::new(m, QuasiStaticSettings { load_steps: 40, ..Default::default() });
-            while !qs.is_finished() {
-                black_box(qs.step().unwrap());
-            }
-            qs
-        })
-    });
+    for (name, axisymmetric) in
+        [("v1c_column_64_cells_40_steps", false), ("v1c_column_64_cells_40_steps_axisymmetric", true)]
+    {
+        let col = Column::V1C;
+        c.bench_function(name, |b| {
+            b.iter(|| {
+                let mut m =
+                    column_model::<2>(&col, col.height / 64.0, 64, 2, BasisKind::Gimp, Kinematics::FiniteStrain);
+                if axisymmetric {
+                    m = m.with_axisymmetry().expect("a 2D column on the axis");
+                }
+                let mut qs = QuasiStatic::new(m, QuasiStaticSettings { load_steps: 40, ..Default::default() });
+                while !qs.is_finished() {
+                    black_box(qs.step().unwrap());
+                }
+                qs
+            })
+        });
+    }
 }
 
 fn block(n: usize) -> QuasiStatic<2> {

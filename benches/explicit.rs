@@ -7,7 +7,8 @@
 //! scales with the points: the 2D GIMP block at 128², 256² and 512² cells (65 536, 262 144
 //! and 1 048 576 points), each timed over one and the same step, taken when a P wave has
 //! crossed a quarter of it (`SCALING_CROSSING`), so that the three are measured in the same
-//! state of motion.
+//! state of motion. The 2D GIMP block is also run as a cylinder (axisymmetric), beside the
+//! plane one.
 //! Before each, one line gives the step's split by stage (`StepPhases`) and the memory per
 //! point (growth of the resident set from before the model is built to after its first
 //! steps; Linux). Criterion's throughput is in elements (points) per second of one step:
@@ -32,16 +33,20 @@ fn resident_bytes() -> u64 {
     kb.unwrap_or(0) * 1024
 }
 
-/// The block of `n` cells per side on `basis`, its explicit analysis to 1000 s (far more steps than a benchmark takes).
-fn block<const D: usize>(n: usize, basis: BasisKind) -> Explicit<D> {
-    let model = elastic_block::<D>(n, Kinematics::FiniteStrain, true).with_basis(basis).expect("a grid basis");
+/// The block of `n` cells per side on `basis` (a cylinder when `axisymmetric`, 2D), its
+/// explicit analysis to 1000 s (far more steps than a benchmark takes).
+fn block<const D: usize>(n: usize, basis: BasisKind, axisymmetric: bool) -> Explicit<D> {
+    let mut model = elastic_block::<D>(n, Kinematics::FiniteStrain, true).with_basis(basis).expect("a grid basis");
+    if axisymmetric {
+        model = model.with_axisymmetry().expect("a 2D block on the axis");
+    }
     Explicit::new(model, ExplicitSettings::new(1e3)).expect("valid settings")
 }
 
 /// One line: the stage split of `steps` steps and the memory per point.
-fn profile<const D: usize>(name: &str, n: usize, basis: BasisKind) -> Explicit<D> {
+fn profile<const D: usize>(name: &str, n: usize, basis: BasisKind, axisymmetric: bool) -> Explicit<D> {
     let before = resident_bytes();
-    let mut ex = block::<D>(n, basis);
+    let mut ex = block::<D>(n, basis, axisymmetric);
     ex.step().unwrap();
     let points = ex.model().points().len();
     let steps = 5;
@@ -66,8 +71,8 @@ fn profile<const D: usize>(name: &str, n: usize, basis: BasisKind) -> Explicit<D
     ex
 }
 
-fn bench_block<const D: usize>(c: &mut Criterion, name: &str, n: usize, basis: BasisKind) {
-    let mut ex = profile::<D>(name, n, basis);
+fn bench_block<const D: usize>(c: &mut Criterion, name: &str, n: usize, basis: BasisKind, axisymmetric: bool) {
+    let mut ex = profile::<D>(name, n, basis, axisymmetric);
     let mut g = c.benchmark_group("explicit");
     g.throughput(Throughput::Elements(ex.model().points().len() as u64));
     g.sample_size(10);
@@ -88,7 +93,7 @@ const SCALING_CROSSING: f64 = 0.25;
 /// updates cost more: the blocks would not be compared like for like (CHANGELOG.md,
 /// Explicit speed).
 fn bench_scaling(c: &mut Criterion, name: &str, n: usize) {
-    let mut ex = profile::<2>(name, n, BasisKind::Gimp);
+    let mut ex = profile::<2>(name, n, BasisKind::Gimp, false);
     // h / c_p: the critical step less its velocity term, small against c_p under gravity.
     let crossing = n as f64 * ex.critical_time_step().unwrap();
     while ex.time() < SCALING_CROSSING * crossing {
@@ -115,10 +120,12 @@ fn bench_scaling(c: &mut Criterion, name: &str, n: usize) {
 }
 
 fn explicit(c: &mut Criterion) {
-    bench_block::<2>(c, "block_2d_256_gimp", 256, BasisKind::Gimp);
-    bench_block::<2>(c, "block_2d_256_bspline", 256, BasisKind::QuadraticBSpline);
-    bench_block::<3>(c, "block_3d_32_gimp", 32, BasisKind::Gimp);
-    bench_block::<3>(c, "block_3d_32_bspline", 32, BasisKind::QuadraticBSpline);
+    bench_block::<2>(c, "block_2d_256_gimp", 256, BasisKind::Gimp, false);
+    // The same block as a cylinder (docs/theory.md §20): the hoop terms' cost.
+    bench_block::<2>(c, "block_2d_256_gimp_axisymmetric", 256, BasisKind::Gimp, true);
+    bench_block::<2>(c, "block_2d_256_bspline", 256, BasisKind::QuadraticBSpline, false);
+    bench_block::<3>(c, "block_3d_32_gimp", 32, BasisKind::Gimp, false);
+    bench_block::<3>(c, "block_3d_32_bspline", 32, BasisKind::QuadraticBSpline, false);
     // Cost linear in the points. Stepped on from rest (before the scaling blocks were timed
     // from a restored state), the 65 536-point block also ran slower when built after a
     // larger one had been dropped (5.9–6.2 against 6.8–7.1 M point-steps/s first in its
