@@ -10,8 +10,9 @@ use crate::{AntiLocking, LoadKind, Model, ModelError, PlaneConstraint};
 
 impl<const D: usize> Model<D> {
     /// Read the model as axisymmetric (module docs): 2D, on a grid whose origin lies on the
-    /// axis (x = 0), with gravity along the axis (y), before any point has moved; the points become rings and the nodes on
-    /// the axis are held radially (`Model::constrained_dofs`). Not with a body-fitted FEM
+    /// axis (x = 0), with gravity along the axis (y), before any point has moved; the
+    /// points become rings and the nodes on the axis are held radially
+    /// (`Model::constrained_dofs`). Not with a body-fitted FEM
     /// mesh, assumed strain or follower pressures (not implemented in axisymmetry); B-bar
     /// averages the dilatation with its hoop part, the ghost penalty acts on rings.
     pub fn with_axisymmetry(mut self) -> Result<Self, ModelError> {

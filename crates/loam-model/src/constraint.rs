@@ -42,7 +42,7 @@ impl PlaneConstraint {
 
     /// Whether the constraint prescribes a non-zero displacement.
     pub fn is_displaced(&self) -> bool {
-        self.displacement.iter().zip(&self.fixed).any(|(d, &f)| f && *d != 0.0)
+        displaces(&self.fixed, &self.displacement)
     }
 }
 
@@ -85,8 +85,14 @@ impl BodyConstraint {
 
     /// Whether the constraint prescribes a non-zero displacement.
     pub fn is_displaced(&self) -> bool {
-        self.displacement.iter().zip(&self.fixed).any(|(d, &f)| f && *d != 0.0)
+        displaces(&self.fixed, &self.displacement)
     }
+}
+
+/// Whether `displacement` is non-zero on some `fixed` component: a constraint that moves
+/// its nodes, not one that holds them.
+fn displaces(fixed: &[bool; 3], displacement: &[f64; 3]) -> bool {
+    displacement.iter().zip(fixed).any(|(d, &f)| f && *d != 0.0)
 }
 
 /// A roller on an inclined plane (a slope's base, a tilted wall): every active node on the

@@ -266,6 +266,10 @@ impl<const D: usize> Load<D> {
     /// false, as a plane surface again.
     pub(crate) fn revolve(&mut self, revolved: bool) {
         debug_assert!(D == 2 || !revolved, "a surface of revolution has a 2D meridian");
+        if revolved == self.revolved {
+            // The dead forces are those the constructor (or the last call) computed.
+            return;
+        }
         self.revolved = revolved;
         let mut dead = Vec::new();
         self.forces_on(&self.surface.vertices, &mut dead);
