@@ -82,7 +82,7 @@ fn an_explicit_body_left_alone_keeps_its_momentum() {
 }
 
 /// A stage that could never happen, a region of the wrong dimension and excavation beside
-/// strength reduction are refused at their place in the file.
+/// strength reduction or arc-length control are refused at their place in the file.
 #[test]
 fn bad_excavation_stages_are_refused() {
     let at = |stage: &str| {
@@ -97,6 +97,8 @@ fn bad_excavation_stages_are_refused() {
     assert!(e.contains("3 components") && e.contains(":24:"), "{e}");
     let e = at("analysis: QuasiStatic(load_steps: 40, strength_reduction: Some((bracket: (1.0, 2.0), tolerance: 0.01))), excavation: [(after_step: 3, region: Box(min: [0.0, 0.0], max: [1.0, 1.0]))],");
     assert!(e.contains("strength reduction"), "{e}");
+    let e = at("analysis: QuasiStatic(load_steps: 40, control: ArcLength(steps: 80)), excavation: [(after_step: 3, region: Box(min: [0.0, 0.0], max: [1.0, 1.0]))],");
+    assert!(e.contains("arc-length control cannot be combined"), "{e}");
 }
 
 /// Outputs are written in id order whatever the order of the store: a model of points put

@@ -69,6 +69,13 @@ fn dead_loads_resume() {
     resumed_run_matches(&scene("footing_load_control.ron", &below_collapse), 13);
 }
 
+/// Arc-length control: the length, its cap and the peak are saved, and the secant
+/// predictor's last increment with them.
+#[test]
+fn arc_length_control_resumes() {
+    resumed_run_matches(&scene("footing_arc_length.ron", &[("steps: 60", "steps: 20")]), 9);
+}
+
 /// Explicit FLIP with two bodies, and the last step landing on the end time.
 #[test]
 fn explicit_flip_resumes() {

@@ -228,6 +228,36 @@ fn load_examples_run() {
     assert!(out.join("points_final.csv").exists(), "the collapse state is written in full");
 }
 
+/// The strip load under arc-length control: the peak is Prandtl's (within 1 %, the
+/// load-controlled example's bound), and the curve goes on past it: every step converges,
+/// the centre settles further at each, and the last steps carry the peak within 0.1 %.
+#[test]
+fn arc_length_example_follows_the_peak() {
+    let dir = tempfile::tempdir().unwrap();
+    let footing = LoadedScene::read(Path::new("examples/footing_arc_length.ron")).unwrap();
+    let summary = run_scene(&footing, dir.path(), &mut |_| {}).unwrap();
+    let peak = summary.peak.expect("an arc-length run reports its peak");
+    assert_eq!((summary.steps, summary.collapse.is_none()), (60, true));
+    let q_ref = (2.0 + std::f64::consts::PI) * 10.0;
+    let q = peak.load_factor * 1.25 * q_ref;
+    assert!((q / q_ref - 1.0).abs() < 0.01, "peak {q} against {q_ref}");
+    let (header, rows) = read_csv(&dir.path().join("run_log.csv"));
+    let column = |name: &str| header.iter().position(|h| h == name).unwrap();
+    let settlement: Vec<f64> = rows.iter().map(|r| r[column("monitor_centre_uy")]).collect();
+    assert!(settlement.windows(2).all(|w| w[1] < w[0]), "{settlement:?}");
+    let last = rows.last().unwrap()[column("load_factor")];
+    assert!((last / peak.load_factor - 1.0).abs() < 1e-3, "{last} after the peak {}", peak.load_factor);
+    // Past where the load first came within 1 % of the peak, the centre settles at least
+    // twice as far again: the plateau is followed, not stopped at.
+    let near = rows.iter().position(|r| r[column("load_factor")] >= 0.99 * peak.load_factor).unwrap();
+    assert!(
+        settlement.last().unwrap() / settlement[near] > 2.0,
+        "{} at the end, {} near the peak",
+        settlement.last().unwrap(),
+        settlement[near]
+    );
+}
+
 /// A scene that asks for the error at collapse (`at_collapse: Error`) gets it: the run
 /// stops with the step that could not go on, naming the load factor reached.
 #[test]

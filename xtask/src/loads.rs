@@ -11,12 +11,12 @@ use crate::report::{Report, Row};
 use crate::soil::{self, COHESION, POISSON, YOUNG};
 use anyhow::Result;
 use loam::constitutive::Elastic;
-use loam::implicit::{AntiLocking, Kinematics, QuasiStatic, QuasiStaticSettings};
+use loam::implicit::{AntiLocking, ArcLengthSettings, Kinematics, LoadControl, QuasiStatic, QuasiStaticSettings};
 use loam::model::Model;
 use loam_verification::cylinder::bounds::{
     FOLLOWER_NEWTON_ITERATIONS, RADIAL_DISPLACEMENT, RING_LAME, RING_LAME_ORDER, RING_LIMIT,
 };
-use loam_verification::footing::bounds::LOAD_CONTROLLED_COLLAPSE;
+use loam_verification::footing::bounds::{ARC_LENGTH_PEAK, ARC_LENGTH_STOPPED, LOAD_CONTROLLED_COLLAPSE};
 use loam_verification::sphere::bounds::{SPHERE_LAME, SPHERE_LIMIT};
 use loam_verification::{footing_load_model, prandtl_nc, Cylinder, ThickSphere};
 use std::fmt::Write as _;
@@ -86,9 +86,82 @@ The V3 soil (von Mises, c_u = {COHESION}, E = {YOUNG:e}, ν = {POISSON}, assumed
     Ok(())
 }
 
-/// The load sections of the report: the load-controlled footing and V6.
+/// Steps of the arc-length footing (the first, load-controlled, of 1 / `ARC_FIRST`).
+const ARC_STEPS: usize = 60;
+const ARC_FIRST: usize = 10;
+
+/// The V3 footing under arc-length control: for each mesh the peak of the curve against
+/// Prandtl, and how far the curve went on past it (the strip centre's settlement at the
+/// last step over its settlement when the load first came within 1 % of the peak).
+fn arc_length(quick: bool, report: &mut Report) -> Result<()> {
+    let meshes: &[usize] = if quick { &[4, 8] } else { &[4, 8, 16] };
+    let q_ref = prandtl_nc(0.0) * COHESION;
+    let law = soil::undrained(Elastic::new(YOUNG, POISSON)?, COHESION)?;
+    let assumed = AntiLocking::AssumedStrain { stabilization: 0.1 };
+    let arc = ArcLengthSettings { steps: ARC_STEPS, ..Default::default() };
+    writeln!(report.md, "## V3 footing under arc-length control
+
+The load-controlled footing above (full pressure {FOOTING_OVERLOAD} (2 + π) c_u), under arc-length control (docs/theory.md §21): a first load step of 1/{ARC_FIRST} of the load, then {ARC_STEPS} steps in all, each aiming at {} Newton corrections and at most {} times the first step's length. Peak: the largest pressure of the curve. Past the peak: the strip centre's settlement at the last step over its settlement at the first step within 1 % of the peak.\n", arc.iterations, arc.max_growth)?;
+    report.mark_table("V3-arc")?;
+    writeln!(
+        report.md,
+        "| cells per b | peak pressure | / (2 + π) c_u − 1 | peak step | settlement at the end / near the peak | steps | Newton iterations | wall [s] |\n|---:|---:|---:|---:|---:|---:|---:|---:|"
+    )?;
+    let mut finest = None;
+    for &cells in meshes {
+        eprintln!("verify: V3 under arc-length control, {cells} cells per b");
+        let t = Instant::now();
+        let model = footing_load_model(law.clone(), cells, 10, 5, FOOTING_OVERLOAD * q_ref, assumed);
+        let centre = nearest_point(&model, [0.0, 5.0]);
+        let settings =
+            QuasiStaticSettings { load_steps: ARC_FIRST, control: LoadControl::ArcLength(arc), ..Default::default() };
+        let mut qs = QuasiStatic::new(model, settings);
+        let settlement = |m: &Model<2>| m.points().position0()[centre][1] - m.points().position()[centre][1];
+        let (mut curve, mut iterations, mut failed) = (Vec::new(), 0, 0);
+        while !qs.is_finished() {
+            match qs.step() {
+                Ok(r) => iterations += r.iterations,
+                Err(_) => {
+                    failed = 1;
+                    break;
+                }
+            }
+            curve.push((qs.load_factor(), settlement(qs.model())));
+        }
+        let peak = qs.peak().expect("an arc-length run has a peak");
+        let near_peak = curve.iter().find(|(l, _)| *l >= 0.99 * peak.load_factor).map_or(f64::NAN, |c| c.1);
+        let end = curve.last().map_or(f64::NAN, |c| c.1);
+        let pressure = peak.load_factor * FOOTING_OVERLOAD * q_ref;
+        let error = pressure / q_ref - 1.0;
+        writeln!(
+            report.md,
+            "| {cells} | {pressure:.3} | {error:+.4} | {} | {:.2} | {} | {iterations} | {:.2} |",
+            peak.step,
+            end / near_peak,
+            qs.steps_done(),
+            t.elapsed().as_secs_f64()
+        )?;
+        finest = Some((cells, error, failed));
+    }
+    let (cells, error, failed) = finest.expect("at least one mesh");
+    writeln!(report.md)?;
+    let name = format!("V3 arc length {cells} cells per b");
+    report.rows.push(Row::checked(&name, "|peak/q_ref - 1|", error.abs(), ARC_LENGTH_PEAK));
+    report.rows.push(Row::checked(&name, "steps that failed", f64::from(failed), ARC_LENGTH_STOPPED));
+    Ok(())
+}
+
+/// The point of `model` that starts nearest `x`.
+fn nearest_point(model: &Model<2>, x: [f64; 2]) -> usize {
+    let start = model.points().position0();
+    let distance = |p: usize| (start[p][0] - x[0]).hypot(start[p][1] - x[1]);
+    (0..start.len()).min_by(|&a, &b| distance(a).total_cmp(&distance(b))).expect("the model has points")
+}
+
+/// The load sections of the report: the load-controlled and arc-length footings and V6.
 pub(crate) fn verify(quick: bool, report: &mut Report) -> Result<()> {
     load_control(quick, report)?;
+    arc_length(quick, report)?;
     cylinder(quick, report)
 }
 

@@ -4,7 +4,7 @@
 
 use loam_explicit::{Explicit, ExplicitError, ExplicitState};
 use loam_implicit::{
-    reduced_strength, Dynamic, DynamicState, QuasiStatic, QuasiStaticState, StepError, StepReport,
+    reduced_strength, Dynamic, DynamicState, Peak, QuasiStatic, QuasiStaticState, StepError, StepReport,
     StrengthReductionError,
 };
 use loam_kernels::ConnectError;
@@ -260,6 +260,15 @@ impl<const D: usize> Analysis<D> {
             Analysis::Explicit(a) => a.check()?,
         }
         Ok(())
+    }
+
+    /// Under arc-length control, the most load carried so far and the step that carried
+    /// it (`None` otherwise).
+    pub fn peak(&self) -> Option<Peak> {
+        match self {
+            Analysis::QuasiStatic(a) => a.peak(),
+            _ => None,
+        }
     }
 
     /// The collapse `error` means, if it is one: a quasi-static step that could not go on

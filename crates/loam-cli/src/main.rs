@@ -281,7 +281,7 @@ fn run_command(
 
 /// The lines a finished run ends with: a warning if its plots could not be drawn, the
 /// factor of safety of a strength reduction, the collapse load of a load-controlled run
-/// that reached it, and what the run did.
+/// that reached it, the peak of an arc-length-controlled one, and what the run did.
 fn print_summary(scene: &Path, summary: &RunSummary) {
     if let Err(e) = &summary.plots {
         eprintln!("warning: the plots of {} could not be drawn: {e}", summary.output_dir.display());
@@ -296,7 +296,15 @@ fn print_summary(scene: &Path, summary: &RunSummary) {
             fos.stable
         );
     }
-    if let Some(c) = &summary.collapse {
+    if let Some(p) = &summary.peak {
+        println!(
+            "peak: the model carried load factor λ = {:.6} at most (step {}); the arc-length control ended at λ = {:.6} (step {})",
+            p.load_factor, p.step, summary.load_factor, summary.steps
+        );
+        if let Some(c) = &summary.collapse {
+            println!("step {} could not go on ({})", c.step, c.reason);
+        }
+    } else if let Some(c) = &summary.collapse {
         println!(
             "collapse: the model carried load factor λ = {:.6} at most; step {} could not go on to {:.6} ({})",
             c.load_factor, c.step, c.attempted, c.reason

@@ -30,12 +30,13 @@ const MAX_MEMORY: &str = "2G";
 
 /// The examples small enough to run a few steps of in CI (the strength-reduction scenes
 /// search their factor of safety before the first step; `loam check` takes every example).
-const RUNNABLE: [&str; 10] = [
+const RUNNABLE: [&str; 11] = [
     "cavity_sphere.ron",
     "column.ron",
     "column_fem.ron",
     "disks.ron",
     "vibrating_bar.ron",
+    "footing_arc_length.ron",
     "footing_circular.ron",
     "footing_load_control.ron",
     "footing_von_mises.ron",

@@ -147,7 +147,7 @@ impl<const D: usize> Dynamic<D> {
         model.check_accepted_by(AnalysisKind::Dynamic)?;
         let inertia = Inertia::new(settings.mass == MassMatrix::Consistent);
         Ok(Self {
-            engine: Engine::new(model, settings.newton, settings.linear_solver),
+            engine: Engine::new(model, settings.newton, settings.linear_solver, false),
             settings,
             step: 0,
             time: 0.0,

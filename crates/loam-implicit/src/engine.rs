@@ -105,9 +105,11 @@ impl<const D: usize> Engine<D> {
     /// and no buoyancy follows a changing volume, LU otherwise (never a silent
     /// symmetrisation; a softening tangent is indefinite and Cholesky would stop at the
     /// first negative pivot; the stiffness of a follower load, or of the buoyancy on a
-    /// point's current volume in finite strain, is not symmetric).
-    pub fn new(model: Model<D>, newton: NewtonSettings, linear_choice: LinearSolverChoice) -> Self {
-        let definite = model.symmetric_tangent()
+    /// point's current volume in finite strain, is not symmetric). `indefinite` says the
+    /// analysis goes where the tangent is indefinite whatever the model (past a limit point).
+    pub fn new(model: Model<D>, newton: NewtonSettings, linear_choice: LinearSolverChoice, indefinite: bool) -> Self {
+        let definite = !indefinite
+            && model.symmetric_tangent()
             && !model.can_soften()
             && !has_follower(model.loads())
             && (model.water().is_none() || model.kinematics() == Kinematics::SmallStrain);
@@ -151,6 +153,11 @@ impl<const D: usize> Engine<D> {
             linear_resolved: false,
             lattice: None,
         }
+    }
+
+    /// Corrections whose Krylov solve failed and were solved by sparse LU, so far.
+    pub fn direct_fallbacks(&self) -> usize {
+        self.fallbacks
     }
 
     pub fn linear_solver(&self) -> &dyn LinearSolver {
@@ -313,6 +320,21 @@ impl<const D: usize> Engine<D> {
         self.level = level;
     }
 
+    /// The external force per unit load factor, ∂f_ext/∂λ, into `out`, on the free dofs
+    /// and in the nodes' frames (as a linear solve takes it); leaves the external forces at
+    /// load factor `lambda`. Dead loads, gravity and the water's force follow the load
+    /// factor linearly, so the difference of two levels is exact.
+    pub fn load_direction(&mut self, lambda: f64, out: &mut Vec<f64>) {
+        self.external_forces(LoadLevel::Factor(lambda + 1.0));
+        out.clone_from(&self.f_ext);
+        self.external_forces(LoadLevel::Factor(lambda));
+        let held = self.frames.assembly_mask(&self.constrained);
+        for ((d, f), &h) in out.iter_mut().zip(&self.f_ext).zip(held) {
+            *d = if h { 0.0 } else { *d - f };
+        }
+        self.frames.hold_in_load(out);
+    }
+
     /// The water's force per unit volume on every point, b_w = −∇p_w (the buoyancy below a
     /// level water table; docs/theory.md §18), at the points' committed places and gravity's
     /// factor of the external forces. Nothing without water.
@@ -450,6 +472,23 @@ impl<const D: usize> Engine<D> {
     /// one does better) and add the correction to the increment: Δu ← Δu + δ. Returns the
     /// Krylov iterations and the time the solver's set-up took.
     fn solve(&mut self, tolerance: f64) -> Result<(usize, std::time::Duration), LinearSolveError> {
+        let setup = self.prepare_solver()?;
+        let (mut rhs, mut correction) = (std::mem::take(&mut self.rhs), std::mem::take(&mut self.correction));
+        for (b, r) in rhs.iter_mut().zip(&self.residual) {
+            *b = -r;
+        }
+        let solved = self.solve_prepared(&rhs, &mut correction, tolerance);
+        (self.rhs, self.correction) = (rhs, correction);
+        let iterations = solved?;
+        for (u, c) in self.du.iter_mut().zip(&self.correction) {
+            *u += c;
+        }
+        Ok((iterations, setup))
+    }
+
+    /// Prepare the linear solver for the assembled tangent (factorise it, or set up the
+    /// preconditioner); returns the time it took.
+    pub fn prepare_solver(&mut self) -> Result<std::time::Duration, LinearSolveError> {
         let start = std::time::Instant::now();
         let system = LinearSystem {
             pattern: &self.pattern,
@@ -458,11 +497,21 @@ impl<const D: usize> Engine<D> {
             lattice: self.lattice.as_ref(),
         };
         self.linear.prepare(&system)?;
-        let setup = start.elapsed();
-        for (b, r) in self.rhs.iter_mut().zip(&self.residual) {
-            *b = -r;
-        }
-        let stats = match self.linear.solve(&system, &self.rhs, &mut self.correction, tolerance) {
+        Ok(start.elapsed())
+    }
+
+    /// Solve K x = b with the prepared solver to the relative residual `tolerance`, `b` in
+    /// the nodes' frames (as the residual is), `x` turned back to the global frame; a failed
+    /// Krylov solve is repeated by sparse LU below `DIRECT_FALLBACK_MAX_DOFS`. Returns the
+    /// Krylov iterations.
+    pub fn solve_prepared(&mut self, b: &[f64], x: &mut [f64], tolerance: f64) -> Result<usize, LinearSolveError> {
+        let system = LinearSystem {
+            pattern: &self.pattern,
+            matrix: &self.matrix,
+            constrained: &self.constrained,
+            lattice: self.lattice.as_ref(),
+        };
+        let stats = match self.linear.solve(&system, b, x, tolerance) {
             Err(e @ (LinearSolveError::NotConverged(_) | LinearSolveError::NotPositiveDefinite(_)))
                 if self.linear.kind().is_iterative() && self.num_dofs() <= DIRECT_FALLBACK_MAX_DOFS[D - 1] =>
             {
@@ -472,15 +521,12 @@ impl<const D: usize> Engine<D> {
                 let columns = SystemMatrix::Columns(self.matrix.to_columns(&self.pattern).into_owned());
                 let system = LinearSystem { matrix: &columns, ..system };
                 direct.prepare(&system)?;
-                direct.solve(&system, &self.rhs, &mut self.correction, tolerance)?
+                direct.solve(&system, b, x, tolerance)?
             }
             result => result?,
         };
-        self.frames.to_global(&mut self.correction);
-        for (u, c) in self.du.iter_mut().zip(&self.correction) {
-            *u += c;
-        }
-        Ok((stats.iterations, setup))
+        self.frames.to_global(x);
+        Ok(stats.iterations)
     }
 
     /// The assembled tangent as the linear solvers see it.

@@ -110,6 +110,15 @@ impl<const D: usize> LocalFrames<D> {
         }
     }
 
+    /// A load vector (global) as a linear solve takes it: in the nodes' frames, its held
+    /// dofs zeroed.
+    pub fn hold_in_load(&self, f: &mut [f64]) {
+        self.to_local(f);
+        for &dof in &self.held {
+            f[dof] = 0.0;
+        }
+    }
+
     /// The tangent at the framed nodes in their frames, their held dofs eliminated.
     pub fn hold_in_matrix(&self, pattern: &BlockPattern, matrix: &mut SystemMatrix) {
         matrix.transform_blocks(pattern, |a| self.frame(a));

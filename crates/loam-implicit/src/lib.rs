@@ -12,6 +12,7 @@
 //! penalty (`ghost`) and inertia (`inertia`) enter the residual and tangent where a model
 //! asks for them.
 
+mod arc_length;
 mod cell_average;
 mod cutback;
 mod dynamic;
@@ -27,11 +28,12 @@ mod residual;
 mod strength_reduction;
 mod tangent;
 
+pub use arc_length::{ArcLengthSettings, ArcLengthState, Peak};
 pub use dynamic::{Dynamic, DynamicSettings, DynamicState, MassMatrix};
 pub use loam_kernels::{ConnectError, InvalidSetting, RunError};
 pub use loam_model::{AntiLocking, Kinematics, Model, ModelError, PlaneConstraint};
 pub use points::PointUpdateError;
-pub use quasi_static::{QuasiStatic, QuasiStaticSettings, QuasiStaticState};
+pub use quasi_static::{LoadControl, QuasiStatic, QuasiStaticSettings, QuasiStaticState};
 pub use report::{IterationProfile, StepError, StepReport};
 pub use strength_reduction::{
     has_strength, reduced_strength, FactorOfSafety, StrengthReduction, StrengthReductionError, StrengthTrial,

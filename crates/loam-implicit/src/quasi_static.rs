@@ -3,7 +3,10 @@
 //!
 //! [`QuasiStatic::step`] advances one load step through the cut-back control;
 //! [`QuasiStatic::attempt`] is one attempt at a sub-step, the algorithm stage by stage.
+//! With arc-length control (`arc_length`) the steps after the first are held to a length
+//! of the displacement increment instead of a load factor.
 
+use crate::arc_length::{ArcLengthSettings, ArcLengthState, ArcScratch, Peak};
 use crate::cutback::{CutBack, StepScale};
 use crate::engine::Engine;
 use crate::points::PointUpdateError;
@@ -11,8 +14,8 @@ use crate::{IterationProfile, StepError, StepReport};
 use loam_kernels::{on_pool, RunError};
 use loam_model::{LoadLevel, Model, ModelError, ModelState, PointChange};
 use loam_solve::{
-    BlockPattern, LinearSolver, LinearSolverChoice, LinearSolverKind, LinearSolverTimings, NewtonError, NewtonReport,
-    NewtonSettings,
+    norm, BlockPattern, LinearSolver, LinearSolverChoice, LinearSolverKind, LinearSolverTimings, NewtonError,
+    NewtonReport, NewtonSettings,
 };
 use std::time::Instant;
 
@@ -34,6 +37,20 @@ pub struct QuasiStaticSettings {
     /// pays (the geometrically linear footings) and where it changes the load path (moving
     /// points).
     pub extrapolate: bool,
+    /// How the load advances: by the load factor in `load_steps` equal steps (the
+    /// default), or by arc length after a first step of 1 / `load_steps`.
+    pub control: LoadControl,
+}
+
+/// How a quasi-static analysis advances the load.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum LoadControl {
+    /// The load factor, in `load_steps` equal steps from 0 to 1.
+    #[default]
+    LoadFactor,
+    /// Arc length (docs/theory.md §21): the load factor is an unknown of each step, which
+    /// follows the load past a limit point.
+    ArcLength(ArcLengthSettings),
 }
 
 impl Default for QuasiStaticSettings {
@@ -44,6 +61,7 @@ impl Default for QuasiStaticSettings {
             max_cutbacks: 8,
             linear_solver: LinearSolverChoice::Auto,
             extrapolate: false,
+            control: LoadControl::LoadFactor,
         }
     }
 }
@@ -60,29 +78,42 @@ pub struct QuasiStaticState {
     pub previous_increment: Option<f64>,
     /// The linear solver resolved at the first step.
     pub linear_solver: Option<LinearSolverKind>,
+    /// Under arc-length control, from the first step on.
+    pub arc_length: Option<ArcLengthState>,
 }
 
 /// Quasi-static implicit analysis of a model. See the module docs.
 pub struct QuasiStatic<const D: usize> {
-    engine: Engine<D>,
-    settings: QuasiStaticSettings,
+    pub(crate) engine: Engine<D>,
+    pub(crate) settings: QuasiStaticSettings,
     step: usize,
-    load_factor: f64,
+    pub(crate) load_factor: f64,
     /// The last converged increment per background node dof (reused from step to step)
     /// and its load increment; `None` until a step has converged.
     previous: Vec<f64>,
-    previous_increment: Option<f64>,
+    pub(crate) previous_increment: Option<f64>,
+    /// Under arc-length control, once the first step has converged.
+    pub(crate) arc: Option<ArcLengthState>,
+    pub(crate) arc_scratch: ArcScratch,
+    /// The load factor of the last arc-length iterate (what a failed step tried).
+    pub(crate) arc_tried: f64,
 }
 
 impl<const D: usize> QuasiStatic<D> {
+    /// A quasi-static analysis of `model`. Under arc-length control the linear solver is
+    /// chosen for an indefinite tangent (LU, BiCGStab), as past a limit point it is.
     pub fn new(model: Model<D>, settings: QuasiStaticSettings) -> Self {
+        let indefinite = matches!(settings.control, LoadControl::ArcLength(_));
         Self {
-            engine: Engine::new(model, settings.newton, settings.linear_solver),
+            engine: Engine::new(model, settings.newton, settings.linear_solver, indefinite),
             settings,
             step: 0,
             load_factor: 0.0,
             previous: Vec::new(),
             previous_increment: None,
+            arc: None,
+            arc_scratch: ArcScratch::default(),
+            arc_tried: 0.0,
         }
     }
 
@@ -106,8 +137,31 @@ impl<const D: usize> QuasiStatic<D> {
         self.load_factor
     }
 
+    /// Load control: after the last load step. Arc-length control: after its most steps,
+    /// or once the load factor has reached 1 or fallen back to 0.
     pub fn is_finished(&self) -> bool {
-        self.step >= self.settings.load_steps
+        match self.settings.control {
+            LoadControl::LoadFactor => self.step >= self.settings.load_steps,
+            LoadControl::ArcLength(arc) => {
+                let reached = self.load_factor >= 1.0 - 1e-12;
+                self.step >= arc.steps || reached || (self.step > 0 && self.load_factor <= 0.0)
+            }
+        }
+    }
+
+    /// The most steps the analysis takes.
+    fn most_steps(&self) -> usize {
+        match self.settings.control {
+            LoadControl::LoadFactor => self.settings.load_steps,
+            LoadControl::ArcLength(arc) => arc.steps,
+        }
+    }
+
+    /// Under arc-length control, the most load carried so far and the step that carried
+    /// it; `None` under load control (whose last load factor is its most) and before the
+    /// first step.
+    pub fn peak(&self) -> Option<Peak> {
+        self.arc.map(|a| a.peak)
     }
 
     /// The state [`QuasiStatic::resume`] takes back.
@@ -118,6 +172,7 @@ impl<const D: usize> QuasiStatic<D> {
             previous: self.previous.clone(),
             previous_increment: self.previous_increment,
             linear_solver: self.engine.resolved_linear_solver(),
+            arc_length: self.arc,
         }
     }
 
@@ -131,10 +186,17 @@ impl<const D: usize> QuasiStatic<D> {
     /// step is the one after `state.step`, with the numbers the saving run would have had.
     /// A state that does not fit is refused and nothing changes.
     pub fn resume(&mut self, state: QuasiStaticState, model: ModelState<D>) -> Result<(), ModelError> {
-        let steps = self.settings.load_steps;
-        if state.step > steps || !(0.0..=1.0).contains(&state.load_factor) {
+        let steps = self.most_steps();
+        let fits = match self.settings.control {
+            LoadControl::LoadFactor => state.arc_length.is_none(),
+            LoadControl::ArcLength(_) => state.arc_length.is_some() == (state.step > 0),
+        };
+        if state.step > steps || !(0.0..=1.0).contains(&state.load_factor) || !fits {
             let (step, lambda) = (state.step, state.load_factor);
-            return Err(ModelError::Restore(format!("step {step} at load factor {lambda} of {steps} load steps")));
+            let control = if state.arc_length.is_some() { "arc-length" } else { "load" };
+            return Err(ModelError::Restore(format!(
+                "step {step} at load factor {lambda} under {control} control, of {steps} steps"
+            )));
         }
         self.engine.model.restore(model)?;
         self.engine.resume_linear_solver(state.linear_solver);
@@ -142,6 +204,7 @@ impl<const D: usize> QuasiStatic<D> {
         self.load_factor = state.load_factor;
         self.previous = state.previous;
         self.previous_increment = state.previous_increment;
+        self.arc = state.arc_length;
         Ok(())
     }
 
@@ -181,21 +244,56 @@ impl<const D: usize> QuasiStatic<D> {
             return report;
         }
         if self.is_finished() {
-            return Err(StepError::Finished(self.settings.load_steps));
+            return Err(StepError::Finished(self.most_steps()));
         }
         let start = Instant::now();
         let step = self.step + 1;
-        let target = step as f64 / self.settings.load_steps as f64;
+        let report = match (self.settings.control, self.arc) {
+            (LoadControl::ArcLength(arc), Some(state)) => self.arc_step(step, arc, state, start)?,
+            (control, _) => {
+                let report = self.load_step(step, step as f64 / self.settings.load_steps as f64, start)?;
+                if let LoadControl::ArcLength(arc) = control {
+                    self.start_arc(step, arc)?;
+                }
+                report
+            }
+        };
+        self.step = step;
+        if let Some(state) = self.arc.as_mut().filter(|a| self.load_factor > a.peak.load_factor) {
+            state.peak = Peak { step, load_factor: self.load_factor };
+        }
+        Ok(report)
+    }
+
+    /// After the first, load-controlled step of an arc-length analysis: the first length
+    /// is that of its increment (its last sub-step's, scaled to the step where it was cut
+    /// back). A step that moved nothing gives the arc no length: an error.
+    fn start_arc(&mut self, step: usize, arc: ArcLengthSettings) -> Result<(), StepError> {
+        let last = self.previous_increment.unwrap_or(0.0);
+        let length = norm(&self.previous) * self.load_factor / last;
+        if !(length.is_finite() && length > 0.0) {
+            return Err(StepError::ArcLength(format!("the first step (to load factor {}) moved no node, so there is no length to hold the next steps to; load the body so that it deforms", self.load_factor)));
+        }
+        let peak = Peak { step, load_factor: self.load_factor };
+        self.arc = Some(ArcLengthState { length, max_length: arc.max_growth * length, peak });
+        Ok(())
+    }
+
+    /// Step `step` by load control from the committed load factor to `target`, cutting
+    /// back as needed: connect, then attempt the increment; a failed attempt is retried
+    /// from the committed state with half the increment.
+    pub(crate) fn load_step(&mut self, step: usize, target: f64, start: Instant) -> Result<StepReport, StepError> {
         let mut control = CutBack::new(self.load_factor, target, StepScale::LoadFactor, self.settings.max_cutbacks);
         while let Some(size) = control.next(self.load_factor) {
             self.engine.connect(step)?;
-            let lambda = (self.load_factor + size).min(target);
+            // A sub-step that ends within round-off of the target ends on it.
+            let end = self.load_factor + size;
+            let lambda = if end >= target - 4.0 * f64::EPSILON * target.abs() { target } else { end };
             match self.attempt(lambda) {
                 Ok(report) => control.converged(report, self.engine.conn.active_nodes().len()),
                 Err(e) => control.failed(step, self.load_factor, lambda, e.to_string(), e.report())?,
             }
         }
-        self.step = step;
         let reactions = self.engine.reactions.clone();
         Ok(control.into_report(step, self.load_factor, self.load_factor, reactions, D, start))
     }
@@ -223,20 +321,27 @@ impl<const D: usize> QuasiStatic<D> {
         e.model.prescribed_increment(&e.layout, &e.conn, self.load_factor, lambda, &mut e.du);
         let increment = lambda - self.load_factor;
         if let (true, Some(previous_increment)) = (self.settings.extrapolate, self.previous_increment) {
-            let ratio = increment / previous_increment;
-            let n = e.layout.dofs_per_node();
-            let held = e.frames.assembly_mask(&e.constrained);
-            for (a, &g) in e.conn.active_nodes().active_to_grid.iter().enumerate() {
-                for c in (0..n).filter(|&c| !held[a * n + c]) {
-                    e.du[a * n + c] = ratio * self.previous[g as usize * n + c];
-                }
+            self.carry_previous(increment / previous_increment);
+        }
+    }
+
+    /// `ratio` times the last converged increment on the free dofs of `du`, carried to
+    /// the active nodes by their grid numbers.
+    pub(crate) fn carry_previous(&mut self, ratio: f64) {
+        let e = &mut self.engine;
+        let n = e.layout.dofs_per_node();
+        let held = e.frames.assembly_mask(&e.constrained);
+        for (a, &g) in e.conn.active_nodes().active_to_grid.iter().enumerate() {
+            for c in (0..n).filter(|&c| !held[a * n + c]) {
+                e.du[a * n + c] = ratio * self.previous.get(g as usize * n + c).copied().unwrap_or(0.0);
             }
         }
     }
 
-    /// With `extrapolate`, keep the converged increment to `lambda` per background node.
-    fn remember_increment(&mut self, lambda: f64) {
-        if !self.settings.extrapolate {
+    /// With `extrapolate` or arc-length control (the secant predictor), keep the
+    /// converged increment to `lambda` per background node.
+    pub(crate) fn remember_increment(&mut self, lambda: f64) {
+        if !self.settings.extrapolate && !matches!(self.settings.control, LoadControl::ArcLength(_)) {
             return;
         }
         let e = &self.engine;

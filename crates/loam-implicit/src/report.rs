@@ -65,6 +65,9 @@ pub enum StepError {
     NotConverged { step: usize, reached: f64, load_factor: f64, cutbacks: usize, reason: String, residuals: Vec<f64> },
     #[error("analysis: {0}")]
     InvalidSettings(InvalidSetting),
+    /// Arc-length control cannot go on (docs/theory.md §21).
+    #[error("arc-length control: {0}")]
+    ArcLength(String),
     #[error("linear solver: {0}")]
     LinearSolver(loam_solve::LinearSolveError),
     /// The model uses an option the analysis does not accept (`loam_model`'s table).

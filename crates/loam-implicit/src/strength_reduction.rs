@@ -9,7 +9,7 @@
 //! Lane's (non-convergence of the equilibrium iterations), with Newton and cut-back in
 //! place of their viscoplastic iterations.
 
-use crate::{QuasiStatic, QuasiStaticSettings, StepError};
+use crate::{LoadControl, QuasiStatic, QuasiStaticSettings, StepError};
 use loam_constitutive::ConstitutiveLaw;
 use loam_kernels::{ConnectError, InvalidSetting};
 use loam_model::{Model, ModelError};
@@ -19,7 +19,8 @@ use std::time::{Duration, Instant};
 /// Settings of a strength-reduction analysis.
 #[derive(Debug, Clone, PartialEq)]
 pub struct StrengthReduction {
-    /// How each trial applies gravity (load steps, Newton, cut-backs).
+    /// How each trial applies gravity (load steps, Newton, cut-backs). A trial is
+    /// load-controlled whatever `trial.control` says: it holds or fails at the full load.
     pub trial: QuasiStaticSettings,
     /// Factors that bracket F: the lower must hold, the upper must fail.
     pub bracket: (f64, f64),
@@ -180,7 +181,8 @@ impl StrengthReduction {
         factor: f64,
     ) -> Result<StrengthTrial, StrengthReductionError> {
         let start = Instant::now();
-        let mut qs = QuasiStatic::new(reduced_strength(model, factor)?, self.trial.clone());
+        let settings = QuasiStaticSettings { control: LoadControl::LoadFactor, ..self.trial.clone() };
+        let mut qs = QuasiStatic::new(reduced_strength(model, factor)?, settings);
         let (mut iterations, mut cutbacks, mut stable) = (0, 0, true);
         while !qs.is_finished() {
             match qs.step() {

@@ -14,7 +14,7 @@
 use loam_analysis::{Analysis, AnalysisState};
 use loam_explicit::ExplicitState;
 use loam_format::checkpoint::{Checkpoint, CheckpointError, CheckpointHeader, Section};
-use loam_implicit::{DynamicState, FactorOfSafety, QuasiStaticState, StrengthTrial};
+use loam_implicit::{ArcLengthState, DynamicState, FactorOfSafety, Peak, QuasiStaticState, StrengthTrial};
 use loam_model::{Model, ModelState};
 use loam_points::{Column, PointStore};
 use loam_solve::LinearSolverKind;
@@ -448,6 +448,8 @@ fn put_analysis(c: &mut Checkpoint, state: &AnalysisState) {
             c.put("analysis.time", Section::F64(vec![s.load_factor]));
             c.put("quasi_static.previous", Section::F64(s.previous.clone()));
             c.put("quasi_static.previous_increment", Section::F64(s.previous_increment.into_iter().collect()));
+            let arc = s.arc_length.map(|a| vec![a.length, a.max_length, a.peak.load_factor, a.peak.step as f64]);
+            c.put("quasi_static.arc_length", Section::F64(arc.unwrap_or_default()));
             put_solver(c, s.linear_solver);
         }
         AnalysisState::Dynamic(s) => {
@@ -463,6 +465,35 @@ fn put_analysis(c: &mut Checkpoint, state: &AnalysisState) {
             c.put("analysis.step", Section::U64(vec![s.steps as u64]));
             c.put("analysis.time", Section::F64(vec![s.time]));
         }
+    }
+}
+
+/// The arc-length state of a quasi-static checkpoint: length, longest length, peak load
+/// factor and its step; none where the section is empty, or absent (a checkpoint written
+/// before arc-length control).
+fn take_arc_length(c: &Checkpoint) -> Result<Option<ArcLengthState>, CheckpointError> {
+    let name = "quasi_static.arc_length";
+    let values = match c.f64s(name) {
+        Err(CheckpointError::Missing(_)) => return Ok(None),
+        other => other?,
+    };
+    match *values {
+        [] => Ok(None),
+        [length, max_length, load_factor, step]
+            if length.is_finite()
+                && length > 0.0
+                && max_length.is_finite()
+                && max_length >= length
+                && load_factor.is_finite()
+                && step >= 1.0
+                && step.fract() == 0.0 =>
+        {
+            Ok(Some(ArcLengthState { length, max_length, peak: Peak { step: step as usize, load_factor } }))
+        }
+        _ => Err(shape_error(
+            name,
+            format!("{values:?}: not (length > 0, longest ≥ length, peak load factor, peak step ≥ 1)"),
+        )),
     }
 }
 
@@ -482,6 +513,7 @@ fn take_analysis(c: &Checkpoint, name: &str) -> Result<AnalysisState, Checkpoint
                 previous: c.f64s("quasi_static.previous")?.to_vec(),
                 previous_increment: increment.first().copied(),
                 linear_solver: take_solver(c)?,
+                arc_length: take_arc_length(c)?,
             })
         }
         "implicit dynamic" => AnalysisState::Dynamic(DynamicState {

@@ -13,7 +13,7 @@ use loam_format::checkpoint::{Checkpoint, CheckpointError, CheckpointHeader};
 use loam_format::output::{CsvCell, CsvWriter, OutputError, PvdWriter};
 use loam_format::output_dir::{clear_output_dir, prepare_output_dir, remove_temp_files, OutputDirError};
 use loam_format::run_plots::plot_run;
-use loam_implicit::{FactorOfSafety, QuasiStatic, StrengthReduction, StrengthReductionError, StrengthTrial};
+use loam_implicit::{FactorOfSafety, Peak, QuasiStatic, StrengthReduction, StrengthReductionError, StrengthTrial};
 use loam_model::{ExternalWork, LoadLevel, Model, ModelError, PointChange};
 use loam_scene::FieldSpec;
 use loam_scene::{AnalysisSpec, CollapseSpec, Excavation, LoadedScene, OutputSpec, SceneError};
@@ -56,6 +56,11 @@ pub struct RunSummary {
     /// The collapse a load-controlled quasi-static run ended with: the load factor it
     /// carried at most.
     pub collapse: Option<Collapse>,
+    /// Under arc-length control, the most load the model carried and the step that
+    /// carried it.
+    pub peak: Option<Peak>,
+    /// The load factor at the end (quasi-static), or 1.
+    pub load_factor: f64,
     /// The plots drawn from the run's CSV files, or why they could not be (a run is not
     /// failed for its plots).
     pub plots: Result<Vec<PathBuf>, String>,
@@ -270,6 +275,8 @@ fn run_prepared<const D: usize>(
         output_dir: out_dir.to_owned(),
         factor_of_safety,
         collapse,
+        peak: analysis.peak(),
+        load_factor: analysis.load_factor(),
         plots: Ok(Vec::new()),
     })
 }

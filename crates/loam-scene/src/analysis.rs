@@ -5,10 +5,12 @@
 
 use super::locate::Seg;
 use super::solver::Solver;
-use super::{AnalysisSpec, LoadedScene, MethodSpec, SceneError, StrengthReductionSpec};
+use super::{AnalysisSpec, ControlSpec, LinearSpec, LoadedScene, MethodSpec, SceneError, StrengthReductionSpec};
 use loam_analysis::{Analysis, AnalysisError};
 use loam_explicit::{Explicit, ExplicitError, ExplicitSettings, TimeStep};
-use loam_implicit::{has_strength, Dynamic, DynamicSettings, QuasiStatic, QuasiStaticSettings, StepError};
+use loam_implicit::{
+    has_strength, ArcLengthSettings, Dynamic, DynamicSettings, LoadControl, QuasiStatic, QuasiStaticSettings, StepError,
+};
 use loam_kernels::{ConnectError, InvalidSetting};
 use loam_model::{Model, ModelOption, Unaccepted};
 
@@ -27,14 +29,16 @@ impl LoadedScene {
         let Solver { newton, linear_solver, extrapolate } = solver;
         self.check_cutbacks()?;
         Ok(match self.scene.analysis {
-            AnalysisSpec::QuasiStatic { load_steps, max_cutbacks, strength_reduction, .. } => {
+            AnalysisSpec::QuasiStatic { load_steps, max_cutbacks, strength_reduction, control, .. } => {
                 if load_steps == 0 {
                     return Err(self.error(&analysis_key("load_steps"), "load_steps is 0; it must be at least 1"));
                 }
                 if let Some(srf) = strength_reduction {
                     self.check_strength_reduction(&srf, &model)?;
                 }
-                let settings = QuasiStaticSettings { load_steps, newton, max_cutbacks, linear_solver, extrapolate };
+                let control = self.load_control(control, &model, newton.max_iterations)?;
+                let settings =
+                    QuasiStaticSettings { load_steps, newton, max_cutbacks, linear_solver, extrapolate, control };
                 Analysis::QuasiStatic(QuasiStatic::new(model, settings))
             }
             AnalysisSpec::ImplicitDynamic { time_step, duration, beta, gamma, bossak_alpha, mass, max_cutbacks } => {
@@ -75,6 +79,70 @@ impl LoadedScene {
             return Err(self.error(&analysis_key("max_cutbacks"), message));
         }
         Ok(())
+    }
+
+    /// The load control of a quasi-static analysis. Arc-length control scales the dead
+    /// loads along its arc: it needs one (gravity not preloaded, a point force or a load),
+    /// and takes no prescribed displacement (the analysis is then displacement-controlled
+    /// already), no follower load (its load direction is the dead loads'), and no strength
+    /// reduction (whose trials are load-controlled).
+    fn load_control<const D: usize>(
+        &self,
+        control: ControlSpec,
+        model: &Model<D>,
+        max_iterations: usize,
+    ) -> Result<LoadControl, SceneError> {
+        let ControlSpec::ArcLength { steps, iterations, max_growth } = control else {
+            return Ok(LoadControl::LoadFactor);
+        };
+        let at = |key: &'static str| [Seg::Key("analysis"), Seg::Key("control"), Seg::Key(key)];
+        if steps < 2 {
+            return Err(self.error(&at("steps"), format!("steps is {steps}; it must be at least 2 (the first step is load-controlled, the arc starts at the second)")));
+        }
+        if !(1..=max_iterations).contains(&iterations) {
+            return Err(self.error(
+                &at("iterations"),
+                format!(
+                    "iterations is {iterations}; it must be from 1 to the solver's max_iterations ({max_iterations})"
+                ),
+            ));
+        }
+        if !(max_growth.is_finite() && max_growth >= 1.0) {
+            return Err(self.error(&at("max_growth"), format!("max_growth is {max_growth}; it must be a number of at least 1 (a multiple of the first step's length)")));
+        }
+        let arc = "arc-length control (analysis.control)";
+        if let AnalysisSpec::QuasiStatic { load_steps: 1, .. } = self.scene.analysis {
+            return Err(self.error(&analysis_key("load_steps"), format!("load_steps is 1, so the first, load-controlled step of {arc} would carry the whole load and the arc never start; use at least 2 (the first step carries 1 / load_steps)")));
+        }
+        if let Some(linear @ (LinearSpec::Cholesky | LinearSpec::Cg)) = self.scene.solver.linear {
+            return Err(self.error(&[Seg::Key("solver"), Seg::Key("linear")], format!("linear: {linear:?} needs a positive definite tangent, which {arc} leaves at a peak; use Direct (LU), Iterative (BiCGStab), Lu or BiCgStab")));
+        }
+        if let Some(k) = model.constraints().iter().position(|c| c.is_displaced()) {
+            return Err(self.error(&[Seg::Key("constraints"), Seg::Index(k)], format!("constraint {k} prescribes a displacement, and {arc} scales loads, not displacements: a displacement-controlled analysis follows a peak without it; use control: LoadFactor, or replace the displacement by a load")));
+        }
+        if let Some(k) = model.body_constraints().iter().position(|c| c.is_displaced()) {
+            return Err(self.error(&[Seg::Key("body_constraints"), Seg::Index(k)], format!("body constraint {k} prescribes a displacement, and {arc} scales loads, not displacements: a displacement-controlled analysis follows a peak without it; use control: LoadFactor, or replace the displacement by a load")));
+        }
+        if let Some(k) = model.loads().iter().position(|l| l.is_follower()) {
+            return Err(self.error(
+                &[Seg::Key("loads"), Seg::Index(k), Seg::Key("follower")],
+                format!("load {k} follows the surface; {arc} scales dead loads only: use follower: false"),
+            ));
+        }
+        if self.scene_strength_reduction() {
+            return Err(self.error(
+                &[Seg::Key("analysis"), Seg::Key("strength_reduction")],
+                format!("strength reduction runs load-controlled trials; remove it, or {arc}"),
+            ));
+        }
+        if !model.load_controlled() {
+            return Err(self.error(&[Seg::Key("analysis"), Seg::Key("control")], format!("{arc} needs a load that the load factor scales: gravity (not preloaded by a geostatic stress), a point force or a load; this scene has none")));
+        }
+        Ok(LoadControl::ArcLength(ArcLengthSettings { steps, iterations, max_growth }))
+    }
+
+    fn scene_strength_reduction(&self) -> bool {
+        matches!(self.scene.analysis, AnalysisSpec::QuasiStatic { strength_reduction: Some(_), .. })
     }
 
     /// A bracket (holds, fails) with 0 < holds < fails, a tolerance below its width, and a

@@ -2,7 +2,7 @@
 //! step (`loam_model::Model::remove_points_in`).
 
 use super::locate::Seg;
-use super::{AnalysisSpec, LoadedScene, MethodSpec, SceneError};
+use super::{AnalysisSpec, ControlSpec, LoadedScene, MethodSpec, SceneError};
 use loam_points::Shape;
 
 /// One excavation stage, checked: after step `after_step`, remove the points in `region`.
@@ -28,9 +28,12 @@ impl LoadedScene {
             if stage.after_step == 0 {
                 return Err(self.error(&at("after_step"), "after_step is 0; a stage comes after step 1 or later"));
             }
-            if let AnalysisSpec::QuasiStatic { load_steps, strength_reduction, .. } = &s.analysis {
+            if let AnalysisSpec::QuasiStatic { load_steps, strength_reduction, control, .. } = &s.analysis {
                 if strength_reduction.is_some() {
                     return Err(self.error(&at("region"), "excavation stages and strength reduction cannot be combined yet: run the excavation, then a strength-reduction scene of the excavated ground"));
+                }
+                if matches!(control, ControlSpec::ArcLength { .. }) {
+                    return Err(self.error(&at("region"), "excavation stages and arc-length control cannot be combined: an excavation at a fixed load leaves an out-of-balance force that the arc would answer by changing the load; excavate under control: LoadFactor"));
                 }
                 if stage.after_step > *load_steps {
                     let message = format!(

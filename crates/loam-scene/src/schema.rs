@@ -93,6 +93,33 @@ pub enum CollapseSpec {
     Error,
 }
 
+/// How a QuasiStatic analysis advances the load.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Default)]
+pub enum ControlSpec {
+    /// The load factor, in `load_steps` equal steps from 0 to 1.
+    #[default]
+    LoadFactor,
+    /// Arc-length control (docs/theory.md §21): at most `steps` steps (the first,
+    /// load-controlled, included), each aiming at `iterations` Newton corrections (default
+    /// 6), none longer than `max_growth` (default 10) times the first. The run ends after
+    /// its steps, or once the load factor reaches 1 or falls back to 0.
+    ArcLength {
+        steps: usize,
+        #[serde(default = "default_arc_iterations")]
+        iterations: usize,
+        #[serde(default = "default_arc_growth")]
+        max_growth: f64,
+    },
+}
+
+fn default_arc_iterations() -> usize {
+    loam_implicit::ArcLengthSettings::default().iterations
+}
+
+fn default_arc_growth() -> f64 {
+    loam_implicit::ArcLengthSettings::default().max_growth
+}
+
 /// A constraint on a body, named by its `name`: the nodes that its points inside
 /// `within` (all of them if not given) reach.
 #[derive(Debug, Clone, Deserialize, PartialEq)]
@@ -492,6 +519,11 @@ pub enum AnalysisSpec {
         /// full; `Error` stops it with the step's error.
         #[serde(default)]
         at_collapse: CollapseSpec,
+        /// How the load advances: `LoadFactor` (the default), in `load_steps` equal steps;
+        /// or `ArcLength(steps: N)`, a first step of 1 / `load_steps` and then steps of a
+        /// length of the displacement increment, which follow the load past its peak.
+        #[serde(default)]
+        control: ControlSpec,
     },
     /// Implicit Newmark dynamics (Bossak with `bossak_alpha` < 0), loads applied in full at
     /// t = 0, Newton per time step, a failed step halved up to `max_cutbacks` times.

@@ -78,6 +78,7 @@ fn cases() -> Vec<(&'static str, usize, String)> {
     let push = |d: &str| format!("{Y0}\n        Displacement(axis: Y, at: 10.0, displacement: {d}),");
     let within = |w: &str| format!("{Y0}\n        Roller(axis: X, at: 0.0, within: Some({w})),");
     let option = |line: &str| format!("{PLANE}\n    {line}");
+    let arc = |settings: &str| format!("load_steps: 40, control: ArcLength({settings})");
     // The loads key after the constraints (Y0 is the last constraint line).
     let load = |l: &str| format!("{Y0}\n    ],\n    loads: [\n        {l},");
     let small = "kinematics: SmallStrain,";
@@ -321,6 +322,32 @@ fn cases() -> Vec<(&'static str, usize, String)> {
                 "load_steps: 40",
                 "load_steps: 40,\n        strength_reduction: Some((bracket: (1.0, 1.5), tolerance: 0.6))",
             )]),
+        ),
+        ("arc length", 2, c(&[("load_steps: 40", &arc("steps: 80"))])),
+        ("arc length one step", 2, c(&[("load_steps: 40", &arc("steps: 1"))])),
+        ("arc length one load step", 2, c(&[("load_steps: 40", "load_steps: 1, control: ArcLength(steps: 80)")])),
+        (
+            "arc length cholesky",
+            2,
+            c(&[("load_steps: 40", &arc("steps: 80")), ("residual_tolerance: 1e-9", "residual_tolerance: 1e-9, linear: Some(Cholesky)")]),
+        ),
+        ("arc length iterations", 2, c(&[("load_steps: 40", &arc("steps: 80, iterations: 0"))])),
+        ("arc length growth", 2, c(&[("load_steps: 40", &arc("steps: 80, max_growth: 0.5"))])),
+        (
+            "arc length pushed only",
+            2,
+            c(&[("load_steps: 40", &arc("steps: 80")), (Y0, &push("[None, Some(-0.1)]")), ("gravity: [0.0, -10.0]", "gravity: [0.0, 0.0]")]),
+        ),
+        ("arc length no load", 2, c(&[("load_steps: 40", &arc("steps: 80")), ("gravity: [0.0, -10.0]", "gravity: [0.0, 0.0]")])),
+        (
+            "arc length follower",
+            2,
+            c(&[("load_steps: 40", &arc("steps: 80")), (Y0, &load("Pressure(within: Some((min: [0.0, 9.9], max: [0.3125, 10.1])), pressure: Uniform(1.0), follower: true)"))]),
+        ),
+        (
+            "arc length strength reduction",
+            2,
+            c(&[("load_steps: 40", &format!("{},\n        strength_reduction: Some(())", arc("steps: 80"))), (ELASTIC, &vm("yield_stress: 1e6"))]),
         ),
         ("dynamic", 2, c(&[(QS, dynamic)])),
         ("dynamic consistent", 2, c(&[(QS, "ImplicitDynamic(time_step: 0.1, duration: 1.0, mass: Consistent)")])),

@@ -121,7 +121,7 @@ fn assembled_tangent_is_the_derivative_of_the_residual() {
     for (kinematics, basis, anti_locking, ghost, law, axisymmetric) in cases {
         let plastic = !Arc::ptr_eq(law, &linear);
         let model = stressed_block_with(kinematics, basis, anti_locking, ghost, law.clone(), axisymmetric);
-        let mut engine = Engine::new(model, NewtonSettings::default(), loam_solve::LinearSolverChoice::Auto);
+        let mut engine = Engine::new(model, NewtonSettings::default(), loam_solve::LinearSolverChoice::Auto, false);
         engine.connect(1).unwrap();
         assert_eq!(engine.ghost.is_empty(), ghost.is_none(), "the shifted block must cut cells");
         // No dof constrained, no external force: the residual is the internal force and
@@ -195,7 +195,7 @@ fn follower_pressure_tangent_is_the_derivative_of_the_residual() {
     let n_vertices = faces.vertices.len();
     let pressure = Load::pressure(faces, vec![5e3; n_vertices], true, TimeFunction::Constant).unwrap();
     let model = model.with_loads(vec![pressure]).unwrap();
-    let mut engine = Engine::new(model, NewtonSettings::default(), loam_solve::LinearSolverChoice::Auto);
+    let mut engine = Engine::new(model, NewtonSettings::default(), loam_solve::LinearSolverChoice::Auto, false);
     engine.connect(1).unwrap();
     engine.constrained.iter_mut().for_each(|c| *c = false);
     let n = engine.num_dofs();
@@ -248,7 +248,7 @@ fn water_tangent_matches_differences(axisymmetric: bool) {
         stressed_block_with(Kinematics::FiniteStrain, BasisKind::Gimp, AntiLocking::None, None, law, axisymmetric);
     let water = Water::new(5e3, PhreaticLevel::Horizontal(1.0), &Vector2::new(0.0, -10.0)).unwrap();
     let model = model.with_water(water).unwrap();
-    let mut engine = Engine::new(model, NewtonSettings::default(), loam_solve::LinearSolverChoice::Auto);
+    let mut engine = Engine::new(model, NewtonSettings::default(), loam_solve::LinearSolverChoice::Auto, false);
     engine.connect(1).unwrap();
     engine.constrained.iter_mut().for_each(|c| *c = false);
     let n = engine.num_dofs();
