@@ -26,9 +26,11 @@ fn strength_reduction_and_gravity_increase_agree_for_undrained_clay() {
     let fos = srf.factor_of_safety(&model, |_| {}).unwrap();
     let n_srf = 4.0 * fos.value();
 
-    // Gravity increase to γH/c_u = 8 in steps of 0.1, halved up to 8 times.
+    // Gravity increase to γH/c_u = 8 in steps of 0.1, halved up to 8 times (no limit
+    // resolution: the search as fine as the tolerance below assumes, 0.1 / 256).
     let model = slope_model(&g, clay(), 0.8, 10.0, 5, AntiLocking::BBar);
-    let mut qs = QuasiStatic::new(model, QuasiStaticSettings { load_steps: 80, ..Default::default() });
+    let settings = QuasiStaticSettings { load_steps: 80, limit_resolution: 0.0, ..Default::default() };
+    let mut qs = QuasiStatic::new(model, settings);
     while !qs.is_finished() {
         if qs.step().is_err() {
             break;

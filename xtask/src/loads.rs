@@ -56,7 +56,7 @@ fn load_control(quick: bool, report: &mut Report) -> Result<()> {
     let assumed = AntiLocking::AssumedStrain { stabilization: 0.1 };
     writeln!(report.md, "## V3 footing under load control
 
-The V3 soil (von Mises, c_u = {COHESION}, E = {YOUNG:e}, ν = {POISSON}, assumed strain β = 0.1, small strain, geometrically linear, half model 10 b × 5 b, 2×2 points per cell) under a uniform pressure on 0 ≤ x ≤ b (a flexible smooth footing, a dead pressure on surface vertices), ramped to {FOOTING_OVERLOAD} (2 + π) c_u in {FOOTING_STEPS} load steps, each halved up to 8 times when Newton fails. Collapse: the last converged pressure. Reference (2 + π) c_u = {q_ref:.3}; the displacement-controlled V3 figures (q at 0.1 B) are in the V3 section above.\n")?;
+The V3 soil (von Mises, c_u = {COHESION}, E = {YOUNG:e}, ν = {POISSON}, assumed strain β = 0.1, small strain, geometrically linear, half model 10 b × 5 b, 2×2 points per cell) under a uniform pressure on 0 ≤ x ≤ b (a flexible smooth footing, a dead pressure on surface vertices), ramped to {FOOTING_OVERLOAD} (2 + π) c_u in {FOOTING_STEPS} load steps, each halved when Newton fails until the increment would be below {} of the load (the default limit resolution). Collapse: the last converged pressure. Reference (2 + π) c_u = {q_ref:.3}; the displacement-controlled V3 figures (q at 0.1 B) are in the V3 section above.\n", QuasiStaticSettings::default().limit_resolution)?;
     writeln!(
         report.md,
         "| cells per b | collapse pressure | / (2 + π) c_u − 1 | steps | wall [s] |\n|---:|---:|---:|---:|---:|"

@@ -2,7 +2,8 @@
 //! and dynamic analyses: try the whole increment; halve it after a failed attempt, and
 //! double it again after two converged sub-steps in a row, so that one hard stretch does
 //! not hold the rest of the step at the smallest size. An attempt that fails at
-//! `max_cutbacks` halvings stops the run with the step, the load factor and the residual
+//! `max_cutbacks` halvings (or whose halved increment would fall below a floor: a limit
+//! load's resolution) stops the run with the step, the load factor and the residual
 //! history. An unconverged state is never committed: the caller only commits a converged
 //! attempt.
 
@@ -26,6 +27,8 @@ pub(crate) struct CutBack {
     /// target.
     scale: StepScale,
     max_cutbacks: usize,
+    /// The smallest increment an attempt may take (0: none but `max_cutbacks`).
+    floor: f64,
     /// Halvings of the current sub-step, and converged sub-steps since the last change.
     depth: usize,
     streak: usize,
@@ -67,7 +70,16 @@ impl StepScale {
 impl CutBack {
     /// Control a step from `position` to `target`.
     pub fn new(position: f64, target: f64, scale: StepScale, max_cutbacks: usize) -> Self {
-        Self { full: target - position, target, scale, max_cutbacks, depth: 0, streak: 0, done: Tally::default() }
+        let full = target - position;
+        Self { full, target, scale, max_cutbacks, floor: 0.0, depth: 0, streak: 0, done: Tally::default() }
+    }
+
+    /// No attempt below `floor`: a failure whose halved increment would be smaller stops
+    /// the step, however few halvings it took (the search for a limit load resolved to a
+    /// fraction of the load rather than to 2^-max_cutbacks of a step).
+    pub fn with_floor(mut self, floor: f64) -> Self {
+        self.floor = floor;
+        self
     }
 
     /// The size of the next attempt from `position`, or `None` once the target is reached.
@@ -117,7 +129,7 @@ impl CutBack {
         // not a warning; a run that cannot go on returns an error.
         let increment = self.full * 0.5f64.powi(self.depth as i32);
         tracing::info!(step, position, increment, error = %reason, "Newton failed; cutting the step back");
-        if self.depth >= self.max_cutbacks {
+        if self.depth >= self.max_cutbacks || 0.5 * increment < self.floor {
             return Err(StepError::NotConverged {
                 step,
                 reached: position,
@@ -205,7 +217,11 @@ mod tests {
     /// Drive the control over a step from 0 to 1 whose attempts succeed when `holds(size)`:
     /// the sizes tried, in order, and the outcome.
     fn drive(holds: impl Fn(f64) -> bool, max_cutbacks: usize) -> (Vec<f64>, Result<StepReport, StepError>) {
-        let mut control = CutBack::new(0.0, 1.0, StepScale::LoadFactor, max_cutbacks);
+        drive_with(CutBack::new(0.0, 1.0, StepScale::LoadFactor, max_cutbacks), holds)
+    }
+
+    /// `drive` with the control `control`.
+    fn drive_with(mut control: CutBack, holds: impl Fn(f64) -> bool) -> (Vec<f64>, Result<StepReport, StepError>) {
         let (mut position, mut tried) = (0.0, Vec::new());
         while let Some(size) = control.next(position) {
             tried.push(size);
@@ -244,6 +260,15 @@ mod tests {
         let report = report.unwrap();
         assert_eq!((report.substeps, report.cutbacks, report.iterations), (4, 3, 12));
         assert_eq!(report.load_factor, 1.0);
+    }
+
+    /// With a floor of 0.2, the attempt at ¼ is the last: its half would be below the floor,
+    /// so the step stops after two halvings of the eight allowed.
+    #[test]
+    fn a_floor_stops_the_halving_early() {
+        let (tried, report) = drive_with(CutBack::new(0.0, 1.0, StepScale::LoadFactor, 8).with_floor(0.2), |_| false);
+        assert_eq!(tried, vec![1.0, 0.5, 0.25]);
+        assert!(matches!(report, Err(StepError::NotConverged { cutbacks: 2, .. })), "{report:?}");
     }
 
     /// An attempt that fails at the smallest size stops the step with its residuals and

@@ -26,7 +26,7 @@ pub struct QuasiStaticSettings {
     pub load_steps: usize,
     pub newton: NewtonSettings,
     /// How many halvings a sub-step may reach before a failure stops the run (the smallest
-    /// sub-step is the load step over 2^max_cutbacks).
+    /// sub-step is the load step over 2^max_cutbacks, or `limit_resolution` of the load).
     pub max_cutbacks: usize,
     /// The linear solver: by default direct (Cholesky for symmetric positive definite
     /// tangents, LU otherwise) below a size and multigrid-preconditioned Krylov above it.
@@ -40,6 +40,11 @@ pub struct QuasiStaticSettings {
     /// How the load advances: by the load factor in `load_steps` equal steps (the
     /// default), or by arc length after a first step of 1 / `load_steps`.
     pub control: LoadControl,
+    /// Where only forces follow the load factor (`Model::load_controlled`), the smallest
+    /// load increment an attempt takes, as a fraction of the full load: the resolution of
+    /// a limit load's search, which then stops after fewer halvings than `max_cutbacks`
+    /// (docs/theory.md §6). 0: `max_cutbacks` alone.
+    pub limit_resolution: f64,
 }
 
 /// How a quasi-static analysis advances the load.
@@ -62,6 +67,7 @@ impl Default for QuasiStaticSettings {
             linear_solver: LinearSolverChoice::Auto,
             extrapolate: false,
             control: LoadControl::LoadFactor,
+            limit_resolution: 1e-3,
         }
     }
 }
@@ -283,7 +289,9 @@ impl<const D: usize> QuasiStatic<D> {
     /// back as needed: connect, then attempt the increment; a failed attempt is retried
     /// from the committed state with half the increment.
     pub(crate) fn load_step(&mut self, step: usize, target: f64, start: Instant) -> Result<StepReport, StepError> {
-        let mut control = CutBack::new(self.load_factor, target, StepScale::LoadFactor, self.settings.max_cutbacks);
+        let floor = if self.engine.model.load_controlled() { self.settings.limit_resolution } else { 0.0 };
+        let mut control =
+            CutBack::new(self.load_factor, target, StepScale::LoadFactor, self.settings.max_cutbacks).with_floor(floor);
         while let Some(size) = control.next(self.load_factor) {
             self.engine.connect(step)?;
             // A sub-step that ends within round-off of the target ends on it.
@@ -415,7 +423,12 @@ impl<const D: usize> QuasiStatic<D> {
     /// number and load factor.
     fn prepare_next_step(&mut self) -> (usize, f64) {
         let step = self.step + 1;
-        let lambda = (step as f64 / self.settings.load_steps as f64).min(1.0);
+        let lambda = match self.settings.control {
+            LoadControl::LoadFactor => step as f64 / self.settings.load_steps as f64,
+            // The arc's next load factor is unknown: one load step on.
+            LoadControl::ArcLength(_) => self.load_factor + 1.0 / self.settings.load_steps as f64,
+        }
+        .min(1.0);
         self.engine.external_forces(LoadLevel::Factor(lambda));
         self.engine.du.clear();
         self.engine.size_buffers();

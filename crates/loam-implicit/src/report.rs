@@ -61,7 +61,7 @@ pub enum StepError {
     /// `load_factor` with the smallest increment allowed; `cutbacks` counts every halving
     /// of the step, which may exceed `max_cutbacks` (a sub-step size doubles back after two
     /// converged attempts).
-    #[error("step {step} did not converge: it reached {reached:.6} and could not go on to {load_factor:.6}, after {cutbacks} cut-backs in the step (the last one as small as max_cutbacks allows): {reason}")]
+    #[error("step {step} did not converge: it reached {reached:.6} and could not go on to {load_factor:.6}, after {cutbacks} cut-backs in the step (the last one as small as max_cutbacks and the limit resolution allow): {reason}")]
     NotConverged { step: usize, reached: f64, load_factor: f64, cutbacks: usize, reason: String, residuals: Vec<f64> },
     #[error("analysis: {0}")]
     InvalidSettings(InvalidSetting),

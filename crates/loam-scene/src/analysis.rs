@@ -29,16 +29,33 @@ impl LoadedScene {
         let Solver { newton, linear_solver, extrapolate } = solver;
         self.check_cutbacks()?;
         Ok(match self.scene.analysis {
-            AnalysisSpec::QuasiStatic { load_steps, max_cutbacks, strength_reduction, control, .. } => {
+            AnalysisSpec::QuasiStatic {
+                load_steps,
+                max_cutbacks,
+                strength_reduction,
+                control,
+                limit_resolution,
+                ..
+            } => {
                 if load_steps == 0 {
                     return Err(self.error(&analysis_key("load_steps"), "load_steps is 0; it must be at least 1"));
+                }
+                if !(0.0..1.0).contains(&limit_resolution) {
+                    return Err(self.error(&analysis_key("limit_resolution"), format!("limit_resolution is {limit_resolution}; it must be from 0 (halve max_cutbacks times) to below 1 (a fraction of the full load)")));
                 }
                 if let Some(srf) = strength_reduction {
                     self.check_strength_reduction(&srf, &model)?;
                 }
                 let control = self.load_control(control, &model, newton.max_iterations)?;
-                let settings =
-                    QuasiStaticSettings { load_steps, newton, max_cutbacks, linear_solver, extrapolate, control };
+                let settings = QuasiStaticSettings {
+                    load_steps,
+                    newton,
+                    max_cutbacks,
+                    linear_solver,
+                    extrapolate,
+                    control,
+                    limit_resolution,
+                };
                 Analysis::QuasiStatic(QuasiStatic::new(model, settings))
             }
             AnalysisSpec::ImplicitDynamic { time_step, duration, beta, gamma, bossak_alpha, mass, max_cutbacks } => {

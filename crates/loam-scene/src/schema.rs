@@ -112,6 +112,10 @@ pub enum ControlSpec {
     },
 }
 
+fn default_limit_resolution() -> f64 {
+    QuasiStaticSettings::default().limit_resolution
+}
+
 fn default_arc_iterations() -> usize {
     loam_implicit::ArcLengthSettings::default().iterations
 }
@@ -524,6 +528,11 @@ pub enum AnalysisSpec {
         /// length of the displacement increment, which follow the load past its peak.
         #[serde(default)]
         control: ControlSpec,
+        /// Where only forces follow the load factor, the smallest load increment an
+        /// attempt takes, as a fraction of the full load: a collapse is found to this
+        /// resolution (default 1e-3; 0: by `max_cutbacks` alone).
+        #[serde(default = "default_limit_resolution")]
+        limit_resolution: f64,
     },
     /// Implicit Newmark dynamics (Bossak with `bossak_alpha` < 0), loads applied in full at
     /// t = 0, Newton per time step, a failed step halved up to `max_cutbacks` times.

@@ -292,6 +292,7 @@ fn cases() -> Vec<(&'static str, usize, String)> {
         ("geostatic negative", 2, c(&[(PLANE, &option("initial_stress: Geostatic(k0: -0.5),"))])),
         ("load steps zero", 2, c(&[("load_steps: 40", "load_steps: 0")])),
         ("cutbacks zero", 2, c(&[("load_steps: 40", "load_steps: 40, max_cutbacks: 0")])),
+        ("limit resolution", 2, c(&[("load_steps: 40", "load_steps: 40, limit_resolution: 1.0")])),
         (
             "strength reduction of elastic",
             2,
