@@ -47,13 +47,19 @@ fn solve(model: Model<2>, load_steps: usize) -> Result<(Model<2>, usize, Vec<f64
 const FOOTING_STEPS: usize = 100;
 const FOOTING_OVERLOAD: f64 = 1.25;
 
+/// The V3 strip load at `cells` cells per b: von Mises soil, assumed strain, the pressure
+/// `FOOTING_OVERLOAD` (2 + π) c_u at full load.
+fn strip_load_model(cells: usize) -> Result<Model<2>> {
+    let law = soil::undrained(Elastic::new(YOUNG, POISSON)?, COHESION)?;
+    let assumed = AntiLocking::AssumedStrain { stabilization: 0.1 };
+    Ok(footing_load_model(law, cells, 10, 5, FOOTING_OVERLOAD * prandtl_nc(0.0) * COHESION, assumed))
+}
+
 /// The V3 footing under load control: for each mesh the load factor at which Newton
 /// failed after its cut-backs, as a pressure over (2 + π) c_u.
 fn load_control(quick: bool, report: &mut Report) -> Result<()> {
     let meshes: &[usize] = if quick { &[4, 8] } else { &[4, 8, 16] };
     let q_ref = prandtl_nc(0.0) * COHESION;
-    let law = soil::undrained(Elastic::new(YOUNG, POISSON)?, COHESION)?;
-    let assumed = AntiLocking::AssumedStrain { stabilization: 0.1 };
     writeln!(report.md, "## V3 footing under load control
 
 The V3 soil (von Mises, c_u = {COHESION}, E = {YOUNG:e}, ν = {POISSON}, assumed strain β = 0.1, small strain, geometrically linear, half model 10 b × 5 b, 2×2 points per cell) under a uniform pressure on 0 ≤ x ≤ b (a flexible smooth footing, a dead pressure on surface vertices), ramped to {FOOTING_OVERLOAD} (2 + π) c_u in {FOOTING_STEPS} load steps, each halved when Newton fails until the increment would be below {} of the load (the default limit resolution). Collapse: the last converged pressure. Reference (2 + π) c_u = {q_ref:.3}; the displacement-controlled V3 figures (q at 0.1 B) are in the V3 section above.\n", QuasiStaticSettings::default().limit_resolution)?;
@@ -65,7 +71,7 @@ The V3 soil (von Mises, c_u = {COHESION}, E = {YOUNG:e}, ν = {POISSON}, assumed
     for &cells in meshes {
         eprintln!("verify: V3 under load control, {cells} cells per b");
         let t = Instant::now();
-        let model = footing_load_model(law.clone(), cells, 10, 5, FOOTING_OVERLOAD * q_ref, assumed);
+        let model = strip_load_model(cells)?;
         let mut qs = QuasiStatic::new(model, QuasiStaticSettings { load_steps: FOOTING_STEPS, ..Default::default() });
         while !qs.is_finished() && qs.step().is_ok() {}
         let collapse = qs.load_factor() * FOOTING_OVERLOAD * q_ref;
@@ -96,8 +102,6 @@ const ARC_FIRST: usize = 10;
 fn arc_length(quick: bool, report: &mut Report) -> Result<()> {
     let meshes: &[usize] = if quick { &[4, 8] } else { &[4, 8, 16] };
     let q_ref = prandtl_nc(0.0) * COHESION;
-    let law = soil::undrained(Elastic::new(YOUNG, POISSON)?, COHESION)?;
-    let assumed = AntiLocking::AssumedStrain { stabilization: 0.1 };
     let arc = ArcLengthSettings { steps: ARC_STEPS, ..Default::default() };
     writeln!(report.md, "## V3 footing under arc-length control
 
@@ -111,8 +115,8 @@ The load-controlled footing above (full pressure {FOOTING_OVERLOAD} (2 + π) c_u
     for &cells in meshes {
         eprintln!("verify: V3 under arc-length control, {cells} cells per b");
         let t = Instant::now();
-        let model = footing_load_model(law.clone(), cells, 10, 5, FOOTING_OVERLOAD * q_ref, assumed);
-        let centre = nearest_point(&model, [0.0, 5.0]);
+        let model = strip_load_model(cells)?;
+        let centre = model.points().nearest_at_start(&[0.0, 5.0].into()).expect("the model has points");
         let settings =
             QuasiStaticSettings { load_steps: ARC_FIRST, control: LoadControl::ArcLength(arc), ..Default::default() };
         let mut qs = QuasiStatic::new(model, settings);
@@ -149,13 +153,6 @@ The load-controlled footing above (full pressure {FOOTING_OVERLOAD} (2 + π) c_u
     report.rows.push(Row::checked(&name, "|peak/q_ref - 1|", error.abs(), ARC_LENGTH_PEAK));
     report.rows.push(Row::checked(&name, "steps that failed", f64::from(failed), ARC_LENGTH_STOPPED));
     Ok(())
-}
-
-/// The point of `model` that starts nearest `x`.
-fn nearest_point(model: &Model<2>, x: [f64; 2]) -> usize {
-    let start = model.points().position0();
-    let distance = |p: usize| (start[p][0] - x[0]).hypot(start[p][1] - x[1]);
-    (0..start.len()).min_by(|&a, &b| distance(a).total_cmp(&distance(b))).expect("the model has points")
 }
 
 /// The load sections of the report: the load-controlled and arc-length footings and V6.

@@ -182,9 +182,7 @@ impl<const D: usize> QuasiStatic<D> {
             }
         }
     }
-}
 
-impl<const D: usize> QuasiStatic<D> {
     /// The secant predictor of a step of length `length`: the last converged increment,
     /// carried to the active nodes by their grid numbers and scaled to the length, in the
     /// engine's `du`; returns the load-factor increment, scaled alike (0 where nothing of

@@ -431,6 +431,15 @@ impl<const D: usize> PointStore<D> {
         0.5 * self.mass.iter().zip(&self.velocity).map(|(m, v)| m * v.norm_squared()).sum::<f64>()
     }
 
+    /// The point whose initial position is nearest `x`; of equally near points the one of
+    /// least id, so that the points' order does not matter. `None` without points.
+    pub fn nearest_at_start(&self, x: &SVector<f64, D>) -> Option<usize> {
+        (0..self.len())
+            .map(|p| ((self.position0[p] - x).norm_squared(), self.id[p], p))
+            .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)))
+            .map(|(_, _, p)| p)
+    }
+
     /// The largest distance a point has moved from its initial position.
     pub fn max_displacement(&self) -> f64 {
         self.position.iter().zip(&self.position0).map(|(x, x0)| (x - x0).norm()).fold(0.0, f64::max)

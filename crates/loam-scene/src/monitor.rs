@@ -46,13 +46,10 @@ impl LoadedScene {
                 )));
             }
             let pts = model.points();
-            // Once per monitor, before the run: of the nearest, the one of least id, so that
-            // the points' order does not matter.
-            let nearest = (0..pts.len())
-                .map(|p| ((pts.position0()[p] - x).norm_squared(), pts.id()[p], p))
-                .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)))
-                .map(|(_, _, p)| p);
-            let Some(p) = nearest else { return Err(self.error(&at("at"), "the model has no points")) };
+            // Once per monitor, before the run.
+            let Some(p) = pts.nearest_at_start(&x) else {
+                return Err(self.error(&at("at"), "the model has no points"));
+            };
             monitors.push(Monitor { name: m.name.clone(), point: pts.id()[p] });
         }
         Ok(monitors)
