@@ -455,6 +455,7 @@ impl<const D: usize> Engine<D> {
                 level: self.level,
                 du: &self.du,
                 delta_f: &self.trial.delta_f,
+                average: CellAverage::of(&self.model, &self.cell_gradients),
             };
             add_follower_tangent(
                 &inputs,

@@ -3,15 +3,22 @@
 //! extra tangent −∂f_p/∂Δu, without which Newton would lose its quadratic rate.
 //!
 //! Vertex v's force is f_v = −s Σ_{e∋v} (p_v / D) a_e (s the load's factor, a_e the facet's
-//! area vector). A vertex carried by point p sits at x_w = x_p + u_p + diag(ΔF_p F_p) R_w
+//! area vector); on a surface of revolution (axisymmetry) the share p_v / D is the ring's
+//! p_v 2π (2 r_v + r_w) / 6, which moves with the radii, so the block below gains
+//! a_e ⊗ ∂share/∂x_w (`Load::portion_gradient`). A vertex carried by point p sits at x_w = x_p + u_p + diag(ΔF_p F_p) R_w
 //! with R_w = X_w − X_p, so ∂x_w,k/∂Δu_I,k = c_wI,k = N_I(x_p) + (Σ_l ∂N_I/∂x_l F_lk) R_w,k.
 //! In 2D a_e = R (x_1 − x_0), R the rotation by −90°, so ∂a_e/∂x_1 = R = −∂a_e/∂x_0; in 3D
 //! ∂a_e/∂x_k = ½ [x_{k+2} − x_{k+1}]_× (cyclic). The block coupling the force at node J
-//! (weight ω_vJ of v) to the increment at node I is s (p_v / D) ω_vJ ∂a_e/∂x_w diag(c_wI).
+//! (weight ω_vJ of v) to the increment at node I is
+//! s ω_vJ [share ∂a_e/∂x_w + a_e ⊗ ∂share/∂x_w] ∂x_w/∂Δu_I, the last diag(c_wI) without
+//! anti-locking; B-bar and assumed strain put the cell's dilatation into ΔF, which couples
+//! the components ([`Carry::derivative`]).
 
+use crate::cell_average::CellAverage;
 use loam_grid::Connectivity;
 use loam_kernels::{trial_vertices, LoadSupports};
 use loam_model::{Load, LoadKind, LoadLevel, Model};
+use loam_points::area_vector;
 use loam_solve::{BlockPattern, SystemMatrix};
 use nalgebra::{SMatrix, SVector};
 
@@ -42,7 +49,8 @@ pub(crate) fn follower_couplings<const D: usize>(
 }
 
 /// What the load stiffness reads: the connectivity, the load vertices' supports, the
-/// committed positions, the trial increment and increments of deformation.
+/// committed positions, the trial increment and increments of deformation, and the cell
+/// averages of B-bar or assumed strain (which enter ΔF, and so the vertices' places).
 pub(crate) struct FollowerInputs<'a, const D: usize> {
     pub model: &'a Model<D>,
     pub conn: &'a Connectivity<D>,
@@ -50,6 +58,7 @@ pub(crate) struct FollowerInputs<'a, const D: usize> {
     pub level: LoadLevel,
     pub du: &'a [f64],
     pub delta_f: &'a [nalgebra::Matrix3<f64>],
+    pub average: Option<CellAverage<'a, D>>,
 }
 
 /// K += −∂f_p/∂Δu for every follower load, facet by facet in a fixed order.
@@ -59,7 +68,7 @@ pub(crate) fn add_follower_tangent<const D: usize>(
     constrained: &[bool],
     matrix: &mut SystemMatrix,
 ) {
-    let FollowerInputs { model, conn, supports, level, du, delta_f } = *inputs;
+    let FollowerInputs { model, conn, supports, level, du, delta_f, average } = *inputs;
     let points = model.points();
     for (k, load) in model.loads().iter().enumerate().filter(|(_, l)| l.is_follower()) {
         let LoadKind::Pressure { values: pressure, .. } = load.kind() else { continue };
@@ -67,15 +76,24 @@ pub(crate) fn add_follower_tangent<const D: usize>(
         let x = trial_vertices(conn, load, points, du, delta_f);
         for facet in &load.surface().facets {
             let corners = facet.map(|v| x[v as usize]);
+            let a = area_vector(&corners);
             for (slot, &w) in facet.iter().enumerate() {
                 let da = area_derivative(&corners, slot);
                 let p = load.carriers()[w as usize] as usize;
-                let carry = Carry { p, offset: *load.offset(w as usize), f: points.deformation_gradient()[p] };
-                for &v in facet {
-                    let coefficient = scale * pressure[v as usize] / D as f64;
+                let carry = Carry {
+                    p,
+                    offset: *load.offset(w as usize),
+                    f: points.deformation_gradient()[p],
+                    average,
+                    inv_radius: model.axisymmetric().then(|| 1.0 / model.configuration()[p][0]),
+                };
+                for (at, &v) in facet.iter().enumerate() {
+                    let amount = scale * pressure[v as usize];
+                    let share = load.portion(amount, facet, at, &x);
+                    let block = da * share + a * load.portion_gradient(amount, at, slot).transpose();
                     let (nodes_j, weights) = supports.support(k, v as usize);
                     for (&j, &omega) in nodes_j.iter().zip(weights) {
-                        add_moving_blocks(conn, &carry, &(da * (coefficient * omega)), j, pattern, constrained, matrix);
+                        add_moving_blocks(conn, &carry, &(block * omega), j, pattern, constrained, matrix);
                     }
                 }
             }
@@ -83,16 +101,51 @@ pub(crate) fn add_follower_tangent<const D: usize>(
     }
 }
 
-/// A vertex's carrier: point `p`, the offset X_v − X_p and the committed F_p.
-struct Carry<const D: usize> {
+/// A vertex's carrier: point `p`, the offset X_v − X_p, the committed F_p, the cell
+/// averages (with anti-locking) and 1 / r_p (axisymmetry).
+struct Carry<'a, const D: usize> {
     p: usize,
     offset: SVector<f64, D>,
     f: nalgebra::Matrix3<f64>,
+    average: Option<CellAverage<'a, D>>,
+    inv_radius: Option<f64>,
 }
 
-/// Add `block` · diag(c_I) to the coupling of node `j` with every node I of the carrier's
-/// support: x_v,k = x_p,k + u_p,k + (ΔF F)_kk R_k, so ∂x_v,k/∂Δu_I,k =
-/// c_I,k = N_I(x_p) + (Σ_l ∂N_I/∂x_l F_lk) R_k, and nothing across components.
+impl<const D: usize> Carry<'_, D> {
+    /// ∂x_v,k/∂Δu_I,j for support slot `a` of the carrier (value `n`, gradient `g`):
+    /// x_v,k = x_p,k + u_p,k + (ΔF F)_kk R_k with ΔF = I + Σ_I Δu_I ⊗ c_I, c_I the strain
+    /// gradient, gives δ_kj [N_I + (Σ_m c_I,m F_mk) R_k]; with anti-locking ΔF also carries
+    /// (θ̄ − θ)/3 I, θ̄ = Σ Δu_I · b̄_I the cell's dilatation and θ = Σ Δu_I · (c_I + N_I/r e_r)
+    /// the point's, adding F_kk R_k (b̄_I − c_I − N_I/r e_r)_j / 3.
+    fn derivative(&self, conn: &Connectivity<D>, a: usize, n: f64, g: &SVector<f64, D>) -> SMatrix<f64, D, D> {
+        let slot = self.p * conn.stride() + a;
+        let c = self.average.map_or(*g, |avg| avg.strain_gradient(slot, g));
+        let mut d = SMatrix::<f64, D, D>::from_fn(|k, j| {
+            if k == j {
+                n + (0..D).map(|m| c[m] * self.f[(m, k)]).sum::<f64>() * self.offset[k]
+            } else {
+                0.0
+            }
+        });
+        if let Some(avg) = self.average {
+            let mut own = c;
+            if let Some(inv_r) = self.inv_radius {
+                own[0] += n * inv_r;
+            }
+            let extra = (avg.average(slot) - own) / 3.0;
+            for k in 0..D {
+                let lever = self.f[(k, k)] * self.offset[k];
+                for j in 0..D {
+                    d[(k, j)] += lever * extra[j];
+                }
+            }
+        }
+        d
+    }
+}
+
+/// Add `block` · C_I to the coupling of node `j` with every node I of the carrier's
+/// support, C_I = ∂x_v/∂Δu_I ([`Carry::derivative`]).
 fn add_moving_blocks<const D: usize>(
     conn: &Connectivity<D>,
     carry: &Carry<D>,
@@ -105,11 +158,11 @@ fn add_moving_blocks<const D: usize>(
     let p = carry.p;
     let mut flat = [0.0; 9];
     let supports = conn.support_nodes(p).iter().zip(conn.support_values(p)).zip(conn.support_gradients(p));
-    for ((&i, &n), g) in supports {
-        for b in 0..D {
-            let c = n + (0..D).map(|l| g[l] * carry.f[(l, b)]).sum::<f64>() * carry.offset[b];
-            for a in 0..D {
-                flat[a * D + b] = c * block[(a, b)];
+    for (a, ((&i, &n), g)) in supports.enumerate() {
+        let coupling = block * carry.derivative(conn, a, n, g);
+        for r in 0..D {
+            for c in 0..D {
+                flat[r * D + c] = coupling[(r, c)];
             }
         }
         matrix.add_block(pattern, constrained, j as usize, i as usize, &flat[..D * D]);

@@ -6,15 +6,15 @@
 //! its out-of-plane (zz) component and the hoop stress's force σ_θθ N_I / r to the
 //! radial internal force. The axis is the grid's x = 0 plane, held radially.
 
-use crate::{AntiLocking, LoadKind, Model, ModelError, PlaneConstraint};
+use crate::{AntiLocking, Model, ModelError, PlaneConstraint};
 
 impl<const D: usize> Model<D> {
     /// Read the model as axisymmetric (module docs): 2D, on a grid whose origin lies on the
     /// axis (x = 0), with gravity along the axis (y), before any point has moved; the
     /// points become rings and the nodes on the axis are held radially
-    /// (`Model::constrained_dofs`). Not with a body-fitted FEM
-    /// mesh, assumed strain or follower pressures (not implemented in axisymmetry); B-bar
-    /// averages the dilatation with its hoop part, the ghost penalty acts on rings.
+    /// (`Model::constrained_dofs`). Not with a body-fitted FEM mesh or assumed strain (not
+    /// implemented in axisymmetry); B-bar averages the dilatation with its hoop part, the
+    /// ghost penalty acts on rings, a follower pressure acts on the current rings.
     pub fn with_axisymmetry(mut self) -> Result<Self, ModelError> {
         let fail = |what: String| Err(ModelError::Axisymmetry(what));
         if D != 2 {
@@ -73,9 +73,6 @@ impl<const D: usize> Model<D> {
                 "assumed strain is not implemented in axisymmetry (its averaged strain has no hoop part); use BBar"
                     .into(),
             );
-        }
-        if self.loads.iter().any(|l| matches!(l.kind(), LoadKind::Pressure { follower: true, .. })) {
-            return Some("follower pressures are not implemented in axisymmetry; use a dead pressure".into());
         }
         None
     }

@@ -324,11 +324,8 @@ impl<const D: usize> Model<D> {
                     "the updated Lagrangian FEM reference takes no loads but gravity yet; use the MPM".into(),
                 );
             }
-            if load.is_follower() && self.kinematics != Kinematics::FiniteStrain {
-                return error("a follower pressure turns with the deformed surface, a finite-strain notion; use kinematics FiniteStrain or a dead pressure".into());
-            }
-            if load.is_follower() && self.axisymmetric {
-                return error("follower pressures are not implemented in axisymmetry; use a dead pressure".into());
+            if load.is_follower() && self.geometrically_linear {
+                return error("a follower pressure turns with the deformed surface, which a geometrically linear model does not have; leave geometrically_linear out or use a dead pressure".into());
             }
             let (lo, hi, h) = (grid.origin(), grid.extent_max(), grid.cell_size());
             let inside = |x: &SVector<f64, D>| (0..D).all(|a| x[a] >= lo[a] && x[a] <= hi[a] + 1e-9 * h[a]);
@@ -469,6 +466,11 @@ impl<const D: usize> Model<D> {
             return Err(ModelError::GeometricallyLinear(
                 "finite strain follows the deformed configuration; use kinematics SmallStrain".into(),
             ));
+        }
+        if let Some(k) = self.loads.iter().position(|l| l.is_follower()) {
+            return Err(ModelError::GeometricallyLinear(format!(
+                "load {k} is a follower pressure, which turns with the deformed surface; use a dead pressure"
+            )));
         }
         self.geometrically_linear = true;
         Ok(self)

@@ -253,12 +253,25 @@ impl<const D: usize> Load<D> {
     /// `k` takes: amount / D, or amount 2π (2 r_v + r_w) / 6 on a surface of revolution
     /// ([`Load::forces_on`]).
     #[inline]
-    fn portion(&self, amount: f64, facet: &[u32; D], k: usize, x: &[SVector<f64, D>]) -> f64 {
+    pub fn portion(&self, amount: f64, facet: &[u32; D], k: usize, x: &[SVector<f64, D>]) -> f64 {
         if !self.revolved {
             return amount / D as f64;
         }
         let (r_v, r_w) = (x[facet[k] as usize][0], x[facet[1 - k] as usize][0]);
         amount * std::f64::consts::TAU * (2.0 * r_v + r_w) / 6.0
+    }
+
+    /// ∂/∂x of [`Load::portion`] with respect to the place of the facet's vertex `slot`:
+    /// zero on a plane surface; on a surface of revolution amount 2π · 2/6 (`slot` = `k`,
+    /// the vertex's own radius) or 2π/6 (the other vertex's), along the radius.
+    #[inline]
+    pub fn portion_gradient(&self, amount: f64, k: usize, slot: usize) -> SVector<f64, D> {
+        let mut g = SVector::zeros();
+        if self.revolved {
+            let weight = if slot == k { 2.0 } else { 1.0 };
+            g[0] = amount * std::f64::consts::TAU * weight / 6.0;
+        }
+        g
     }
 
     /// Read the surface as the meridian of a surface of revolution about the y axis (an

@@ -136,6 +136,25 @@ fn treatments_are_refused_where_they_do_not_apply() {
     assert!(matches!(finite.with_geometrically_linear(), Err(ModelError::GeometricallyLinear(_))));
 }
 
+/// A follower pressure needs a configuration that moves: taken in small strain on the
+/// updated configuration, refused in a geometrically linear model whichever comes first.
+#[test]
+fn a_follower_pressure_is_refused_where_the_configuration_does_not_move() {
+    let follower = || {
+        let top = loam_points::Surface {
+            vertices: vec![Vector2::new(0.0, 1.0), Vector2::new(1.0, 1.0)],
+            facets: vec![[0, 1]],
+        };
+        crate::Load::pressure(top, vec![1.0, 1.0], true, crate::TimeFunction::Constant).unwrap()
+    };
+    let small = model_with(vec![]).unwrap();
+    assert!(small.clone().with_loads(vec![follower()]).is_ok());
+    let linear = small.clone().with_geometrically_linear().unwrap();
+    assert!(matches!(linear.with_loads(vec![follower()]), Err(ModelError::Load { index: 0, .. })));
+    let loaded = small.with_loads(vec![follower()]).unwrap();
+    assert!(matches!(loaded.with_geometrically_linear(), Err(ModelError::GeometricallyLinear(_))));
+}
+
 #[test]
 fn the_fem_reference_refuses_a_ghost_penalty_and_blocks_without_density() {
     let mesh = FeMesh::block(Vector2::zeros(), Vector2::new(2.0, 2.0), [2, 2], 2).unwrap();

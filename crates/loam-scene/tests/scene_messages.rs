@@ -431,6 +431,11 @@ fn cases() -> Vec<(&'static str, usize, String)> {
         ("load linear gradient length", 2, c(&[(Y0, &load("Pressure(pressure: Linear(value: 1.0, at: [0.0, 0.0], gradient: [1.0]))"))])),
         ("load time in quasi-static", 2, c(&[(Y0, &load("Traction(traction: [0.0, -1.0], time: Ramp(duration: 1.0))"))])),
         ("load follower in small strain", 2, c(&[("kinematics: FiniteStrain", "kinematics: SmallStrain"), (Y0, &load("Pressure(pressure: Uniform(1.0), follower: true)"))])),
+        (
+            "load follower geometrically linear",
+            2,
+            c(&[(PLANE, &option("geometrically_linear: true,")), ("kinematics: FiniteStrain,", small), (Y0, &load("Pressure(pressure: Uniform(1.0), follower: true)"))]),
+        ),
         ("load follower", 2, c(&[(Y0, &load("Pressure(pressure: Uniform(1.0), follower: true)"))])),
         ("load on the fem reference", 2, f(&[(Y0, &load("Traction(traction: [0.0, -1.0])"))])),
         ("water", 2, c(&[("kinematics: FiniteStrain", "kinematics: SmallStrain"), (PLANE, &option("water: Some((unit_weight: 10.0, level: Horizontal(5.0))),"))])),
