@@ -12,6 +12,8 @@
 //! - [`slope`]: V4, slopes against Taylor's chart and Griffiths & Lane;
 //! - [`disks`]: V5, two colliding elastic disks;
 //! - [`cylinder`]: V6, the thick-walled cylinder under internal pressure (Lamé);
+//! - [`sphere`], [`cavity`](mod@cavity): V6 posed axisymmetrically, the thick sphere and
+//!   a spherical cavity expanded from a small radius;
 //! - [`water`]: V7, columns under a water table and submerged;
 //! - [`granular`]: V8, the collapse of a granular column (explicit);
 //! - [`hard_cases`]: where implicit MPM usually breaks (softening, small cuts, ...).
@@ -25,6 +27,7 @@
 pub mod bar;
 pub mod block;
 pub mod bound;
+pub mod cavity;
 pub mod column;
 pub mod conditioning;
 pub mod cylinder;
