@@ -2,6 +2,9 @@
 //! softening branch, against the closed form of a homogeneous test.
 
 use crate::support::{column, run, table};
+use loam::run::{run_scene, RunEvent};
+use loam::scene::LoadedScene;
+use std::path::Path;
 
 /// A column in uniaxial compression (0.5 m × 0.5 m × 2 m, one cell across, on smooth
 /// planes x = 0, y = 0, z = 0, its other sides free) of von Mises material that softens
@@ -21,11 +24,23 @@ use crate::support::{column, run, table};
 #[test]
 fn a_softening_column_is_followed_past_its_peak() {
     let (young, yield_stress, hardening, q) = (1e7, 1e4, -2e6, 2e4);
-    let dir = run(&column_scene(
+    let scene = column_scene(
         &format!("VonMises(young: {young}, poisson: 0.3, yield_stress: {yield_stress}, hardening: {hardening})"),
         q,
         10,
-    ));
+    );
+    // How far the run says it is grows with every step, though λ falls past the peak.
+    let dir = tempfile::tempdir().unwrap();
+    let loaded = LoadedScene::parse(Path::new("scene.ron"), scene).unwrap();
+    let mut done = Vec::new();
+    run_scene(&loaded, dir.path(), &mut |e| {
+        if let RunEvent::Step { done: d, .. } = e {
+            done.push(d);
+        }
+    })
+    .unwrap();
+    assert!(done.windows(2).all(|w| w[1] > w[0]), "progress {done:?}");
+    assert_eq!(done.last(), Some(&1.0));
     let (header, log) = table(&dir.path().join("run_log.csv"));
     let (lambda, uz, szz) =
         (column(&header, "load_factor"), column(&header, "monitor_top_uz"), column(&header, "monitor_top_szz"));

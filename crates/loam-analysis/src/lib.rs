@@ -188,6 +188,15 @@ impl<const D: usize> Analysis<D> {
         }
     }
 
+    /// How far the analysis is, in [0, 1] (what a progress bar shows): the share of the
+    /// duration reached, or of the load ([`QuasiStatic::fraction_done`]).
+    pub fn fraction_done(&self) -> f64 {
+        match self {
+            Analysis::QuasiStatic(a) => a.fraction_done(),
+            _ => (self.time() / self.end_time()).clamp(0.0, 1.0),
+        }
+    }
+
     /// Time (or load factor) at the end of the analysis.
     pub fn end_time(&self) -> f64 {
         match self {

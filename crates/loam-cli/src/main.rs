@@ -254,7 +254,7 @@ fn run_command(
     let mut trials = 0;
     let run_options = RunOptions { max_steps: steps, overwrite, checkpoint_every };
     let mut progress = |event: RunEvent| match event {
-        RunEvent::Step { report, end } => show_progress(&bar, report, end),
+        RunEvent::Step { report, end, done } => show_progress(&bar, report, end, done),
         RunEvent::Trial(t) => {
             trials += 1;
             show_trial(&bar, trials, t, quiet);
@@ -412,9 +412,10 @@ fn show_trial(bar: &ProgressBar, k: usize, t: &StrengthTrial, quiet: bool) {
     bar.set_message(format!("strength reduction: {line}"));
 }
 
-/// The progress bar after step `r` of a run that ends at `end`.
-fn show_progress(bar: &ProgressBar, r: &Progress, end: f64) {
-    bar.set_position((1000.0 * (r.time / end).clamp(0.0, 1.0)) as u64);
+/// The progress bar after step `r` of a run that ends at `end` and is a share `done` of
+/// the way there.
+fn show_progress(bar: &ProgressBar, r: &Progress, end: f64, done: f64) {
+    bar.set_position((1000.0 * done) as u64);
     let newton = if r.final_residual.is_nan() {
         String::new()
     } else {

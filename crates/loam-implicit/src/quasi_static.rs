@@ -155,6 +155,21 @@ impl<const D: usize> QuasiStatic<D> {
         }
     }
 
+    /// How far the analysis is, in [0, 1]: the load factor under load control; under
+    /// arc-length control the share of its most steps taken, which grows with every step
+    /// where the load factor stalls on a plateau or falls past a peak (1 once finished,
+    /// which may come sooner, at λ = 1).
+    pub fn fraction_done(&self) -> f64 {
+        if self.is_finished() {
+            return 1.0;
+        }
+        let done = match self.settings.control {
+            LoadControl::ArcLength(arc) => self.step as f64 / arc.steps as f64,
+            LoadControl::LoadFactor => self.load_factor,
+        };
+        done.clamp(0.0, 1.0)
+    }
+
     /// The most steps the analysis takes.
     fn most_steps(&self) -> usize {
         match self.settings.control {

@@ -84,8 +84,9 @@ pub struct RunOptions {
 pub enum RunEvent<'a> {
     /// A strength-reduction trial finished (they come before the run's steps).
     Trial(&'a StrengthTrial),
-    /// A step finished; `end` is the run's end time (quasi-static: load factor 1).
-    Step { report: &'a Progress, end: f64 },
+    /// A step finished; `end` is the run's end time (quasi-static: load factor 1), `done`
+    /// how far the run is, in [0, 1] (`Analysis::fraction_done`).
+    Step { report: &'a Progress, end: f64, done: f64 },
     /// A checkpoint was written.
     Checkpoint(CheckpointWritten),
     /// A resumed run starts after `step` steps and `trials` strength-reduction trials.
@@ -317,7 +318,7 @@ impl Stepping<'_> {
             excavate(analysis, &excavations, r.step, progress)?;
             totals.add(&r);
             outputs.record(&r, analysis.model(), stop(analysis))?;
-            progress(RunEvent::Step { report: &r, end: end_time });
+            progress(RunEvent::Step { report: &r, end: end_time, done: analysis.fraction_done() });
             if saver.due_after_step(r.step) && !analysis.is_finished() {
                 let mut c = saver.start();
                 restart::save_steps(&mut c, analysis, &outputs.state(), *totals, self.factor_of_safety);
