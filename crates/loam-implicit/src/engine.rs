@@ -497,7 +497,9 @@ impl<const D: usize> Engine<D> {
             constrained: &self.constrained,
             lattice: self.lattice.as_ref(),
         };
-        self.linear.prepare(&system)?;
+        self.linear
+            .prepare(&system)
+            .map_err(|e| crate::slivers::traced(e, &self.model, &self.conn, &self.constrained))?;
         Ok(start.elapsed())
     }
 
@@ -524,7 +526,7 @@ impl<const D: usize> Engine<D> {
                 direct.prepare(&system)?;
                 direct.solve(&system, b, x, tolerance)?
             }
-            result => result?,
+            result => result.map_err(|e| crate::slivers::traced(e, &self.model, &self.conn, &self.constrained))?,
         };
         self.frames.to_global(x);
         Ok(stats.iterations)

@@ -25,6 +25,7 @@ mod points;
 mod quasi_static;
 mod report;
 mod residual;
+mod slivers;
 mod strength_reduction;
 mod tangent;
 

@@ -157,6 +157,9 @@ pub enum LinearSolveError {
     NotConverged(Box<KrylovFailure>),
     #[error("the multigrid smoother takes blocks of 1 to 3 dofs a node, and this system has {0}: use a direct solver")]
     BlockSize(usize),
+    /// A failure its caller traced to a cause in the model (which this crate cannot see).
+    #[error("{source}; here {cause}")]
+    Traced { source: Box<LinearSolveError>, cause: String },
 }
 
 /// A Krylov solve that did not reach its tolerance, with the true relative residual of
