@@ -497,10 +497,15 @@ impl<const D: usize> Engine<D> {
             constrained: &self.constrained,
             lattice: self.lattice.as_ref(),
         };
-        self.linear
-            .prepare(&system)
-            .map_err(|e| crate::slivers::traced(e, &self.model, &self.conn, &self.constrained))?;
+        let prepared = self.linear.prepare(&system);
+        prepared.map_err(|e| self.traced(e))?;
         Ok(start.elapsed())
+    }
+
+    /// A linear solver's failure, with its cause in the grid where it can be named
+    /// (`slivers::traced`).
+    fn traced(&self, error: LinearSolveError) -> LinearSolveError {
+        crate::slivers::traced(error, &self.model, &self.conn, &self.constrained)
     }
 
     /// Solve K x = b with the prepared solver to the relative residual `tolerance`, `b` in
@@ -514,7 +519,7 @@ impl<const D: usize> Engine<D> {
             constrained: &self.constrained,
             lattice: self.lattice.as_ref(),
         };
-        let stats = match self.linear.solve(&system, b, x, tolerance) {
+        let solved = match self.linear.solve(&system, b, x, tolerance) {
             Err(e @ (LinearSolveError::NotConverged(_) | LinearSolveError::NotPositiveDefinite(_)))
                 if self.linear.kind().is_iterative() && self.num_dofs() <= DIRECT_FALLBACK_MAX_DOFS[D - 1] =>
             {
@@ -523,11 +528,12 @@ impl<const D: usize> Engine<D> {
                 let direct = self.fallback.get_or_insert_with(|| SparseDirectSolver::new(LinearSolverKind::Lu));
                 let columns = SystemMatrix::Columns(self.matrix.to_columns(&self.pattern).into_owned());
                 let system = LinearSystem { matrix: &columns, ..system };
-                direct.prepare(&system)?;
-                direct.solve(&system, b, x, tolerance)?
+                direct.prepare(&system).and_then(|()| direct.solve(&system, b, x, tolerance))
             }
-            result => result.map_err(|e| crate::slivers::traced(e, &self.model, &self.conn, &self.constrained))?,
+            result => result,
         };
+        // The LU fallback's failures (a NaN solution, a missing pivot) are traced as well.
+        let stats = solved.map_err(|e| self.traced(e))?;
         self.frames.to_global(x);
         Ok(stats.iterations)
     }
