@@ -14,6 +14,7 @@ use loam::constitutive::{ConstitutiveLaw, Elastic, VonMises};
 use loam::implicit::{AntiLocking, ArcLengthSettings, Kinematics, LoadControl, QuasiStatic, QuasiStaticSettings};
 use loam::model::Model;
 use loam_verification::cavity::SphericalCavity;
+use loam_verification::cylinder::bore_radius;
 use loam_verification::cylinder::bounds::{
     FOLLOWER_NEWTON_ITERATIONS, RADIAL_DISPLACEMENT, RING_LAME, RING_LAME_ORDER, RING_LIMIT,
 };
@@ -205,8 +206,7 @@ fn follower(quick: bool, report: &mut Report) -> Result<()> {
     let t = Instant::now();
     let model = c.model(cells, Kinematics::FiniteStrain, true).with_ghost_penalty(FOLLOWER_GHOST)?;
     let (model, most, residuals) = solve(model, FOLLOWER_STEPS)?;
-    let bore =
-        model.loads()[0].positions().iter().map(|x| x.norm()).sum::<f64>() / model.loads()[0].positions().len() as f64;
+    let bore = bore_radius(&model);
     let sequence = residuals.iter().map(|r| format!("{r:.2e}")).collect::<Vec<_>>().join(" → ");
     writeln!(report.md, "\n## V6 follower pressure, finite strain\n\np = E/10 on the bore, following the surface (load stiffness in the tangent, LU), Hencky elasticity, {cells} cells, {FOLLOWER_STEPS} load steps, ghost penalty γ = {FOLLOWER_GHOST}. The bore's mean radius grows from {:.3} to {bore:.4}. Most Newton corrections in a load step: **{most}**; that step's relative residuals: {sequence}. Wall {:.2} s.\n", c.inner, t.elapsed().as_secs_f64())?;
     let name = format!("V6 follower {cells} cells");
@@ -337,11 +337,11 @@ fn cavity(quick: bool, report: &mut Report) -> Result<()> {
         let mut qs = QuasiStatic::new(model, settings);
         let mut curve: f64 = 0.0;
         while !qs.is_finished() && qs.step().is_ok() {
-            let (p, a) = (qs.load_factor() * full, SphericalCavity::bore_radius(qs.model()));
+            let (p, a) = (qs.load_factor() * full, bore_radius(qs.model()));
             curve = curve.max((p - s.pressure_at(a)).abs() / p_lim);
         }
         let carried = qs.load_factor() * full;
-        let a = SphericalCavity::bore_radius(qs.model()) / s.inner;
+        let a = bore_radius(qs.model()) / s.inner;
         let (to_limit, to_peak) = (carried / p_lim - 1.0, carried / p_peak - 1.0);
         let wall = t.elapsed().as_secs_f64();
         writeln!(report.md, "| {cells} | {n} | {to_limit:+.2e} | {to_peak:+.2e} | {a:.3} | {curve:.2e} | {wall:.2} |")?;

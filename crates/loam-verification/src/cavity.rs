@@ -149,12 +149,6 @@ impl SphericalCavity {
         let facets = (0..bore.len() as u32 - 1).map(|k| [k, k + 1]).collect();
         (points, Surface { vertices: bore, facets })
     }
-
-    /// The cavity's radius: the mean distance from the centre of the bore's vertices.
-    pub fn bore_radius(model: &Model<2>) -> f64 {
-        let x = model.loads()[0].positions();
-        x.iter().map(|v| v.norm()).sum::<f64>() / x.len() as f64
-    }
 }
 
 #[cfg(test)]
@@ -192,6 +186,6 @@ mod tests {
         let volume: f64 = model.points().volume().iter().sum();
         let exact = 2.0 / 3.0 * std::f64::consts::PI * (s.outer.powi(3) - s.inner.powi(3));
         assert!((volume / exact - 1.0).abs() < 1e-3, "{volume} against {exact}");
-        assert!((SphericalCavity::bore_radius(&model) - s.inner).abs() < 1e-3);
+        assert!((crate::cylinder::bore_radius(&model) - s.inner).abs() < 1e-3);
     }
 }

@@ -163,6 +163,13 @@ impl Cylinder {
     }
 }
 
+/// The mean distance from the origin of the vertices of `model`'s first load (a bore
+/// centred on the origin: the cylinder's, the cavity's).
+pub fn bore_radius(model: &Model<2>) -> f64 {
+    let x = model.loads()[0].positions();
+    x.iter().map(|v| v.norm()).sum::<f64>() / x.len() as f64
+}
+
 /// Every point's (initial distance from the origin, displacement along it).
 pub(crate) fn radial_displacements(points: &PointStore<2>) -> Vec<(f64, f64)> {
     (points.position0().iter().zip(points.position()))
