@@ -4,7 +4,7 @@
 //! analyses differ only in what they add around these stages (prescribed displacements,
 //! the Newmark predictor and inertia) and in how they advance the load or time.
 
-use crate::cell_average::{cell_averaged_gradients, CellAverage};
+use crate::cell_average::{cell_averaged_gradients, CellAverage, CellGroups};
 use crate::follower::{add_follower_tangent, follower_couplings, has_follower, FollowerInputs};
 use crate::frames::LocalFrames;
 use crate::ghost::{ghost_couplings, scaled_ghost_faces};
@@ -18,7 +18,7 @@ use loam_kernels::{
     advance_deformation, check_constraints_connected, connect, gather_nodal, interpolate_add, trial_vertices,
     LoadSupports,
 };
-use loam_model::{FreeBody, Kinematics, LoadLevel, Model, ModelError, PointChange};
+use loam_model::{AntiLocking, FreeBody, Kinematics, LoadLevel, Model, ModelError, PointChange};
 use loam_solve::{
     norm, BlockPattern, LinearSolveError, LinearSolver, LinearSolverChoice, LinearSolverKind, LinearSystem,
     NewtonControl, NewtonError, NewtonReport, NewtonSettings, NodeLattice, SparseDirectSolver, SystemMatrix,
@@ -68,6 +68,8 @@ pub(crate) struct Engine<const D: usize> {
     /// B-bar or assumed strain: the cell-averaged support gradients, `stride` per point
     /// (empty without them).
     cell_gradients: Vec<SVector<f64, D>>,
+    /// With anti-locking, the points of every cell (element) of the connectivity.
+    groups: CellGroups,
     /// Ghost-penalty faces over active nodes, scaled by γ M (empty without the penalty),
     /// and the node couplings they add to the pattern.
     ghost: Vec<GhostFace>,
@@ -142,6 +144,7 @@ impl<const D: usize> Engine<D> {
             rhs: Vec::new(),
             correction: Vec::new(),
             cell_gradients: Vec::new(),
+            groups: CellGroups::default(),
             ghost: Vec::new(),
             extra_couplings: Vec::new(),
             trial: TrialState::default(),
@@ -246,8 +249,11 @@ impl<const D: usize> Engine<D> {
         if self.linear.wants_lattice() && (changed || self.lattice.is_none()) {
             self.lattice = Some(self.node_lattice());
         }
+        if self.model.anti_locking() != AntiLocking::None {
+            self.groups.build(&self.model);
+        }
         if self.model.anti_locking().deviatoric_weight().is_some() {
-            cell_averaged_gradients(&self.model, &self.conn, &mut self.cell_gradients);
+            cell_averaged_gradients(&self.model, &self.conn, &self.groups, &mut self.cell_gradients);
         }
         self.conn_current = true;
         Ok(())
@@ -404,13 +410,14 @@ impl<const D: usize> Engine<D> {
         self.rhs.resize(n, 0.0);
         self.correction.resize(n, 0.0);
         let pts = self.model.points();
-        self.trial.resize(pts.len(), self.conn.stride(), pts.history_stride());
+        self.trial.resize(pts.len(), self.conn.stride(), pts.history_stride(), self.fbar().is_some());
     }
 
     /// Update points, then the residual at `du`; returns the reference force norm.
     pub fn update_points_and_residual(&mut self, inertia: Option<&mut Inertia>) -> Result<f64, PointUpdateError> {
         let average = CellAverage::of(&self.model, &self.cell_gradients);
-        let inputs = PointInputs { model: &self.model, conn: &self.conn, average, du: &self.du };
+        let fbar = (self.model.anti_locking() == AntiLocking::FBar).then_some(&self.groups);
+        let inputs = PointInputs { model: &self.model, conn: &self.conn, average, fbar, du: &self.du };
         update_points(inputs, &mut self.trial)?;
         // The follower loads act on the vertices the trial state carries.
         let follower = self.follower_forces();
@@ -445,6 +452,7 @@ impl<const D: usize> Engine<D> {
             mass: self.model.points().mass(),
             water_force: if self.model.kinematics() == Kinematics::FiniteStrain { &self.water_force } else { &[] },
             axisymmetric: self.model.axisymmetric(),
+            fbar: self.fbar().is_some(),
         };
         assemble(&inputs, &self.trial, inertia, &mut self.matrix);
         if has_follower(self.model.loads()) {
@@ -456,6 +464,7 @@ impl<const D: usize> Engine<D> {
                 du: &self.du,
                 delta_f: &self.trial.delta_f,
                 average: CellAverage::of(&self.model, &self.cell_gradients),
+                fbar: self.fbar().map(|_| &self.trial),
             };
             add_follower_tangent(
                 &inputs,
@@ -546,6 +555,11 @@ impl<const D: usize> Engine<D> {
             constrained: &self.constrained,
             lattice: self.lattice.as_ref(),
         }
+    }
+
+    /// With F-bar, the points of every cell, which the point update averages over.
+    fn fbar(&self) -> Option<&CellGroups> {
+        (self.model.anti_locking() == AntiLocking::FBar).then_some(&self.groups)
     }
 
     /// The cell-averaged support gradients of the connectivity (empty without cell

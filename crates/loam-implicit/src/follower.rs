@@ -11,10 +11,11 @@
 //! ∂a_e/∂x_k = ½ [x_{k+2} − x_{k+1}]_× (cyclic). The block coupling the force at node J
 //! (weight ω_vJ of v) to the increment at node I is
 //! s ω_vJ [share ∂a_e/∂x_w + a_e ⊗ ∂share/∂x_w] ∂x_w/∂Δu_I, the last diag(c_wI) without
-//! anti-locking; B-bar and assumed strain put the cell's dilatation into ΔF, which couples
-//! the components ([`Carry::derivative`]).
+//! anti-locking; B-bar, assumed strain and F-bar put the cell's dilatation into ΔF, which
+//! couples the components ([`Carry::derivative`]).
 
 use crate::cell_average::CellAverage;
+use crate::points::TrialState;
 use loam_grid::Connectivity;
 use loam_kernels::{trial_vertices, LoadSupports};
 use loam_model::{Load, LoadKind, LoadLevel, Model};
@@ -59,6 +60,8 @@ pub(crate) struct FollowerInputs<'a, const D: usize> {
     pub du: &'a [f64],
     pub delta_f: &'a [nalgebra::Matrix3<f64>],
     pub average: Option<CellAverage<'a, D>>,
+    /// With F-bar, the trial state, whose ΔF̄ carries the vertices.
+    pub fbar: Option<&'a TrialState<D>>,
 }
 
 /// K += −∂f_p/∂Δu for every follower load, facet by facet in a fixed order.
@@ -68,7 +71,7 @@ pub(crate) fn add_follower_tangent<const D: usize>(
     constrained: &[bool],
     matrix: &mut SystemMatrix,
 ) {
-    let FollowerInputs { model, conn, supports, level, du, delta_f, average } = *inputs;
+    let FollowerInputs { model, conn, supports, level, du, delta_f, average, fbar } = *inputs;
     let points = model.points();
     for (k, load) in model.loads().iter().enumerate().filter(|(_, l)| l.is_follower()) {
         let LoadKind::Pressure { values: pressure, .. } = load.kind() else { continue };
@@ -80,12 +83,14 @@ pub(crate) fn add_follower_tangent<const D: usize>(
             for (slot, &w) in facet.iter().enumerate() {
                 let da = area_derivative(&corners, slot);
                 let p = load.carriers()[w as usize] as usize;
+                let offset = *load.offset(w as usize);
                 let carry = Carry {
                     p,
-                    offset: *load.offset(w as usize),
+                    offset,
                     f: points.deformation_gradient()[p],
                     average,
                     inv_radius: model.axisymmetric().then(|| 1.0 / model.configuration()[p][0]),
+                    fbar: fbar.map(|trial| FBarCarry::new(model, trial, p, &offset)),
                 };
                 for (at, &v) in facet.iter().enumerate() {
                     let amount = scale * pressure[v as usize];
@@ -102,13 +107,44 @@ pub(crate) fn add_follower_tangent<const D: usize>(
 }
 
 /// A vertex's carrier: point `p`, the offset X_v − X_p, the committed F_p, the cell
-/// averages (with anti-locking) and 1 / r_p (axisymmetry).
+/// averages (with B-bar or assumed strain), 1 / r_p (axisymmetry) and F-bar's terms.
 struct Carry<'a, const D: usize> {
     p: usize,
     offset: SVector<f64, D>,
     f: nalgebra::Matrix3<f64>,
     average: Option<CellAverage<'a, D>>,
     inv_radius: Option<f64>,
+    fbar: Option<FBarCarry<'a, D>>,
+}
+
+/// With F-bar the vertex moves with ΔF̄ = s ΔF, s = (ΔJ̄ / ΔJ)^{1/m}, and δΔF̄ =
+/// s δΔF + (1/m) (tr l̄ − tr l) ΔF̄ (crate::fbar): the carrier's trial state, s, and the
+/// lever (ΔF̄ F)_kk R_k / m of the dilatation's part.
+struct FBarCarry<'a, const D: usize> {
+    trial: &'a TrialState<D>,
+    scale: f64,
+    lever: SVector<f64, D>,
+    axisymmetric: bool,
+}
+
+impl<'a, const D: usize> FBarCarry<'a, D> {
+    fn new(model: &Model<D>, trial: &'a TrialState<D>, p: usize, offset: &SVector<f64, D>) -> Self {
+        let m = if D == 2 && !model.axisymmetric() { 2.0 } else { 3.0 };
+        let ratio = trial.volume[p] / model.points().volume()[p] / trial.jacobian[p];
+        let moved = trial.delta_f[p] * model.points().deformation_gradient()[p];
+        let lever = SVector::from_fn(|k, _| moved[(k, k)] * offset[k] / m);
+        Self { trial, scale: ratio.powf(1.0 / m), lever, axisymmetric: model.axisymmetric() }
+    }
+
+    /// The dilatation's part of ∂x_v,k/∂Δu_I,j, lever_k (b̄_I − ∂N_I/∂x − N_I / r e_r)_j, for
+    /// support slot `slot` (value `n`) of carrier `p`.
+    fn dilatation(&self, slot: usize, n: f64, p: usize) -> SMatrix<f64, D, D> {
+        let mut extra = self.trial.average_x[slot] - self.trial.grad_x[slot];
+        if self.axisymmetric {
+            extra[0] -= n * self.trial.inv_radius[p];
+        }
+        self.lever * extra.transpose()
+    }
 }
 
 impl<const D: usize> Carry<'_, D> {
@@ -120,13 +156,17 @@ impl<const D: usize> Carry<'_, D> {
     fn derivative(&self, conn: &Connectivity<D>, a: usize, n: f64, g: &SVector<f64, D>) -> SMatrix<f64, D, D> {
         let slot = self.p * conn.stride() + a;
         let c = self.average.map_or(*g, |avg| avg.strain_gradient(slot, g));
+        let s = self.fbar.as_ref().map_or(1.0, |fbar| fbar.scale);
         let mut d = SMatrix::<f64, D, D>::from_fn(|k, j| {
             if k == j {
-                n + (0..D).map(|m| c[m] * self.f[(m, k)]).sum::<f64>() * self.offset[k]
+                n + s * (0..D).map(|m| c[m] * self.f[(m, k)]).sum::<f64>() * self.offset[k]
             } else {
                 0.0
             }
         });
+        if let Some(fbar) = &self.fbar {
+            d += fbar.dilatation(slot, n, self.p);
+        }
         if let Some(avg) = self.average {
             let mut own = c;
             if let Some(inv_r) = self.inv_radius {

@@ -8,15 +8,16 @@
 //! Each analysis's step is one driver over named stages (docs/theory.md §1): connect the
 //! committed points to the background (`engine`), external forces, Newton — update points
 //! (`points`), residual (`residual`), assemble (`tangent`), solve, check — and commit;
-//! cut-back (`cutback`) wraps the attempts. Cell averages (`cell_average`), the ghost
-//! penalty (`ghost`) and inertia (`inertia`) enter the residual and tangent where a model
-//! asks for them.
+//! cut-back (`cutback`) wraps the attempts. Cell averages (`cell_average`), F-bar
+//! (`fbar`), the ghost penalty (`ghost`) and inertia (`inertia`) enter the residual and
+//! tangent where a model asks for them.
 
 mod arc_length;
 mod cell_average;
 mod cutback;
 mod dynamic;
 mod engine;
+mod fbar;
 mod follower;
 mod frames;
 mod ghost;

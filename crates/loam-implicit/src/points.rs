@@ -5,7 +5,7 @@
 //! what is implicit here is the strain operator (B-bar and assumed strain, docs/theory.md
 //! §13) and the tangent the assembly needs.
 
-use crate::cell_average::CellAverage;
+use crate::cell_average::{CellAverage, CellGroups};
 use loam_constitutive::{ConstitutiveError, Tensor4};
 use loam_grid::Connectivity;
 use loam_kernels::{embed, update_point, Committed};
@@ -36,16 +36,24 @@ pub(crate) struct TrialState<const D: usize> {
     pub grad_x: Vec<SVector<f64, D>>,
     /// Cell averages only: v (I : D) and v (D : I) as 3×3, the volumetric contractions of
     /// the point's tangent that the averaged dilatation couples through (v I : D : I is
-    /// the trace of the first).
+    /// the trace of the first). F-bar: the first is unused and the second is its coupling
+    /// Q = (v/m) (a : I_m + σ) ([`crate::fbar`]).
     pub volumetric: Vec<(Matrix3<f64>, Matrix3<f64>)>,
     /// Axisymmetry only: 1 / r, r the point's radius in the trial configuration, so that
     /// N_a / r is the hoop strain of a unit radial increment at node a (docs/theory.md
     /// §20); the tangent's θθ row and column are then its index 4 (D = 2).
     pub inv_radius: Vec<f64>,
+    /// F-bar only (empty otherwise): each point's own det ΔF, and the averaged dilatation
+    /// operator b̄ of its support slots over its cell in the trial configuration, `stride`
+    /// per point ([`crate::fbar`]).
+    pub jacobian: Vec<f64>,
+    pub average_x: Vec<SVector<f64, D>>,
 }
 
 impl<const D: usize> TrialState<D> {
-    pub fn resize(&mut self, n_points: usize, stride: usize, history_stride: usize) {
+    /// Size every buffer to `n_points` points of `stride` support slots, and F-bar's too
+    /// when `fbar`.
+    pub fn resize(&mut self, n_points: usize, stride: usize, history_stride: usize, fbar: bool) {
         self.delta_f.resize(n_points, Matrix3::identity());
         self.stress.resize(n_points, Matrix3::zeros());
         self.elastic_strain.resize(n_points, Matrix3::zeros());
@@ -56,12 +64,15 @@ impl<const D: usize> TrialState<D> {
         self.grad_x.resize(n_points * stride, SVector::zeros());
         self.volumetric.resize(n_points, (Matrix3::zeros(), Matrix3::zeros()));
         self.inv_radius.resize(n_points, 0.0);
+        let (m, k) = if fbar { (n_points, n_points * stride) } else { (0, 0) };
+        self.jacobian.resize(m, 1.0);
+        self.average_x.resize(k, SVector::zeros());
     }
 }
 
 /// One point's slots in the trial state.
-struct TrialSlot<'a, const D: usize> {
-    delta_f: &'a mut Matrix3<f64>,
+pub(crate) struct TrialSlot<'a, const D: usize> {
+    pub delta_f: &'a mut Matrix3<f64>,
     stress: &'a mut Matrix3<f64>,
     elastic_strain: &'a mut Matrix3<f64>,
     volume: &'a mut f64,
@@ -73,12 +84,13 @@ struct TrialSlot<'a, const D: usize> {
 }
 
 /// What every point's update reads: the model's committed state, the step's connectivity,
-/// its cell averages and the increment.
+/// its cell averages (B-bar, assumed strain) or averaging groups (F-bar) and the increment.
 #[derive(Clone, Copy)]
 pub(crate) struct PointInputs<'a, const D: usize> {
     pub model: &'a Model<D>,
     pub conn: &'a Connectivity<D>,
     pub average: Option<CellAverage<'a, D>>,
+    pub fbar: Option<&'a CellGroups>,
     pub du: &'a [f64],
 }
 
@@ -91,6 +103,19 @@ pub(crate) const HOOP: usize = 4;
 pub(crate) fn update_points<const D: usize>(
     inputs: PointInputs<'_, D>,
     trial: &mut TrialState<D>,
+) -> Result<(), PointUpdateError> {
+    match inputs.fbar {
+        Some(groups) => crate::fbar::update_points(inputs, groups, trial),
+        None => for_each_slot(inputs, trial, |p, slot| update_trial_point(inputs, p, slot)),
+    }
+}
+
+/// Run `update` on every point's slots of the trial state in parallel; the first failing
+/// point (lowest index) is reported.
+pub(crate) fn for_each_slot<const D: usize>(
+    inputs: PointInputs<'_, D>,
+    trial: &mut TrialState<D>,
+    update: impl Fn(usize, TrialSlot<'_, D>) -> Result<(), PointUpdateError> + Sync,
 ) -> Result<(), PointUpdateError> {
     let stride = inputs.conn.stride();
     let hs = inputs.model.points().history_stride();
@@ -119,7 +144,7 @@ pub(crate) fn update_points<const D: usize>(
                     history: &mut history[..hs],
                     inv_radius,
                 };
-                update_trial_point(inputs, p, slot).err()
+                update(p, slot).err()
             },
         )
         .min_by_key(|e| e.point);
@@ -134,7 +159,7 @@ fn update_trial_point<const D: usize>(
     p: usize,
     slot: TrialSlot<'_, D>,
 ) -> Result<(), PointUpdateError> {
-    let PointInputs { model, conn, average, du } = inputs;
+    let PointInputs { model, conn, average, du, .. } = inputs;
     let nodes = conn.support_nodes(p);
     let grads = conn.support_gradients(p);
     let first = p * conn.stride();
@@ -149,15 +174,11 @@ fn update_trial_point<const D: usize>(
         }
         None => grads,
     };
-    let mut g = SMatrix::<f64, D, D>::zeros();
-    for (a, &node) in nodes.iter().enumerate() {
-        let u = SVector::<f64, D>::from_fn(|i, _| du[node as usize * D + i]);
-        g += u * strain_grads[a].transpose();
-    }
+    let g = increment_of(nodes, strain_grads, du);
     let hoop = model.axisymmetric().then(|| hoop_increment(model, conn, p, du));
     let failed = |source| PointUpdateError { point: p, source };
     match model.kinematics() {
-        Kinematics::FiniteStrain => finite_strain_point(model, p, &g, hoop, grads, slot).map_err(failed),
+        Kinematics::FiniteStrain => finite_strain_point(model, p, &g, hoop, None, grads, slot).map_err(failed),
         Kinematics::SmallStrain => {
             let theta_bar = average.map(|avg| averaged_dilatation(&avg, nodes, first, du));
             small_strain_point(model, p, &g, hoop, theta_bar, grads, slot).map_err(failed)
@@ -165,15 +186,32 @@ fn update_trial_point<const D: usize>(
     }
 }
 
+/// The in-plane increment gradient Σ_a Δu_a ⊗ c_a over the support `nodes` and their
+/// gradients `grads`.
+#[inline]
+pub(crate) fn increment_of<const D: usize>(nodes: &[u32], grads: &[SVector<f64, D>], du: &[f64]) -> SMatrix<f64, D, D> {
+    let mut g = SMatrix::<f64, D, D>::zeros();
+    for (a, &node) in nodes.iter().enumerate() {
+        let u = SVector::<f64, D>::from_fn(|i, _| du[node as usize * D + i]);
+        g += u * grads[a].transpose();
+    }
+    g
+}
+
 /// A point's hoop increment in axisymmetry (docs/theory.md §20): the strain Δu_r / r with
 /// Δu_r = Σ_a N_a Δu_a,r, and the radius r it is on.
 #[derive(Debug, Clone, Copy)]
-struct HoopIncrement {
-    strain: f64,
-    radius: f64,
+pub(crate) struct HoopIncrement {
+    pub strain: f64,
+    pub radius: f64,
 }
 
-fn hoop_increment<const D: usize>(model: &Model<D>, conn: &Connectivity<D>, p: usize, du: &[f64]) -> HoopIncrement {
+pub(crate) fn hoop_increment<const D: usize>(
+    model: &Model<D>,
+    conn: &Connectivity<D>,
+    p: usize,
+    du: &[f64],
+) -> HoopIncrement {
     let radius = model.configuration()[p][0];
     let nodes = conn.support_nodes(p).iter();
     let u_r: f64 = nodes.zip(conn.support_values(p)).map(|(&node, &n)| n * du[node as usize * D]).sum();
@@ -183,7 +221,7 @@ fn hoop_increment<const D: usize>(model: &Model<D>, conn: &Connectivity<D>, p: u
 /// The 3×3 increment gradient of the in-plane `g`, with the hoop strain as its θθ (zz)
 /// entry in axisymmetry.
 #[inline]
-fn increment_gradient<const D: usize>(g: &SMatrix<f64, D, D>, hoop: Option<HoopIncrement>) -> Matrix3<f64> {
+pub(crate) fn increment_gradient<const D: usize>(g: &SMatrix<f64, D, D>, hoop: Option<HoopIncrement>) -> Matrix3<f64> {
     let mut g3 = embed(g);
     if let Some(h) = hoop {
         g3[(2, 2)] = h.strain;
@@ -193,22 +231,33 @@ fn increment_gradient<const D: usize>(g: &SMatrix<f64, D, D>, hoop: Option<HoopI
 
 /// Finite strain (docs/theory.md §2): ΔF = I + g on the point's current volume, the
 /// spatial gradients ∂N/∂x = ΔF⁻ᵀ ∂N/∂x_n of the step's start, the volume det ΔF v_n.
-fn finite_strain_point<const D: usize>(
+/// With F-bar's `volume_ratio` ΔJ̄ / ΔJ the law is driven by ΔF̄ instead, the volume is
+/// det ΔF̄ v_n and the F-bar coupling Q is kept ([`crate::fbar`]); the spatial gradients
+/// stay those of ΔF.
+pub(crate) fn finite_strain_point<const D: usize>(
     model: &Model<D>,
     p: usize,
     g: &SMatrix<f64, D, D>,
     hoop: Option<HoopIncrement>,
+    volume_ratio: Option<f64>,
     grads: &[SVector<f64, D>],
     slot: TrialSlot<'_, D>,
 ) -> Result<(), ConstitutiveError> {
     let pts = model.points();
-    let TrialSlot { delta_f, stress, elastic_strain, volume, tangent, grad_x, history, inv_radius, .. } = slot;
-    let g3 = increment_gradient(g, hoop);
+    let TrialSlot { delta_f, stress, elastic_strain, volume, tangent, grad_x, history, inv_radius, volumetric } = slot;
+    let mut g3 = increment_gradient(g, hoop);
+    let plane = D == 2 && hoop.is_none();
+    if let Some(ratio) = volume_ratio {
+        g3 = crate::fbar::scaled_increment(&g3, ratio, plane);
+    }
     let det_df = update_point(Kinematics::FiniteStrain, model.law(p), &g3, Committed::of(pts, p), history, |u| {
         let det_df = u.delta_f.determinant();
         (*delta_f, *stress, *elastic_strain) = (*u.delta_f, *u.stress, *u.elastic_strain);
         *volume = det_df * pts.volume()[p];
         *tangent = in_plane::<D>(u.tangent, *volume, hoop.is_some());
+        if volume_ratio.is_some() {
+            volumetric.1 = crate::fbar::coupling(u.tangent, u.stress, *volume, plane);
+        }
         det_df
     })?;
     if let Some(h) = hoop {

@@ -1,9 +1,10 @@
 //! The tangent of a step (docs/theory.md §1, §13): K_IJ = Σ_p v_p (∂N_I/∂x)_j a_ijkl
-//! (∂N_J/∂x)_l, with the cross and volumetric terms of the cell averages, the inertial
+//! (∂N_J/∂x)_l, with the cross and volumetric terms of the cell averages or F-bar, the inertial
 //! c M of dynamics and the ghost penalty G, assembled node block by node block in a fixed
 //! order (deterministic).
 
 use crate::cell_average::CellAverage;
+use crate::fbar::add_tangent_terms as add_fbar_terms;
 use crate::ghost::add_ghost_tangent;
 use crate::inertia::Inertia;
 use crate::points::{TrialState, HOOP};
@@ -39,6 +40,9 @@ pub(crate) struct TangentInputs<'a, const D: usize> {
     pub water_force: &'a [nalgebra::SVector<f64, D>],
     /// Whether the model is axisymmetric: the hoop strain's terms join each block.
     pub axisymmetric: bool,
+    /// Whether the points are updated with F-bar ([`crate::fbar`]), whose averaged volume
+    /// change couples each point's stress to its cell's nodes.
+    pub fbar: bool,
 }
 
 /// Assemble the tangent at the trial state into `matrix` (on the pattern, in its layout).
@@ -89,6 +93,13 @@ fn assemble_blocks<const D: usize, const AXISYMMETRIC: bool>(
             }
             add_averaged_terms::<D>(&trial.volumetric[p], (ga, gb), (&da, &db), hoop, out);
         }
+        if inputs.fbar {
+            let mut db = trial.average_x[p * stride + b] - gb;
+            if let Some((_, hb)) = hoop {
+                db[0] -= hb;
+            }
+            add_fbar_terms::<D>(&trial.volumetric[p].1, ga, &db, hoop.map(|h| h.0), out);
+        }
         let t = &trial.tangent[p];
         for i in 0..D {
             for k in 0..D {
@@ -105,14 +116,16 @@ fn assemble_blocks<const D: usize, const AXISYMMETRIC: bool>(
             add_hoop_terms::<D>(t, ga, gb, ha, hb, out);
         }
         if let Some(bw) = inputs.water_force.get(p) {
-            // −N_a b v with δv = v ∇·δu: K_ab,ik = −N_a b_i v ∂N_b/∂x_k.
+            // −N_a b v with δv = v ∇·δu: K_ab,ik = −N_a b_i v ∂N_b/∂x_k; with F-bar the
+            // volume follows the cell's, δv = v b̄_b · δu_b (b̄ with its hoop part).
             let na = conn.support_values(p)[a];
+            let dilatation = if inputs.fbar { &trial.average_x[p * stride + b] } else { gb };
             for i in 0..D {
                 for k in 0..D {
-                    out[i * D + k] -= na * bw[i] * trial.volume[p] * gb[k];
+                    out[i * D + k] -= na * bw[i] * trial.volume[p] * dilatation[k];
                 }
             }
-            if let Some((_, hb)) = hoop {
+            if let Some((_, hb)) = hoop.filter(|_| !inputs.fbar) {
                 // The volume's hoop part: δv = v (∇·δu + δu_r / r).
                 for i in 0..D {
                     out[i * D] -= na * bw[i] * trial.volume[p] * hb;

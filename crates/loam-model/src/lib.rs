@@ -48,8 +48,9 @@ pub enum Kinematics {
 }
 
 /// Treatment of volumetric locking (near-incompressible elastic or plastic flow).
-/// Both treatments are small strain, with the linear basis or the FEM mesh, where all
-/// points of a cell share its nodes so that the cell averages add no couplings.
+/// B-bar and assumed strain are small strain, F-bar finite strain; all three need the
+/// linear basis or the FEM mesh, where all points of a cell share its nodes so that the
+/// cell averages add no couplings.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub enum AntiLocking {
     /// The plain formulation: every point's own strain (full integration).
@@ -68,6 +69,12 @@ pub enum AntiLocking {
     /// (docs/theory.md §13; β = 1 is B-bar). A variational strain operator: residual and
     /// tangent stay consistent.
     AssumedStrain { stabilization: f64 },
+    /// F-bar (de Souza Neto et al. 1996), finite strain: each point's increment of
+    /// deformation ΔF is scaled to the volume change ΔJ̄ of its cell, the volume-weighted
+    /// average of its points' det ΔF (ΔF̄ = (ΔJ̄ / ΔJ)^{1/3} ΔF; the in-plane part with the
+    /// exponent ½ in plane strain), its isochoric part kept. Not variational: the tangent is
+    /// not symmetric (docs/theory.md §13).
+    FBar,
 }
 
 impl AntiLocking {
@@ -75,7 +82,7 @@ impl AntiLocking {
     /// `None` without cell averaging.
     pub fn deviatoric_weight(&self) -> Option<f64> {
         match *self {
-            AntiLocking::None => None,
+            AntiLocking::None | AntiLocking::FBar => None,
             AntiLocking::BBar => Some(1.0),
             AntiLocking::AssumedStrain { stabilization } => Some(stabilization),
         }
@@ -86,6 +93,7 @@ impl AntiLocking {
             AntiLocking::None => "none",
             AntiLocking::BBar => "B-bar",
             AntiLocking::AssumedStrain { .. } => "assumed strain",
+            AntiLocking::FBar => "F-bar",
         }
     }
 }
@@ -476,8 +484,9 @@ impl<const D: usize> Model<D> {
         Ok(self)
     }
 
-    /// Use the given anti-locking treatment; B-bar and assumed strain need small strain and
-    /// the linear basis (or the FEM mesh), assumed strain a stabilization in (0, 1].
+    /// Use the given anti-locking treatment; B-bar and assumed strain need small strain,
+    /// F-bar finite strain, all three the linear basis (or the FEM mesh), assumed strain a
+    /// stabilization in (0, 1].
     pub fn with_anti_locking(mut self, anti_locking: AntiLocking) -> Result<Self, ModelError> {
         if let AntiLocking::AssumedStrain { stabilization } = anti_locking {
             if !(stabilization > 0.0 && stabilization <= 1.0) {
@@ -488,9 +497,15 @@ impl<const D: usize> Model<D> {
         }
         if anti_locking != AntiLocking::None {
             let name = anti_locking.name();
-            if self.kinematics != Kinematics::SmallStrain {
+            let finite = anti_locking == AntiLocking::FBar;
+            if finite && self.kinematics != Kinematics::FiniteStrain {
                 return Err(ModelError::AntiLocking(format!(
-                    "{name} is a small-strain treatment; use kinematics SmallStrain"
+                    "{name} is a finite-strain treatment; use kinematics FiniteStrain, or BBar in small strain"
+                )));
+            }
+            if !finite && self.kinematics != Kinematics::SmallStrain {
+                return Err(ModelError::AntiLocking(format!(
+                    "{name} is a small-strain treatment; use kinematics SmallStrain, or FBar in finite strain"
                 )));
             }
             if !self.background.groups_share_nodes() {
@@ -702,10 +717,11 @@ impl<const D: usize> Model<D> {
         (0..active.len()).filter(|&a| self.node_on_plane(active.active_to_grid[a] as usize, c)).collect()
     }
 
-    /// Whether every material in use has a symmetric algorithmic tangent — the
-    /// hyperelastic finite-strain tangent is symmetric as a whole.
+    /// Whether the tangent is symmetric: every material in use has a symmetric algorithmic
+    /// tangent (the hyperelastic finite-strain tangent is symmetric as a whole) and no
+    /// F-bar, whose averaged volume change enters the stress but not the test function.
     pub fn symmetric_tangent(&self) -> bool {
-        self.materials.iter().all(|m| m.symmetric_tangent())
+        self.anti_locking != AntiLocking::FBar && self.materials.iter().all(|m| m.symmetric_tangent())
     }
 
     /// Whether some material softens, so that the tangent can turn indefinite.

@@ -117,6 +117,12 @@ fn assembled_tangent_is_the_derivative_of_the_residual() {
         (Kinematics::SmallStrain, BasisKind::Linear, AntiLocking::BBar, None, &von_mises, true),
         (Kinematics::FiniteStrain, BasisKind::Gimp, AntiLocking::None, None, &von_mises, true),
         (Kinematics::FiniteStrain, BasisKind::Gimp, AntiLocking::None, Some(1.0), &linear, true),
+        // F-bar (finite strain): plane strain's square root and the ring's cube root.
+        (Kinematics::FiniteStrain, BasisKind::Linear, AntiLocking::FBar, None, &linear, false),
+        (Kinematics::FiniteStrain, BasisKind::Linear, AntiLocking::FBar, None, &von_mises, false),
+        (Kinematics::FiniteStrain, BasisKind::Linear, AntiLocking::FBar, None, &mohr_coulomb, false),
+        (Kinematics::FiniteStrain, BasisKind::Linear, AntiLocking::FBar, None, &linear, true),
+        (Kinematics::FiniteStrain, BasisKind::Linear, AntiLocking::FBar, None, &von_mises, true),
     ];
     for (kinematics, basis, anti_locking, ghost, law, axisymmetric) in cases {
         let plastic = !Arc::ptr_eq(law, &linear);
@@ -171,11 +177,39 @@ fn assembled_tangent_is_the_derivative_of_the_residual() {
             "{kinematics:?} {anti_locking:?} plastic {plastic} axisymmetric {axisymmetric}: |Kv - FD| / |Kv| = {:e}",
             diff / scale
         );
+        if anti_locking == AntiLocking::FBar {
+            assert_fbar_terms_matter(&mut engine, &v, &kv);
+            continue;
+        }
         // Hyperelastic (Hencky), linear elastic and associated tangents are symmetric
-        // as a whole.
+        // as a whole (F-bar's is not: its average is on the trial side only).
         let asym = engine.matrix.asymmetry(&engine.pattern);
         assert!(asym < 1e-10, "{kinematics:?} axisymmetric {axisymmetric}: asymmetry {asym:e}");
     }
+}
+
+/// F-bar's coupling is what makes the tangent match: assembled without it (the plain
+/// finite-strain tangent at the same trial state), K v misses the differences that the
+/// full one met to 1e-6 by more than 1e-4 of |K v|, and the full tangent is not
+/// symmetric.
+fn assert_fbar_terms_matter(engine: &mut Engine<2>, v: &[f64], kv: &[f64]) {
+    assert!(engine.matrix.asymmetry(&engine.pattern) > 1e-6, "F-bar's tangent is not symmetric");
+    let inputs = TangentInputs {
+        conn: &engine.conn,
+        pattern: &engine.pattern,
+        average: None,
+        ghost: &[],
+        constrained: &engine.constrained,
+        mass: engine.model.points().mass(),
+        water_force: &[],
+        axisymmetric: engine.model.axisymmetric(),
+        fbar: false,
+    };
+    assemble(&inputs, &engine.trial, None, &mut engine.matrix);
+    let mut plain = vec![0.0; kv.len()];
+    engine.matrix.mul_vec(&engine.pattern, v, &mut plain);
+    let miss: Vec<f64> = plain.iter().zip(kv).map(|(a, b)| a - b).collect();
+    assert!(norm(&miss) > 1e-4 * norm(kv), "F-bar's terms must matter: {:e}", norm(&miss) / norm(kv));
 }
 
 /// A follower pressure's load stiffness: on the stressed block in finite strain with a
@@ -192,6 +226,7 @@ fn follower_pressure_tangent_is_the_derivative_of_the_residual() {
             (Kinematics::FiniteStrain, BasisKind::Gimp, AntiLocking::None),
             (Kinematics::SmallStrain, BasisKind::Linear, AntiLocking::BBar),
             (Kinematics::SmallStrain, BasisKind::Linear, AntiLocking::AssumedStrain { stabilization: 0.3 }),
+            (Kinematics::FiniteStrain, BasisKind::Linear, AntiLocking::FBar),
         ] {
             // Assumed strain is plane only.
             if !(axisymmetric && matches!(anti_locking, AntiLocking::AssumedStrain { .. })) {
@@ -239,6 +274,7 @@ fn follower_tangent_matches_differences(
             du: &engine.du,
             delta_f: &engine.trial.delta_f,
             average: crate::cell_average::CellAverage::of(&engine.model, &engine.cell_gradients),
+            fbar: engine.fbar().map(|_| &engine.trial),
         };
         crate::follower::add_follower_tangent(&inputs, &engine.pattern, &engine.constrained, &mut dead);
         let mut kv = vec![0.0; n];
@@ -253,22 +289,23 @@ fn follower_tangent_matches_differences(
 /// term. On the stressed block half under water (level at y = 1, γ_w = 5e3, a body force
 /// of half the block's weight), K v equals the central difference of the residual
 /// (tolerance as above), on the plane block and on the ring (axisymmetric: the volume
-/// changes with the hoop strain too), and leaving the water's term out would miss by far
-/// more than that.
+/// changes with the hoop strain too), with F-bar too (the volume follows the cell's), and
+/// leaving the water's term out would miss by far more than that.
 #[test]
 fn water_force_tangent_is_the_derivative_of_the_residual() {
     for axisymmetric in [false, true] {
-        water_tangent_matches_differences(axisymmetric);
+        for (basis, anti_locking) in [(BasisKind::Gimp, AntiLocking::None), (BasisKind::Linear, AntiLocking::FBar)] {
+            water_tangent_matches_differences(basis, anti_locking, axisymmetric);
+        }
     }
 }
 
 /// The check of [`water_force_tangent_is_the_derivative_of_the_residual`] on the plane
 /// block or the ring (whose volume changes with its hoop strain too).
-fn water_tangent_matches_differences(axisymmetric: bool) {
+fn water_tangent_matches_differences(basis: BasisKind, anti_locking: AntiLocking, axisymmetric: bool) {
     use loam_model::{PhreaticLevel, Water};
     let law: Arc<dyn ConstitutiveLaw> = Arc::new(Elastic::new(1e5, 0.3).unwrap());
-    let model =
-        stressed_block_with(Kinematics::FiniteStrain, BasisKind::Gimp, AntiLocking::None, None, law, axisymmetric);
+    let model = stressed_block_with(Kinematics::FiniteStrain, basis, anti_locking, None, law, axisymmetric);
     let water = Water::new(5e3, PhreaticLevel::Horizontal(1.0), &Vector2::new(0.0, -10.0)).unwrap();
     let model = model.with_water(water).unwrap();
     let mut engine = Engine::new(model, NewtonSettings::default(), loam_solve::LinearSolverChoice::Auto, false);
