@@ -580,3 +580,33 @@ fn positional_fields_are_explained() {
 fn a_body_of_astronomically_many_cells_is_refused_at_once() {
     refused("cell_size: [0.3125, 0.3125]", "cell_size: [0.3125, 1e-308]", line_of("shape: Box"), &["outside the grid"]);
 }
+
+/// A plastic material in an implicit analysis without anti-locking is a warning at its
+/// law, naming the treatments; with F-bar (finite strain, linear basis) it is not, and an
+/// explicit analysis, which has no anti-locking, is not warned.
+#[test]
+fn a_plastic_material_without_anti_locking_is_a_warning() {
+    let plastic = GOOD.replacen(
+        "law: Elastic(young: 1e5, poisson: 0.0)",
+        "law: VonMises(young: 1e5, poisson: 0.3, yield_stress: 1e5)",
+        1,
+    );
+    let scene = LoadedScene::parse(Path::new("bad.ron"), plastic.clone()).unwrap();
+    scene.build::<2>().unwrap();
+    let warnings = scene.warnings();
+    assert_eq!(warnings.len(), 1);
+    let w = warnings[0].to_string();
+    assert!(w.contains("\"soil\" is plastic") && w.contains("anti_locking: FBar") && w.contains("BBar"), "{w}");
+    assert_eq!(warnings[0].line, plastic.lines().position(|l| l.contains("VonMises")).unwrap() + 1);
+    let treated = plastic.replacen("basis: Gimp,", "basis: Linear,\n    anti_locking: FBar,", 1);
+    let scene = LoadedScene::parse(Path::new("bad.ron"), treated).unwrap();
+    scene.build::<2>().unwrap();
+    assert!(scene.warnings().is_empty());
+    let explicit = plastic.replacen(
+        "analysis: QuasiStatic(load_steps: 40)",
+        "analysis: Explicit(duration: 0.01, time_step: Cfl(0.5))",
+        1,
+    );
+    assert!(explicit.contains("Explicit"), "test setup");
+    assert!(LoadedScene::parse(Path::new("bad.ron"), explicit).unwrap().warnings().is_empty());
+}

@@ -32,6 +32,8 @@ pub enum ModelOption {
     GeometricallyLinear,
     /// Static groundwater.
     Water,
+    /// An anti-locking treatment (B-bar, assumed strain, F-bar).
+    AntiLocking,
     /// A plane constraint that prescribes a non-zero displacement.
     DisplacedConstraint { index: usize },
     /// A roller on an inclined plane.
@@ -51,7 +53,7 @@ struct Acceptance {
 }
 
 /// Which analyses accept each option (the module docs).
-const ACCEPTED: [Acceptance; 8] = [
+const ACCEPTED: [Acceptance; 9] = [
     Acceptance {
         is: |o| matches!(o, ModelOption::BodyFittedMesh),
         by: [true, true, false],
@@ -71,6 +73,11 @@ const ACCEPTED: [Acceptance; 8] = [
         is: |o| matches!(o, ModelOption::Water),
         by: [true, true, false],
         why: "the model has groundwater; pore pressures are implemented in the implicit analyses only (QuasiStatic, ImplicitDynamic)",
+    },
+    Acceptance {
+        is: |o| matches!(o, ModelOption::AntiLocking),
+        by: [true, true, false],
+        why: "the model asks for anti-locking, which the implicit point update applies; explicit analysis has none (remove it)",
     },
     Acceptance {
         is: |o| matches!(o, ModelOption::DisplacedConstraint { .. }),
@@ -131,6 +138,9 @@ impl<const D: usize> Model<D> {
         }
         if self.water.is_some() {
             options.push(ModelOption::Water);
+        }
+        if self.anti_locking != crate::AntiLocking::None {
+            options.push(ModelOption::AntiLocking);
         }
         let displaced = self.constraints.iter().enumerate().filter(|(_, c)| c.is_displaced());
         options.extend(displaced.map(|(index, _)| ModelOption::DisplacedConstraint { index }));

@@ -215,6 +215,7 @@ impl LoadedScene {
             ModelOption::GhostPenalty => vec![Seg::Key("ghost_penalty")],
             ModelOption::GeometricallyLinear => vec![Seg::Key("geometrically_linear")],
             ModelOption::Water => vec![Seg::Key("water")],
+            ModelOption::AntiLocking => vec![Seg::Key("anti_locking")],
             ModelOption::BodyFittedMesh => vec![Seg::Key("method")],
         };
         self.error(&at, refusal.to_string())

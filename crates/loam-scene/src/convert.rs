@@ -48,6 +48,7 @@ impl From<AntiLockingSpec> for AntiLocking {
             AntiLockingSpec::None => AntiLocking::None,
             AntiLockingSpec::BBar => AntiLocking::BBar,
             AntiLockingSpec::AssumedStrain { stabilization } => AntiLocking::AssumedStrain { stabilization },
+            AntiLockingSpec::FBar => AntiLocking::FBar,
         }
     }
 }

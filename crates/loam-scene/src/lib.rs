@@ -141,17 +141,30 @@ impl LoadedScene {
         Ok(Self { path: path.to_owned(), source, scene, memory_limit: None })
     }
 
-    /// What is valid but probably not meant, each at its place: a material no body uses.
-    /// `loam check` and `loam run` print them before anything else.
+    /// What is valid but probably not meant, each at its place: a material no body uses,
+    /// and a plastic material in an implicit analysis without anti-locking (its flow locks
+    /// in the points' cells, and collapse loads come out too high). `loam check` and
+    /// `loam run` print them before anything else.
     pub fn warnings(&self) -> Vec<SceneError> {
         let used = |name: &str| self.scene.bodies.iter().any(|b| b.material == name);
-        (self.scene.materials.iter().enumerate())
-            .filter(|(_, m)| !used(&m.name))
-            .map(|(i, m)| {
+        let implicit = !matches!(self.scene.analysis, AnalysisSpec::Explicit { .. });
+        let may_lock = implicit && self.scene.anti_locking == AntiLockingSpec::None;
+        let mut warnings = Vec::new();
+        for (i, m) in self.scene.materials.iter().enumerate() {
+            if !used(&m.name) {
                 let at = [Seg::Key("materials"), Seg::Index(i), Seg::Key("name")];
-                self.error(&at, format!("material \"{}\" is used by no body (a typo in a body's material?)", m.name))
-            })
-            .collect()
+                warnings.push(
+                    self.error(
+                        &at,
+                        format!("material \"{}\" is used by no body (a typo in a body's material?)", m.name),
+                    ),
+                );
+            } else if may_lock && !matches!(m.law, LawSpec::Elastic { .. }) {
+                let at = [Seg::Key("materials"), Seg::Index(i), Seg::Key("law")];
+                warnings.push(self.error(&at, format!("material \"{}\" is plastic, and without anti-locking its plastic flow locks: collapse loads come out too high (docs/theory.md §13); give basis: Linear with anti_locking: FBar (finite strain) or BBar (small strain)", m.name)));
+            }
+        }
+        warnings
     }
 
     /// An error at `path` in the file.

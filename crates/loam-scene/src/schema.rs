@@ -28,7 +28,8 @@ pub struct Scene {
     #[serde(default)]
     pub method: MethodSpec,
     /// Volumetric-locking treatment: `None` (default), `BBar` or
-    /// `AssumedStrain(stabilization: β)` (small strain; linear basis or the FEM reference).
+    /// `AssumedStrain(stabilization: β)` (small strain), `FBar` (finite strain); linear
+    /// basis or the FEM reference.
     #[serde(default)]
     pub anti_locking: AntiLockingSpec,
     /// Small strain on the initial configuration: points keep their places (default false).
@@ -210,6 +211,9 @@ pub enum AntiLockingSpec {
     /// Assumed strain: the cell's average strain plus β times each point's deviatoric
     /// deviation from it (0 < β ≤ 1).
     AssumedStrain { stabilization: f64 },
+    /// F-bar (finite strain): each point's increment of deformation scaled to its cell's
+    /// volume change.
+    FBar,
 }
 
 /// How the bodies are discretised.

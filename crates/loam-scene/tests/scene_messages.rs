@@ -232,6 +232,8 @@ fn cases() -> Vec<(&'static str, usize, String)> {
         ("linear lu", 2, c(&[("residual_tolerance: 1e-9", "residual_tolerance: 1e-9, linear: Some(Lu)")])),
         ("solver unknown key", 2, c(&[("residual_tolerance: 1e-9", "residual_tolerance: 1e-9, linearr: None")])),
         ("bbar finite strain", 2, c(&[(PLANE, &option("anti_locking: BBar,"))])),
+        ("fbar small strain", 2, c(&[(PLANE, &option("anti_locking: FBar,")), ("kinematics: FiniteStrain,", small)])),
+        ("fbar gimp", 2, c(&[(PLANE, &option("anti_locking: FBar,"))])),
         ("bbar gimp", 2, c(&[(PLANE, &option("anti_locking: BBar,")), ("kinematics: FiniteStrain,", small)])),
         (
             "bbar",
@@ -261,6 +263,11 @@ fn cases() -> Vec<(&'static str, usize, String)> {
         ("ghost penalty", 2, c(&[(PLANE, &option("ghost_penalty: Some(0.1),"))])),
         ("ghost penalty negative", 2, c(&[(PLANE, &option("ghost_penalty: Some(-1.0),"))])),
         ("ghost penalty explicit", 2, c(&[(PLANE, &option("ghost_penalty: Some(0.1),")), (QS, explicit)])),
+        (
+            "fbar explicit",
+            2,
+            c(&[(PLANE, &option("anti_locking: FBar,")), ("Gimp", "Linear"), (QS, explicit)]),
+        ),
         ("axisymmetric", 2, c(&[(PLANE, &option("axisymmetric: true,"))])),
         ("axisymmetric 3D", 3, edit(CUBE, &[("dimension: 3,", "dimension: 3,\n    axisymmetric: true,")])),
         (
