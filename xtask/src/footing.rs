@@ -13,8 +13,10 @@ use loam::constitutive::{ConstitutiveLaw, Elastic, MohrCoulomb};
 use loam::format::output::plot::{Plot, Series};
 use loam::format::output::{CsvCell, CsvWriter};
 use loam::implicit::{AntiLocking, QuasiStatic, QuasiStaticSettings, StepReport};
-use loam_verification::footing::bounds::{CIRCULAR_Q_U, LARGEST_DROP, NEWTON_CORRECTIONS, Q_U, RUNS_STOPPED};
-use loam_verification::{circular_footing_model, footing_model, prandtl_nc};
+use loam_verification::footing::bounds::{
+    CIRCULAR_Q_U, FINITE_STRAIN_Q, LARGEST_DROP, NEWTON_CORRECTIONS, Q_U, RUNS_STOPPED,
+};
+use loam_verification::{circular_footing_model, finite_strain_footing_model, footing_model, prandtl_nc};
 use std::fmt::Write as _;
 use std::path::Path;
 use std::sync::Arc;
@@ -251,7 +253,57 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
         report.rows.push(Row::checked(&every, "runs_stopped_before_0.1B", stopped as f64, RUNS_STOPPED));
     }
     sweep.finish(report)?;
-    circular(report)
+    circular(report)?;
+    finite_strain(quick, report)
+}
+
+/// The finite-strain footing's settlement where q is read (in b), how far it is pushed,
+/// and in how many steps.
+const FINITE_READ: f64 = 0.05;
+const FINITE_SETTLEMENT: f64 = 0.06;
+const FINITE_STEPS: usize = 30;
+
+/// The strip footing in finite strain (the points move): von Mises soil, linear basis,
+/// plain and F-bar, q at 0.05 b against (2 + π) c_u; the bound on F-bar's finest mesh.
+fn finite_strain(quick: bool, report: &mut Report) -> Result<()> {
+    let meshes: &[usize] = if quick { &[4] } else { &[4, 8] };
+    let law = soil::undrained(Elastic::new(YOUNG, POISSON)?, COHESION)?;
+    writeln!(report.md, "## V3 strip footing in finite strain
+
+The V3 strip footing (von Mises, ν = {POISSON}) in finite strain: the points move, the linear basis, pushed {FINITE_SETTLEMENT} b in {FINITE_STEPS} steps; q at {FINITE_READ} b against (2 + π) c_u. Plain: every point's own deformation; F-bar: each point's scaled to its cell's volume change (docs/theory.md §13). Bound: F-bar within 5 % on the finest mesh.\n")?;
+    report.mark_table("V3-finite")?;
+    writeln!(
+        report.md,
+        "| treatment | cells per b | q/q_ref − 1 | Newton its | cut-backs | wall [s] |\n|---|---:|---:|---:|---:|---:|"
+    )?;
+    for &cells in meshes {
+        for anti_locking in [AntiLocking::None, AntiLocking::FBar] {
+            eprintln!("verify: V3 finite strain, {}, {cells} cells per b", treatment_name(anti_locking));
+            let t = Instant::now();
+            let model = finite_strain_footing_model(law.clone(), cells, FINITE_SETTLEMENT, anti_locking);
+            let mut qs =
+                QuasiStatic::new(model, QuasiStaticSettings { load_steps: FINITE_STEPS, ..Default::default() });
+            let (mut q, mut iterations, mut cutbacks) = (f64::NAN, 0, 0);
+            while !qs.is_finished() {
+                let Ok(r) = qs.step() else { break };
+                (iterations, cutbacks) = (iterations + r.iterations, cutbacks + r.cutbacks);
+                if (qs.load_factor() * FINITE_SETTLEMENT - FINITE_READ).abs() < 1e-9 {
+                    q = -r.reactions[0][1] / (COHESION * prandtl_nc(0.0));
+                }
+            }
+            let (error, wall) = (q - 1.0, t.elapsed().as_secs_f64());
+            let name = treatment_name(anti_locking);
+            writeln!(report.md, "| {name} | {cells} | {error:+.4} | {iterations} | {cutbacks} | {wall:.2} |")?;
+            let case = format!("V3 finite strain {name} {cells} cells per b");
+            if anti_locking == AntiLocking::FBar && Some(&cells) == meshes.last() {
+                report.rows.push(Row::checked(&case, "|q/q_ref - 1|", error.abs(), FINITE_STRAIN_Q));
+            } else {
+                report.rows.push(Row::info(&case, "q/q_ref - 1", error));
+            }
+        }
+    }
+    writeln!(report.md)?;
+    Ok(())
 }
 
 /// Load steps of the circular footing (its curve is flat soon after 0.01 R).

@@ -13,7 +13,7 @@ use anyhow::Result;
 use loam::constitutive::{ConstitutiveLaw, Elastic, VonMises};
 use loam::implicit::{AntiLocking, ArcLengthSettings, Kinematics, LoadControl, QuasiStatic, QuasiStaticSettings};
 use loam::model::Model;
-use loam_verification::cavity::SphericalCavity;
+use loam_verification::cavity::{bounds::CAVITY_LIMIT, SphericalCavity};
 use loam_verification::cylinder::bore_radius;
 use loam_verification::cylinder::bounds::{
     FOLLOWER_NEWTON_ITERATIONS, RADIAL_DISPLACEMENT, RING_LAME, RING_LAME_ORDER, RING_LIMIT,
@@ -312,18 +312,23 @@ fn sphere(quick: bool, report: &mut Report) -> Result<()> {
 const CAVITY_STEPS: usize = 40;
 const CAVITY_OVERLOAD: f64 = 1.05;
 const CAVITY_GHOST: f64 = 0.1;
+/// Newton's relative residual tolerance for the cavity: near-incompressible Hencky
+/// elasticity (ν = 0.49) leaves a round-off floor of about 1e-9 of the first step's load
+/// (measured at 8 cells: 1 → 4.6e-2 → 6.2e-7 → 1.2e-9, then no lower), which the default
+/// 1e-9 does not always clear.
+const CAVITY_RESIDUAL_TOLERANCE: f64 = 1e-8;
 
 /// V6's spherical cavity expanded from a small radius: the follower pressure on the bore
 /// ramped to `CAVITY_OVERLOAD` × (4/3) c (1 + ln(G/c)) until the run stops; the most it
 /// carried against that limit and against the outer face's peak, how far the bore grew,
-/// and the pressure along the way against the closed form at the bore's radius. Info
-/// rows: the bound is not met (docs/verification.md §V6).
+/// and the pressure along the way against the closed form at the bore's radius. The bound
+/// is checked at 8 cells per a₀ (the full sweep); the 4-cell rows are info.
 fn cavity(quick: bool, report: &mut Report) -> Result<()> {
     let meshes: &[usize] = if quick { &[4] } else { &[4, 8] };
     let s = SphericalCavity::REFERENCE;
     let (p_lim, (p_peak, a_peak)) = (s.limit_pressure(), s.peak());
     let full = CAVITY_OVERLOAD * p_lim;
-    writeln!(report.md, "## V6 spherical cavity, large deformation\n\na₀ = {}, b = {}, Tresca (von Mises σ_y = 2c), c = {}, G = {} (G/c = {}), ν = {}; points on rings half a cell apart, linear basis, B-bar, small strain on the updated configuration, ghost penalty γ = {CAVITY_GHOST}, a follower pressure on the bore ramped to {CAVITY_OVERLOAD} × (4/3) c (1 + ln(G/c)) = {full:.3} in {CAVITY_STEPS} load steps; the most carried. The outer face at b puts the closed form's peak at {p_peak:.4} (a = {a_peak:.3} a₀), {:+.2} % of the infinite soil's limit {p_lim:.4}. Curve: the largest |p − p(a)| / p_lim over the converged steps, a the bore's mean radius.\n", s.inner, s.outer, s.cohesion, s.shear_modulus, s.shear_modulus / s.cohesion, s.poisson, 100.0 * (p_peak / p_lim - 1.0))?;
+    writeln!(report.md, "## V6 spherical cavity, large deformation\n\na₀ = {}, b = {}, Tresca (von Mises σ_y = 2c), c = {}, G = {} (G/c = {}), ν = {}; points on rings half a cell apart, linear basis, F-bar in finite strain, ghost penalty γ = {CAVITY_GHOST}, a follower pressure on the bore ramped to {CAVITY_OVERLOAD} × (4/3) c (1 + ln(G/c)) = {full:.3} in {CAVITY_STEPS} load steps; the most carried. The outer face at b puts the closed form's peak at {p_peak:.4} (a = {a_peak:.3} a₀), {:+.2} % of the infinite soil's limit {p_lim:.4}. Curve: the largest |p − p(a)| / p_lim over the converged steps, a the bore's mean radius.\n", s.inner, s.outer, s.cohesion, s.shear_modulus, s.shear_modulus / s.cohesion, s.poisson, 100.0 * (p_peak / p_lim - 1.0))?;
     report.mark_table("V6-cavity")?;
     writeln!(report.md, "| cells per a₀ | points | carried / limit − 1 | carried / peak − 1 | a / a₀ | curve | wall [s] |\n|---:|---:|---:|---:|---:|---:|---:|")?;
     let law: Arc<dyn ConstitutiveLaw> =
@@ -331,9 +336,10 @@ fn cavity(quick: bool, report: &mut Report) -> Result<()> {
     for &cells in meshes {
         eprintln!("verify: V6 spherical cavity, {cells} cells per a0");
         let t = Instant::now();
-        let model = s.model(cells, law.clone(), full, Some(CAVITY_GHOST));
+        let model = s.model(cells, law.clone(), full, Some(CAVITY_GHOST), Kinematics::FiniteStrain);
         let n = model.points().len();
-        let settings = QuasiStaticSettings { load_steps: CAVITY_STEPS, ..Default::default() };
+        let mut settings = QuasiStaticSettings { load_steps: CAVITY_STEPS, ..Default::default() };
+        settings.newton.residual_tolerance = CAVITY_RESIDUAL_TOLERANCE;
         let mut qs = QuasiStatic::new(model, settings);
         let mut curve: f64 = 0.0;
         while !qs.is_finished() && qs.step().is_ok() {
@@ -346,7 +352,11 @@ fn cavity(quick: bool, report: &mut Report) -> Result<()> {
         let wall = t.elapsed().as_secs_f64();
         writeln!(report.md, "| {cells} | {n} | {to_limit:+.2e} | {to_peak:+.2e} | {a:.3} | {curve:.2e} | {wall:.2} |")?;
         let name = format!("V6 spherical cavity {cells} cells");
-        report.rows.push(Row::info(&name, "carried/limit - 1", to_limit));
+        if cells == 8 {
+            report.rows.push(Row::checked(&name, "|carried/limit - 1|", to_limit.abs(), CAVITY_LIMIT));
+        } else {
+            report.rows.push(Row::info(&name, "carried/limit - 1", to_limit));
+        }
         report.rows.push(Row::info(&name, "bore radius / a0", a));
         report.rows.push(Row::info(&name, "curve error", curve));
     }

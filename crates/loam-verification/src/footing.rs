@@ -31,6 +31,12 @@ pub mod bounds {
     pub const CIRCULAR_Q_U: Bound =
         Bound::upper(0.05, "docs/verification.md §V3: rough circular footing within 5 % of 6.05 c at 16 cells per R");
     pub const RUNS_STOPPED: Bound = Bound::upper(0.0, "docs/verification.md §V3: every run reaches 0.1 B");
+    /// The strip footing in finite strain with F-bar, q at a settlement of 0.05 b on the
+    /// finest mesh, against (2 + π) c_u.
+    pub const FINITE_STRAIN_Q: Bound = Bound::upper(
+        0.05,
+        "docs/verification.md §V3: finite strain with F-bar within 5 % of (2 + pi) c_u at 0.05 b, finest mesh",
+    );
     /// Under load control (a pressure on the footing width ramped until Newton fails),
     /// |collapse pressure / q_ref − 1| on the finest mesh of the full sweep.
     pub const LOAD_CONTROLLED_COLLAPSE: Bound = Bound::upper(
@@ -70,11 +76,33 @@ pub fn footing_model(
     settlement: f64,
     anti_locking: AntiLocking,
 ) -> Model<2> {
-    let (b, top) = (1.0, depth as f64);
-    let footing = PlaneConstraint::new(1, depth * cells_per_b, [true, true, false])
-        .displaced([0.0, -settlement, 0.0])
-        .within([0.0, top, 0.0], [b, top, 0.0]);
+    let footing = pushed_footing(cells_per_b, depth, settlement, true);
     footing_soil(law, cells_per_b, width, depth, Some(footing), anti_locking)
+}
+
+/// The rigid footing 0 ≤ x ≤ 1 on the surface of soil `depth` deep at `cells` cells per
+/// unit: its nodes pushed down `settlement` at full load and, when `rough`, held
+/// horizontally (radially).
+fn pushed_footing(cells: usize, depth: usize, settlement: f64, rough: bool) -> PlaneConstraint {
+    let top = depth as f64;
+    PlaneConstraint::new(1, depth * cells, [rough, true, false])
+        .displaced([0.0, -settlement, 0.0])
+        .within([0.0, top, 0.0], [1.0, top, 0.0])
+}
+
+/// V3's strip footing in finite strain (the points move, no geometric linearity):
+/// the soil, supports and rough footing of [`footing_model`], 10 b wide and 5 b deep, with
+/// `anti_locking` (F-bar or none).
+pub fn finite_strain_footing_model(
+    law: Arc<dyn ConstitutiveLaw>,
+    cells_per_b: usize,
+    settlement: f64,
+    anti_locking: AntiLocking,
+) -> Model<2> {
+    let (width, depth) = (10, 5);
+    let footing = pushed_footing(cells_per_b, depth, settlement, true);
+    let soil = soil_model(law, cells_per_b, width, depth, Some(footing), Kinematics::FiniteStrain);
+    soil.with_anti_locking(anti_locking).expect("valid footing model")
 }
 
 /// V3's soil under a rigid circular footing of radius R = b, axisymmetric (docs/theory.md
@@ -88,17 +116,14 @@ pub fn circular_footing_model(
     rough: bool,
 ) -> Model<2> {
     let (width, depth) = (6, 5);
-    let top = depth as f64;
-    let footing = PlaneConstraint::new(1, depth * cells_per_r, [rough, true, false])
-        .displaced([0.0, -settlement, 0.0])
-        .within([0.0, top, 0.0], [1.0, top, 0.0]);
+    let footing = pushed_footing(cells_per_r, depth, settlement, rough);
     footing_soil(law, cells_per_r, width, depth, Some(footing), AntiLocking::BBar)
         .with_axisymmetry()
         .expect("the footing's soil starts on the axis")
 }
 
 /// The soil of V3 on its grid and supports (rollers on x = 0 and the far side, the base
-/// fixed), after `footing` when there is one.
+/// fixed), after `footing` when there is one: small strain, geometrically linear.
 fn footing_soil(
     law: Arc<dyn ConstitutiveLaw>,
     cells_per_b: usize,
@@ -106,6 +131,21 @@ fn footing_soil(
     depth: usize,
     footing: Option<PlaneConstraint>,
     anti_locking: AntiLocking,
+) -> Model<2> {
+    soil_model(law, cells_per_b, width, depth, footing, Kinematics::SmallStrain)
+        .with_anti_locking(anti_locking)
+        .and_then(|m| m.with_geometrically_linear())
+        .expect("valid footing model")
+}
+
+/// V3's soil with the given kinematics, no anti-locking.
+fn soil_model(
+    law: Arc<dyn ConstitutiveLaw>,
+    cells_per_b: usize,
+    width: usize,
+    depth: usize,
+    footing: Option<PlaneConstraint>,
+    kinematics: Kinematics,
 ) -> Model<2> {
     let b = 1.0;
     let h = b / cells_per_b as f64;
@@ -123,9 +163,7 @@ fn footing_soil(
         PlaneConstraint::new(1, 0, [true, true, false]),
     ];
     let constraints = footing.into_iter().chain(supports).collect();
-    Model::new(grid, BasisKind::Linear, Kinematics::SmallStrain, points, vec![law], constraints, Vector2::zeros())
-        .and_then(|m| m.with_anti_locking(anti_locking))
-        .and_then(|m| m.with_geometrically_linear())
+    Model::new(grid, BasisKind::Linear, kinematics, points, vec![law], constraints, Vector2::zeros())
         .expect("valid footing model")
 }
 

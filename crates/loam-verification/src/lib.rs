@@ -51,7 +51,7 @@ pub use conditioning::condition_number;
 pub use cylinder::{Cylinder, CylinderErrors};
 pub use disks::{disks_model, disks_model_with, inscribed_polygon, polygon_area_ratio, DiskOutline};
 pub use dynamics::{centre_of_mass_velocity, period_from_crossings, zero_crossings, DynamicRecord};
-pub use footing::{circular_footing_model, footing_load_model, footing_model, prandtl_nc};
+pub use footing::{circular_footing_model, finite_strain_footing_model, footing_load_model, footing_model, prandtl_nc};
 pub use hard_cases::{softening_specimen, translated_block};
 pub use slope::{slope_model, slope_model_with, SlopeGeometry};
 pub use sphere::ThickSphere;
