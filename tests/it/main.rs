@@ -4,6 +4,7 @@
 //! process of its own (no test sets global state: rayon pools are built per test, outputs
 //! go to temporary folders), so there is no reason to split.
 
+mod anti_locking;
 mod arc_length;
 mod axisymmetric;
 mod body_constraint;

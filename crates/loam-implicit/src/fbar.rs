@@ -47,12 +47,11 @@ pub(crate) fn update_points<const D: usize>(
             v += volume_n[q as usize];
         }
         // A point whose own ΔF folds over is inverted whatever its cell does (ΔF̄ would
-        // hide it: a negative ratio's cube root flips ΔF̄ back to a positive determinant).
-        if jacobian[p] <= 0.0 {
-            return Err(PointUpdateError {
-                point: p,
-                source: ConstitutiveError::NonPositiveJacobian { j: jacobian[p] },
-            });
+        // hide it: a negative ratio's cube root flips ΔF̄ back to a positive determinant),
+        // and so is one whose cell folds over as a whole.
+        let inverted = if jacobian[p] <= 0.0 { Some(jacobian[p]) } else { (vj <= 0.0).then(|| vj / v) };
+        if let Some(j) = inverted {
+            return Err(PointUpdateError { point: p, source: ConstitutiveError::NonPositiveJacobian { j } });
         }
         let ratio = vj / v / jacobian[p];
         let (g, hoop) = split_increment(inputs, p, slot.delta_f);

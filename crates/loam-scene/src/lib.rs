@@ -161,7 +161,13 @@ impl LoadedScene {
                 );
             } else if may_lock && !matches!(m.law, LawSpec::Elastic { .. }) {
                 let at = [Seg::Key("materials"), Seg::Index(i), Seg::Key("law")];
-                warnings.push(self.error(&at, format!("material \"{}\" is plastic, and without anti-locking its plastic flow locks: collapse loads come out too high (docs/theory.md §13); give basis: Linear with anti_locking: FBar (finite strain) or BBar (small strain)", m.name)));
+                let remedy = match self.scene.method {
+                    MethodSpec::Mpm => {
+                        "give basis: Linear with anti_locking: FBar (finite strain) or BBar (small strain)"
+                    }
+                    _ => "give anti_locking: FBar (finite strain) or BBar (small strain)",
+                };
+                warnings.push(self.error(&at, format!("material \"{}\" is plastic, and without anti-locking its plastic flow locks: collapse loads come out too high (docs/theory.md §13); {remedy}", m.name)));
             }
         }
         warnings
