@@ -60,7 +60,7 @@ fn noise(n: usize, seed: u64) -> Vec<f64> {
 }
 
 /// The residual (internal force, with f_ext = 0 and no dof constrained) at `du`.
-fn residual_at(engine: &mut Engine<2>, du: &[f64]) -> Vec<f64> {
+fn residual_at<const D: usize>(engine: &mut Engine<D>, du: &[f64]) -> Vec<f64> {
     engine.du.copy_from_slice(du);
     engine.update_points_and_residual(None).unwrap();
     engine.residual().to_vec()
@@ -73,7 +73,7 @@ fn norm(x: &[f64]) -> f64 {
 
 /// Assemble K at `du` and check K v against the central difference of the residual along
 /// `v` (step 1e-7, relative tolerance 1e-6 as below); returns K v.
-fn assert_tangent_matches_differences(engine: &mut Engine<2>, du: &[f64], v: &[f64]) -> Vec<f64> {
+fn assert_tangent_matches_differences<const D: usize>(engine: &mut Engine<D>, du: &[f64], v: &[f64]) -> Vec<f64> {
     let eps = 1e-7;
     let plus: Vec<f64> = du.iter().zip(v).map(|(a, b)| a + eps * b).collect();
     let minus: Vec<f64> = du.iter().zip(v).map(|(a, b)| a - eps * b).collect();
@@ -192,7 +192,7 @@ fn assembled_tangent_is_the_derivative_of_the_residual() {
 /// finite-strain tangent at the same trial state), K v misses the differences that the
 /// full one met to 1e-6 by more than 1e-4 of |K v|, and the full tangent is not
 /// symmetric.
-fn assert_fbar_terms_matter(engine: &mut Engine<2>, v: &[f64], kv: &[f64]) {
+fn assert_fbar_terms_matter<const D: usize>(engine: &mut Engine<D>, v: &[f64], kv: &[f64]) {
     assert!(engine.matrix.asymmetry(&engine.pattern) > 1e-6, "F-bar's tangent is not symmetric");
     let inputs = TangentInputs {
         conn: &engine.conn,
@@ -210,6 +210,55 @@ fn assert_fbar_terms_matter(engine: &mut Engine<2>, v: &[f64], kv: &[f64]) {
     engine.matrix.mul_vec(&engine.pattern, v, &mut plain);
     let miss: Vec<f64> = plain.iter().zip(kv).map(|(a, b)| a - b).collect();
     assert!(norm(&miss) > 1e-4 * norm(kv), "F-bar's terms must matter: {:e}", norm(&miss) / norm(kv));
+}
+
+/// F-bar in 3D (the cube root of the whole ΔF; eight points a cell): on a 2 × 2 × 2-cell
+/// block pre-loaded by gravity and a sideways pull, von Mises points taken past yield by a
+/// simple shear and nodal noise, K v equals the central difference of the residual
+/// (tolerance as above), and F-bar's coupling matters.
+#[test]
+fn fbar_tangent_in_3d_is_the_derivative_of_the_residual() {
+    use nalgebra::Vector3;
+    let grid = Grid::new(Vector3::zeros(), Vector3::new(1.0, 1.0, 1.0), [4, 4, 4]).unwrap();
+    let mut points = PointStore::new();
+    let block = Shape::Box { min: Vector3::new(1.0, 1.0, 0.0), max: Vector3::new(3.0, 3.0, 2.0) };
+    points.fill(&grid, &block, 2, 1000.0, 0).unwrap();
+    let law: Arc<dyn ConstitutiveLaw> = Arc::new(VonMises::new(Elastic::new(1e5, 0.3).unwrap(), 2.4e4, 0.0).unwrap());
+    let fixed = PlaneConstraint::new(2, 0, [true, true, true]);
+    let model = Model::new(
+        grid,
+        BasisKind::Linear,
+        Kinematics::FiniteStrain,
+        points,
+        vec![law],
+        vec![fixed],
+        Vector3::new(3.0, 0.0, -10.0),
+    )
+    .and_then(|m| m.with_anti_locking(AntiLocking::FBar))
+    .unwrap();
+    let mut qs = QuasiStatic::new(model, QuasiStaticSettings { load_steps: 2, ..Default::default() });
+    qs.step().unwrap();
+    qs.step().unwrap();
+    let mut engine =
+        Engine::new(qs.into_model(), NewtonSettings::default(), loam_solve::LinearSolverChoice::Auto, false);
+    engine.connect(1).unwrap();
+    engine.constrained.iter_mut().for_each(|c| *c = false);
+    let n = engine.num_dofs();
+    engine.f_ext = vec![0.0; n];
+    engine.size_buffers();
+    let mut du: Vec<f64> = noise(n, 23).iter().map(|x| 0.2 * x).collect();
+    for (a, &g) in engine.conn.active_nodes().active_to_grid.iter().enumerate() {
+        du[a * 3] += 0.2 * engine.model.grid().node_position(g as usize)[2];
+    }
+    residual_at(&mut engine, &vec![0.0; n]);
+    let elastic_tangents = engine.trial.tangent.clone();
+    residual_at(&mut engine, &du);
+    let returned =
+        elastic_tangents.iter().zip(&engine.trial.tangent).filter(|(e, t)| (*e - *t).norm() > 1e-6 * e.norm()).count();
+    assert!(returned > 0, "no point returned to the yield surface");
+    let v = noise(n, 29);
+    let kv = assert_tangent_matches_differences(&mut engine, &du, &v);
+    assert_fbar_terms_matter(&mut engine, &v, &kv);
 }
 
 /// A follower pressure's load stiffness: on the stressed block in finite strain with a
