@@ -77,6 +77,12 @@ pub trait ConstitutiveLaw: Send + Sync + std::fmt::Debug {
     fn history_len(&self) -> usize {
         0
     }
+    /// The law's own slots of a point's history, the first `history_len()`: a store holds
+    /// as many slots a point as the law that needs most, and each law is given its own (a
+    /// law given fewer than it keeps reports the mismatch when it updates).
+    fn own_history<'a>(&self, slots: &'a [f64]) -> &'a [f64] {
+        &slots[..self.history_len().min(slots.len())]
+    }
     /// The history of a point that starts at `initial_stress` (the law's own stress; zero
     /// for unloaded ground, a geostatic state otherwise): zero (accumulated plastic
     /// strains) unless a law says otherwise — a hardening law's size of yield surface may

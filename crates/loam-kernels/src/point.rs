@@ -96,9 +96,8 @@ pub fn update_point<R>(
     })
 }
 
-/// The first `law.history_len()` of a point's history slots, committed and new: a store
-/// holds as many a point as the law that needs most, and a law is given its own (one
-/// given fewer reports the mismatch). The slots beyond carry their committed values over,
+/// The law's own history slots of a point, committed and new
+/// ([`ConstitutiveLaw::own_history`]). The slots beyond carry their committed values over,
 /// so that a trial buffer holds no other point's leftovers.
 #[inline]
 fn own_history<'a, 'b>(
@@ -111,7 +110,7 @@ fn own_history<'a, 'b>(
         // No law of the model keeps a history (the common elastic case): nothing to give.
         return (history, h_out);
     }
-    let n = law.history_len().min(slots);
+    let n = law.own_history(&history[..slots]).len();
     if n < slots {
         h_out[n..slots].copy_from_slice(&history[n..slots]);
     }

@@ -43,10 +43,8 @@ impl<const D: usize> Model<D> {
         let mut h_out = vec![0.0; hs];
         let mut strains = Vec::with_capacity(sigma_v.len());
         for (p, (sigma, &sv)) in stresses.iter().zip(&sigma_v).enumerate() {
-            // The law's own values of the point's slots (a law given fewer reports it).
-            let n = self.law(p).history_len().min(hs);
-            let h = &history[p * hs..][..n];
-            strains.push(self.carrying_strain(p, sigma, h, (k0, sv), &mut h_out[..n])?);
+            let h = self.law(p).own_history(&history[p * hs..][..hs]);
+            strains.push(self.carrying_strain(p, sigma, h, (k0, sv), &mut h_out[..h.len()])?);
         }
         let view = self.points.view_mut();
         view.elastic_strain.copy_from_slice(&strains);

@@ -584,8 +584,7 @@ impl<const D: usize> Model<D> {
             Kinematics::FiniteStrain => pts.stress()[p] * pts.deformation_gradient()[p].determinant(),
             Kinematics::SmallStrain => pts.stress()[p],
         };
-        let history = pts.history(p);
-        let history = &history[..self.law(p).history_len().min(history.len())];
+        let history = self.law(p).own_history(pts.history(p));
         MaterialState { stress, elastic_strain: &pts.elastic_strain()[p], history }
     }
 
