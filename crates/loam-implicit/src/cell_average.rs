@@ -6,6 +6,7 @@
 use loam_grid::Connectivity;
 use loam_model::Model;
 use nalgebra::SVector;
+use rayon::prelude::*;
 
 /// The cell averages of one step's connectivity.
 #[derive(Clone, Copy)]
@@ -76,61 +77,116 @@ impl CellGroups {
         self.starts.push(n as u32);
     }
 
-    /// The points of each group in turn.
-    pub fn groups(&self) -> impl Iterator<Item = &[u32]> {
-        self.starts.windows(2).map(|w| &self.order[w[0] as usize..w[1] as usize])
+    /// How many groups there are.
+    pub fn len(&self) -> usize {
+        self.starts.len().saturating_sub(1)
     }
 
-    /// The points of point `p`'s group (`p` among them).
-    pub fn members(&self, p: usize) -> &[u32] {
-        let g = self.group_of[p] as usize;
+    /// The points of group `g`, in ascending order.
+    pub fn group(&self, g: usize) -> &[u32] {
         &self.order[self.starts[g] as usize..self.starts[g + 1] as usize]
+    }
+
+    /// Point `p`'s group.
+    pub fn group_of(&self, p: usize) -> usize {
+        self.group_of[p] as usize
     }
 }
 
-/// B-bar's b̄ of every point's support slot: Σ_q v_q ∂N_a(x_q) / Σ_q v_q over the points q
-/// of its averaging group (in axisymmetry the dilatation operator ∂N_a + (N_a / r) e_r in
-/// place of ∂N_a, docs/theory.md §20), `stride` per point, into `out`.
+/// What [`average_dilatation_operators`] averages: each point's weight (its volume), its
+/// support gradients and 1 / r (axisymmetry; unread in a plane model).
+pub(crate) struct PointOperators<V, G, R> {
+    pub volume: V,
+    pub gradients: G,
+    pub inv_radius: R,
+}
+
+/// Scratch of [`average_dilatation_operators`], reused: each group's nodes (the union of
+/// its points' supports, `stride` slots, unused ones `u32::MAX`), their weighted sums and
+/// the group's total weight.
+#[derive(Debug, Default)]
+pub(crate) struct GroupSums<const D: usize> {
+    nodes: Vec<u32>,
+    sums: Vec<SVector<f64, D>>,
+    volume: Vec<f64>,
+}
+
+/// b̄ of every point's support slot: Σ_q v_q d_a(x_q) / Σ_q v_q over the points q of its
+/// averaging group, d_a = ∂N_a the dilatation operator (in axisymmetry ∂N_a + (N_a / r) e_r,
+/// docs/theory.md §20), `stride` per point, into `out`. B-bar takes the start-of-step
+/// volumes and gradients, F-bar the trial ones. Every group's sums are taken once, over its
+/// points in order (deterministic). A group's points share its nodes (linear basis, FEM
+/// mesh: `Model::with_anti_locking` asks for it), though a point may leave out one it
+/// barely touches (docs/theory.md §11), so a group's nodes are the union of its points'.
+pub(crate) fn average_dilatation_operators<'a, const D: usize>(
+    groups: &CellGroups,
+    conn: &Connectivity<D>,
+    axisymmetric: bool,
+    operators: PointOperators<
+        impl Fn(usize) -> f64 + Sync,
+        impl Fn(usize) -> &'a [SVector<f64, D>] + Sync,
+        impl Fn(usize) -> f64 + Sync,
+    >,
+    scratch: &mut GroupSums<D>,
+    out: &mut Vec<SVector<f64, D>>,
+) {
+    let PointOperators { volume, gradients, inv_radius } = operators;
+    let stride = conn.stride();
+    let GroupSums { nodes, sums, volume: group_volume } = scratch;
+    nodes.clear();
+    nodes.resize(groups.len() * stride, u32::MAX);
+    sums.clear();
+    sums.resize(groups.len() * stride, SVector::zeros());
+    group_volume.resize(groups.len(), 0.0);
+    let slot_of = |nodes: &[u32], node: u32| nodes.iter().position(|&m| m == node);
+    let chunks = (nodes.par_chunks_mut(stride), sums.par_chunks_mut(stride), group_volume.par_iter_mut());
+    chunks.into_par_iter().enumerate().for_each(|(g, (nodes, sums, total))| {
+        *total = 0.0;
+        for &q in groups.group(g) {
+            let q = q as usize;
+            let v = volume(q);
+            *total += v;
+            let grads = gradients(q);
+            for (b, &node) in conn.support_nodes(q).iter().enumerate() {
+                let mut d = grads[b];
+                if axisymmetric {
+                    d[0] += conn.support_values(q)[b] * inv_radius(q);
+                }
+                // A group has at most `stride` nodes: those of its cell (element).
+                let k = slot_of(nodes, node).unwrap_or_else(|| {
+                    let free = slot_of(nodes, u32::MAX).expect("a group's nodes are its cell's");
+                    nodes[free] = node;
+                    free
+                });
+                sums[k] += d * v;
+            }
+        }
+    });
+    out.resize(groups.group_of.len() * stride, SVector::zeros());
+    out.par_chunks_mut(stride).enumerate().for_each(|(p, out)| {
+        let g = groups.group_of(p);
+        let group_nodes = &nodes[g * stride..][..stride];
+        for (a, &node) in conn.support_nodes(p).iter().enumerate() {
+            let k = slot_of(group_nodes, node).expect("every node of the group's points was summed");
+            out[a] = sums[g * stride + k] / group_volume[g];
+        }
+    });
+}
+
+/// B-bar's b̄ (start-of-step volumes and gradients, [`average_dilatation_operators`]).
 pub(crate) fn cell_averaged_gradients<const D: usize>(
     model: &Model<D>,
     conn: &Connectivity<D>,
     groups: &CellGroups,
+    scratch: &mut GroupSums<D>,
     out: &mut Vec<SVector<f64, D>>,
 ) {
-    let pts = model.points();
-    let n = pts.len();
-    let stride = conn.stride();
+    let (pts, configuration) = (model.points(), model.configuration());
+    let operators = PointOperators {
+        volume: |q: usize| pts.volume()[q],
+        gradients: |q: usize| conn.support_gradients(q),
+        inv_radius: |q: usize| 1.0 / configuration[q][0],
+    };
     out.clear();
-    out.resize(n * stride, SVector::zeros());
-    let mut sums: Vec<(u32, SVector<f64, D>)> = Vec::new();
-    let axisymmetric = model.axisymmetric();
-    for group in groups.groups() {
-        sums.clear();
-        let mut volume = 0.0;
-        for &p in group {
-            let p = p as usize;
-            let v = pts.volume()[p];
-            volume += v;
-            let inv_r = if axisymmetric { 1.0 / model.configuration()[p][0] } else { 0.0 };
-            for (a, (&node, g)) in conn.support_nodes(p).iter().zip(conn.support_gradients(p)).enumerate() {
-                // The dilatation operator: ∂N_a, and in axisymmetry (N_a / r) e_r beside it.
-                let mut d = *g;
-                if axisymmetric {
-                    d[0] += conn.support_values(p)[a] * inv_r;
-                }
-                match sums.iter_mut().find(|(m, _)| *m == node) {
-                    Some((_, s)) => *s += d * v,
-                    None => sums.push((node, d * v)),
-                }
-            }
-        }
-        for &p in group {
-            let p = p as usize;
-            for (k, node) in conn.support_nodes(p).iter().enumerate() {
-                // Every support node of the group's points was summed above.
-                let s = sums.iter().find(|(m, _)| m == node).expect("a node of the group").1;
-                out[p * stride + k] = s / volume;
-            }
-        }
-    }
+    average_dilatation_operators(groups, conn, model.axisymmetric(), operators, scratch, out);
 }

@@ -101,6 +101,12 @@ const ITERATIVE_FROM_DOFS: [usize; 3] = [usize::MAX, 100_000, 5_000];
 /// step is cut back.
 const DIRECT_FALLBACK_MAX_DOFS: [usize; 3] = [usize::MAX, 2_000_000, 120_000];
 
+/// `groups` when the model updates its points with F-bar (a free function, so that it
+/// borrows only the two fields it reads).
+fn fbar_groups<'a, const D: usize>(model: &Model<D>, groups: &'a CellGroups) -> Option<&'a CellGroups> {
+    (model.anti_locking() == AntiLocking::FBar).then_some(groups)
+}
+
 impl<const D: usize> Engine<D> {
     /// The linear solver is the one asked for, or chosen from the tangent: Cholesky when
     /// every material's tangent is symmetric, none softens, no load follows the surface
@@ -253,7 +259,8 @@ impl<const D: usize> Engine<D> {
             self.groups.build(&self.model);
         }
         if self.model.anti_locking().deviatoric_weight().is_some() {
-            cell_averaged_gradients(&self.model, &self.conn, &self.groups, &mut self.cell_gradients);
+            let scratch = &mut self.trial.group_sums;
+            cell_averaged_gradients(&self.model, &self.conn, &self.groups, scratch, &mut self.cell_gradients);
         }
         self.conn_current = true;
         Ok(())
@@ -416,7 +423,7 @@ impl<const D: usize> Engine<D> {
     /// Update points, then the residual at `du`; returns the reference force norm.
     pub fn update_points_and_residual(&mut self, inertia: Option<&mut Inertia>) -> Result<f64, PointUpdateError> {
         let average = CellAverage::of(&self.model, &self.cell_gradients);
-        let fbar = (self.model.anti_locking() == AntiLocking::FBar).then_some(&self.groups);
+        let fbar = fbar_groups(&self.model, &self.groups);
         let inputs = PointInputs { model: &self.model, conn: &self.conn, average, fbar, du: &self.du };
         update_points(inputs, &mut self.trial)?;
         // The follower loads act on the vertices the trial state carries.
@@ -559,7 +566,7 @@ impl<const D: usize> Engine<D> {
 
     /// With F-bar, the points of every cell, which the point update averages over.
     fn fbar(&self) -> Option<&CellGroups> {
-        (self.model.anti_locking() == AntiLocking::FBar).then_some(&self.groups)
+        fbar_groups(&self.model, &self.groups)
     }
 
     /// The cell-averaged support gradients of the connectivity (empty without cell

@@ -18,7 +18,7 @@
 //! c : (l + (1/m)(tr l̄ − tr l) I_m) and c / J̄ = a + σ̄_il δ_jk. The test side carries no
 //! average, so the tangent is not symmetric.
 
-use crate::cell_average::CellGroups;
+use crate::cell_average::{average_dilatation_operators, CellGroups, PointOperators};
 use crate::points::{
     finite_strain_point, for_each_slot, hoop_increment, increment_gradient, increment_of, HoopIncrement, PointInputs,
     PointUpdateError, TrialState,
@@ -36,30 +36,28 @@ pub(crate) fn update_points<const D: usize>(
     trial: &mut TrialState<D>,
 ) -> Result<(), PointUpdateError> {
     increments(inputs, trial);
-    // Taken out for the update, which reads every point's ΔJ while writing its own slots.
+    cell_volume_changes(inputs, groups, trial);
+    // Taken out for the update, which reads every point's ΔJ and its cell's ΔJ̄ while
+    // writing its own slots.
     let jacobian = std::mem::take(&mut trial.jacobian);
-    let volume_n = inputs.model.points().volume();
+    let cell_jacobian = std::mem::take(&mut trial.cell_jacobian);
     let result = for_each_slot(inputs, trial, |p, slot| {
-        let members = groups.members(p);
-        let (mut vj, mut v) = (0.0, 0.0);
-        for &q in members {
-            vj += volume_n[q as usize] * jacobian[q as usize];
-            v += volume_n[q as usize];
-        }
+        let j_bar = cell_jacobian[groups.group_of(p)];
         // A point whose own ΔF folds over is inverted whatever its cell does (ΔF̄ would
         // hide it: a negative ratio's cube root flips ΔF̄ back to a positive determinant),
         // and so is one whose cell folds over as a whole.
-        let inverted = if jacobian[p] <= 0.0 { Some(jacobian[p]) } else { (vj <= 0.0).then(|| vj / v) };
+        let inverted = if jacobian[p] <= 0.0 { Some(jacobian[p]) } else { (j_bar <= 0.0).then_some(j_bar) };
         if let Some(j) = inverted {
             return Err(PointUpdateError { point: p, source: ConstitutiveError::NonPositiveJacobian { j } });
         }
-        let ratio = vj / v / jacobian[p];
+        let ratio = j_bar / jacobian[p];
         let (g, hoop) = split_increment(inputs, p, slot.delta_f);
         let grads = inputs.conn.support_gradients(p);
         finite_strain_point(inputs.model, p, &g, hoop, Some(ratio), grads, slot)
             .map_err(|source| PointUpdateError { point: p, source })
     });
     trial.jacobian = jacobian;
+    trial.cell_jacobian = cell_jacobian;
     result?;
     averaged_dilatation_operators(inputs, groups, trial);
     Ok(())
@@ -115,37 +113,38 @@ pub(crate) fn coupling(a: &Tensor4, stress: &Matrix3<f64>, volume: f64, plane: b
     Matrix3::from_fn(|i, j| scale * ((0..m).map(|k| a[(3 * i + j, 4 * k)]).sum::<f64>() + stress[(i, j)]))
 }
 
-/// b̄ of every point's support slot: Σ_q v_q (∂N_a/∂x + N_a / r e_r)(x_q) / Σ_q v_q over
-/// the points q of its cell, with the actual volumes v_q = ΔJ_q v_q,n of the trial
-/// configuration.
+/// Every cell's volume change ΔJ̄ = Σ_q v_q,n ΔJ_q / Σ_q v_q,n, once a cell.
+fn cell_volume_changes<const D: usize>(inputs: PointInputs<'_, D>, groups: &CellGroups, trial: &mut TrialState<D>) {
+    let volume_n = inputs.model.points().volume();
+    let TrialState { jacobian, cell_jacobian, .. } = trial;
+    cell_jacobian.resize(groups.len(), 1.0);
+    cell_jacobian.par_iter_mut().enumerate().for_each(|(g, j_bar)| {
+        let (mut vj, mut v) = (0.0, 0.0);
+        for &q in groups.group(g) {
+            vj += volume_n[q as usize] * jacobian[q as usize];
+            v += volume_n[q as usize];
+        }
+        *j_bar = vj / v;
+    });
+}
+
+/// b̄ of every point's support slot over its cell in the trial configuration: the actual
+/// volumes v_q = ΔJ_q v_q,n, the spatial gradients and radii of the trial state.
 fn averaged_dilatation_operators<const D: usize>(
     inputs: PointInputs<'_, D>,
     groups: &CellGroups,
     trial: &mut TrialState<D>,
 ) {
     let PointInputs { model, conn, .. } = inputs;
-    let (stride, axisymmetric) = (conn.stride(), model.axisymmetric());
+    let stride = conn.stride();
     let volume_n = model.points().volume();
-    let TrialState { grad_x, jacobian, inv_radius, average_x, .. } = trial;
-    average_x.par_chunks_mut(stride).enumerate().for_each(|(p, out)| {
-        for (a, &node) in conn.support_nodes(p).iter().enumerate() {
-            let (mut sum, mut volume) = (SVector::<f64, D>::zeros(), 0.0);
-            for &q in groups.members(p) {
-                let q = q as usize;
-                let v = volume_n[q] * jacobian[q];
-                volume += v;
-                // A node outside q's support has neither value nor gradient there.
-                if let Some(b) = conn.support_nodes(q).iter().position(|&m| m == node) {
-                    let mut d = grad_x[q * stride + b];
-                    if axisymmetric {
-                        d[0] += conn.support_values(q)[b] * inv_radius[q];
-                    }
-                    sum += d * v;
-                }
-            }
-            out[a] = sum / volume;
-        }
-    });
+    let TrialState { grad_x, jacobian, inv_radius, average_x, group_sums, .. } = trial;
+    let operators = PointOperators {
+        volume: |q: usize| volume_n[q] * jacobian[q],
+        gradients: |q: usize| &grad_x[q * stride..][..conn.support_nodes(q).len()],
+        inv_radius: |q: usize| inv_radius[q],
+    };
+    average_dilatation_operators(groups, conn, model.axisymmetric(), operators, group_sums, average_x);
 }
 
 /// F-bar's part of a point's block (a, b) of the tangent (module docs): the plain

@@ -5,7 +5,7 @@
 //! what is implicit here is the strain operator (B-bar and assumed strain, docs/theory.md
 //! §13) and the tangent the assembly needs.
 
-use crate::cell_average::{CellAverage, CellGroups};
+use crate::cell_average::{CellAverage, CellGroups, GroupSums};
 use loam_constitutive::{ConstitutiveError, Tensor4};
 use loam_grid::Connectivity;
 use loam_kernels::{embed, update_point, Committed};
@@ -48,6 +48,10 @@ pub(crate) struct TrialState<const D: usize> {
     /// per point ([`crate::fbar`]).
     pub jacobian: Vec<f64>,
     pub average_x: Vec<SVector<f64, D>>,
+    /// F-bar only: each cell's volume change ΔJ̄, by [`CellGroups`] index.
+    pub cell_jacobian: Vec<f64>,
+    /// The scratch of the cell averages (B-bar's once a step, F-bar's every iterate).
+    pub group_sums: GroupSums<D>,
 }
 
 impl<const D: usize> TrialState<D> {
