@@ -9,7 +9,7 @@ use crate::report::{Report, Row};
 use crate::soil::{POISSON, YOUNG};
 use anyhow::Result;
 use loam::constitutive::{ConstitutiveLaw, Elastic, MohrCoulomb};
-use loam::implicit::{AntiLocking, Kinematics, QuasiStatic, QuasiStaticSettings, StrengthReduction};
+use loam::implicit::{AntiLocking, Kinematics, QuasiStatic, QuasiStaticSettings, StrengthReduction, TrialStart};
 use loam::model::{Model, PhreaticLevel, Water};
 use loam_verification::column::bounds::{GIMP_E_SIGMA_64, GIMP_RATE};
 use loam_verification::slope::bounds::SUBMERGED_SLOPE;
@@ -119,15 +119,16 @@ fn submerged_slope(quick: bool, report: &mut Report) -> Result<()> {
         trial: QuasiStaticSettings { load_steps: 10, max_cutbacks: 4, ..Default::default() },
         bracket: (1.0, 3.0),
         tolerance: 0.005,
+        start: TrialStart::LastHeld,
     };
     eprintln!("verify: V7 submerged slope, {cells} cells per H");
     let t = Instant::now();
-    let dry = srf.factor_of_safety(&slope_model(&g, law.clone(), 1.0, 10.0, cells, AntiLocking::BBar), |_| {})?;
+    let dry = srf.factor_of_safety(&slope_model(&g, law.clone(), 1.0, 10.0, cells, AntiLocking::BBar), |_, _| {})?;
     let wet = slope_model(&g, law, 2.0, 10.0, cells, AntiLocking::BBar);
     let level = (g.depth + 1.0) * g.height + 0.5 * g.height / cells as f64;
     let water = Water::new(10.0, PhreaticLevel::Horizontal(level), wet.gravity()).map_err(anyhow::Error::msg)?;
     let wet = wet.with_water(water)?;
-    let wet = srf.factor_of_safety(&wet, |_| {})?;
+    let wet = srf.factor_of_safety(&wet, |_, _| {})?;
     let rel = wet.value() / dry.value() - 1.0;
     writeln!(report.md, "## V7 water: the submerged slope\n\nThe Griffiths & Lane slope (V4b: c = 10, φ = 20°, ψ = 0), {cells} cells per H, B-bar, entirely under water (level {level} above the crest, ρ_sat = 2, γ_w = 10), against the same slope dry with γ′ = γ_sat − γ_w = 10. Strength reduction between 1 and 3 to 0.005, 10 load steps per trial. With static water the pore pressures change nothing but the weight: the factors must agree.\n\n| slope | F (bracket) |\n|---|---:|\n| dry, γ′ = 10 | {:.4} ({:.4}–{:.4}) |\n| submerged, γ_sat = 20 | {:.4} ({:.4}–{:.4}) |\n\nRelative difference {rel:+.2e}; wall {:.1} s.\n", dry.value(), dry.stable, dry.failed, wet.value(), wet.stable, wet.failed, t.elapsed().as_secs_f64())?;
     report.rows.push(Row::checked(

@@ -237,11 +237,17 @@ fn run_command(
     let loaded = load(scene, max_memory)?;
     if let loam_scene::AnalysisSpec::QuasiStatic { strength_reduction: Some(srf), .. } = &loaded.scene.analysis {
         if !quiet {
+            let (lo, hi, tol) = (srf.bracket.0, srf.bracket.1, srf.tolerance);
+            let how = match srf.start {
+                loam_scene::TrialStartSpec::LastHeld => {
+                    format!("F raised from {lo} towards {hi} from the last state that held, to {tol}")
+                }
+                loam_scene::TrialStartSpec::Zero => {
+                    format!("F bisected between {lo} and {hi}, each trial from zero load, to {tol}")
+                }
+            };
             println!(
-                "strength reduction: bisecting F between {} and {} to {}, one trial per row in {}",
-                srf.bracket.0,
-                srf.bracket.1,
-                srf.tolerance,
+                "strength reduction: {how}; one trial per row in {}",
                 out.join("strength_reduction.csv").display()
             );
         }
@@ -400,7 +406,12 @@ fn checkpoint_line(w: &CheckpointWritten, out: &Path) -> String {
 /// A finished strength-reduction trial, one line above the progress bar (unless quiet),
 /// and the bar's message.
 fn show_trial(bar: &ProgressBar, k: usize, t: &StrengthTrial, quiet: bool) {
-    let outcome = if t.stable { "holds".to_string() } else { format!("fails at load factor {:.3}", t.load_factor) };
+    // A trial from the last state that held keeps the full load: it fails at load factor 1.
+    let outcome = match (t.stable, t.load_factor < 1.0) {
+        (true, _) => "holds".to_string(),
+        (false, true) => format!("fails at load factor {:.3}", t.load_factor),
+        (false, false) => "fails".to_string(),
+    };
     let line = format!(
         "trial {k}: F = {:.4} {outcome} ({} Newton iterations, {} cut-backs, {:.1} s)",
         t.factor,

@@ -139,8 +139,9 @@ fn quasi_static_resumes_byte_identical() {
     killed_run_resumes_to_the_same_outputs("footing", &text, "1", &["run_log.csv"]);
 }
 
-/// Strength reduction: the Griffiths & Lane slope on 2 m cells to a tolerance of 0.05 (7
-/// trials), killed during the search or during the run at the factor found.
+/// Strength reduction: the Griffiths & Lane slope on 2 m cells to a tolerance of 0.05 (8
+/// trials, each from the last state that held, which the checkpoint saves), killed during
+/// the search or during the run at the factor found.
 #[test]
 fn strength_reduction_resumes_byte_identical() {
     let text = example("slope_griffiths_lane.ron");

@@ -101,11 +101,25 @@ impl CutBack {
         }
         done.residuals = report.residuals;
         done.active_nodes = active_nodes;
+        self.advance();
+    }
+
+    /// After a converged attempt: two in a row double the size back. Called by
+    /// [`converged`](Self::converged), and alone to replay a saved record (a
+    /// strength-reduction search resumed), which tallies nothing.
+    pub fn advance(&mut self) {
         self.streak += 1;
         if self.depth > 0 && self.streak >= 2 {
             self.depth -= 1;
             self.streak = 0;
         }
+    }
+
+    /// After a failed attempt: halve the size. Called by [`failed`](Self::failed), and
+    /// alone to replay a saved record.
+    pub fn cut(&mut self) {
+        self.streak = 0;
+        self.depth += 1;
     }
 
     /// An attempt of step `step` from `position` to `load_factor` failed for `reason`
@@ -123,7 +137,6 @@ impl CutBack {
         let residuals = &report.residuals;
         self.done.cutbacks += 1;
         self.done.direct_fallbacks += report.direct_fallbacks;
-        self.streak = 0;
         // A cut-back is the step control doing its job (the run log and the progress
         // count them; strength reduction fails trials on purpose), so it is information,
         // not a warning; a run that cannot go on returns an error.
@@ -139,7 +152,7 @@ impl CutBack {
                 residuals: residuals.to_vec(),
             });
         }
-        self.depth += 1;
+        self.cut();
         Ok(())
     }
 

@@ -38,5 +38,6 @@ pub use points::PointUpdateError;
 pub use quasi_static::{LoadControl, QuasiStatic, QuasiStaticSettings, QuasiStaticState};
 pub use report::{IterationProfile, StepError, StepReport};
 pub use strength_reduction::{
-    has_strength, reduced_strength, FactorOfSafety, StrengthReduction, StrengthReductionError, StrengthTrial,
+    has_strength, reduced_strength, FactorOfSafety, SearchSoFar, StrengthReduction, StrengthReductionError,
+    StrengthTrial, TrialStart,
 };

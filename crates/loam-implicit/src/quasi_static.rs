@@ -334,6 +334,20 @@ impl<const D: usize> QuasiStatic<D> {
         Ok(report)
     }
 
+    /// One attempt to bring the committed state back to equilibrium at its own load factor
+    /// after its laws changed (a strength-reduction search lowering the strength of a state
+    /// that held): the stages of [`QuasiStatic::attempt`] at zero load increment, on the
+    /// connectivity of that state. On success the state is committed; on failure nothing
+    /// changes. The extrapolated increment is left as it was (this attempt has no load
+    /// increment to scale it by).
+    pub(crate) fn attempt_at_held_load(&mut self) -> Result<NewtonReport, NewtonError<PointUpdateError>> {
+        self.engine.external_forces(LoadLevel::Factor(self.load_factor));
+        self.prescribe(self.load_factor);
+        let report = self.engine.newton(None)?;
+        self.engine.commit();
+        Ok(report)
+    }
+
     /// The increment Newton starts from: the prescribed displacements on their dofs
     /// (Newton never corrects constrained dofs, so they keep them), and zero — or, with
     /// `extrapolate`, the last converged increment scaled to this one — on the free dofs.

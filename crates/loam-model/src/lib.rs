@@ -286,6 +286,15 @@ impl<const D: usize> Model<D> {
     /// history length of the one it replaces), the points' state kept: strength
     /// reduction's reduced strengths.
     pub fn with_materials(&self, materials: Vec<Arc<dyn ConstitutiveLaw>>) -> Result<Self, ModelError> {
+        let mut model = self.clone();
+        model.set_materials(materials)?;
+        Ok(model)
+    }
+
+    /// [`Model::with_materials`] in place: a strength-reduction search that lowers the
+    /// strength of the state it holds. Refused (and nothing changed) unless there is one
+    /// law per material, each with the history length of the one it replaces.
+    pub fn set_materials(&mut self, materials: Vec<Arc<dyn ConstitutiveLaw>>) -> Result<(), ModelError> {
         if materials.len() != self.materials.len() {
             return Err(ModelError::Materials(format!(
                 "{} laws given for {} materials",
@@ -300,7 +309,8 @@ impl<const D: usize> Model<D> {
                 self.materials[m].history_len()
             )));
         }
-        Ok(Self { materials, ..self.clone() })
+        self.materials = materials;
+        Ok(())
     }
 
     /// Dead forces on the points at full load, one per point, following the load factor.

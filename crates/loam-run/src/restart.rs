@@ -14,7 +14,9 @@
 use loam_analysis::{Analysis, AnalysisState};
 use loam_explicit::ExplicitState;
 use loam_format::checkpoint::{Checkpoint, CheckpointError, CheckpointHeader, Section};
-use loam_implicit::{ArcLengthState, DynamicState, FactorOfSafety, Peak, QuasiStaticState, StrengthTrial};
+use loam_implicit::{
+    ArcLengthState, DynamicState, FactorOfSafety, Peak, QuasiStatic, QuasiStaticState, SearchSoFar, StrengthTrial,
+};
 use loam_model::{Model, ModelState};
 use loam_points::{Column, PointStore};
 use loam_solve::LinearSolverKind;
@@ -196,17 +198,38 @@ pub(crate) struct OutputsState {
 }
 
 /// The checkpoint of a strength-reduction search after `trials`, with `csv_bytes` of
-/// `strength_reduction.csv` written.
-pub(crate) fn save_search(c: &mut Checkpoint, trials: &[StrengthTrial], csv_bytes: u64) {
+/// `strength_reduction.csv` written and, in a search from the last state that held, that
+/// state (`held`).
+pub(crate) fn save_search<const D: usize>(
+    c: &mut Checkpoint,
+    trials: &[StrengthTrial],
+    held: Option<&QuasiStatic<D>>,
+    csv_bytes: u64,
+) {
     c.put("run.phase", Section::Text("search".into()));
     put_trials(c, trials);
     c.put("search.csv_bytes", Section::U64(vec![csv_bytes]));
+    if let Some(qs) = held {
+        put_model(c, qs.model());
+        put_analysis(c, &AnalysisState::QuasiStatic(qs.state()));
+    }
 }
 
-/// The trials a search checkpoint holds and the bytes of `strength_reduction.csv` they
+/// The trials a search checkpoint holds, with the held state where it saved one (for
+/// `model`, built from the same scene), and the bytes of `strength_reduction.csv` they
 /// wrote.
-pub(crate) fn saved_search(c: &Checkpoint) -> Result<(Vec<StrengthTrial>, u64), CheckpointError> {
-    Ok((take_trials(c)?, one_u64(c, "search.csv_bytes")?))
+pub(crate) fn saved_search<const D: usize>(
+    c: &Checkpoint,
+    model: &Model<D>,
+) -> Result<(SearchSoFar<D>, u64), CheckpointError> {
+    let held = match c.u64s("analysis.step") {
+        Err(CheckpointError::Missing(_)) => None,
+        _ => match take_analysis(c, "quasi-static")? {
+            AnalysisState::QuasiStatic(state) => Some((state, take_model(c, model)?)),
+            _ => unreachable!("a quasi-static state is read as one"),
+        },
+    };
+    Ok((SearchSoFar { trials: take_trials(c)?, held }, one_u64(c, "search.csv_bytes")?))
 }
 
 /// The checkpoint of a run between steps.

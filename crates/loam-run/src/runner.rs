@@ -13,10 +13,15 @@ use loam_format::checkpoint::{Checkpoint, CheckpointError, CheckpointHeader};
 use loam_format::output::{CsvCell, CsvWriter, OutputError, PvdWriter};
 use loam_format::output_dir::{clear_output_dir, prepare_output_dir, remove_temp_files, OutputDirError};
 use loam_format::run_plots::plot_run;
-use loam_implicit::{FactorOfSafety, Peak, QuasiStatic, StrengthReduction, StrengthReductionError, StrengthTrial};
+use loam_implicit::{
+    FactorOfSafety, Peak, QuasiStatic, SearchSoFar, StrengthReduction, StrengthReductionError, StrengthTrial,
+    TrialStart,
+};
 use loam_model::{ExternalWork, LoadLevel, Model, ModelError, PointChange};
 use loam_scene::FieldSpec;
-use loam_scene::{AnalysisSpec, CollapseSpec, Excavation, LoadedScene, OutputSpec, SceneError};
+use loam_scene::{
+    AnalysisSpec, CollapseSpec, Excavation, LoadedScene, OutputSpec, SceneError, StrengthReductionSpec, TrialStartSpec,
+};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
@@ -382,7 +387,7 @@ fn strength_reduction_first<const D: usize>(
     let saved = search.stepping.map(restart::saved_search_result).transpose()?.flatten();
     let fos = match saved {
         Some(fos) => fos,
-        None => factor_of_safety(qs, spec.bracket, spec.tolerance, search, progress)?,
+        None => factor_of_safety(qs, spec, search, progress)?,
     };
     *analysis = analysis.with_strength_reduced(fos.stable)?;
     Ok(Some(fos))
@@ -657,28 +662,32 @@ const TRIAL_COLUMNS: [&str; 7] =
 /// its trials.
 fn factor_of_safety<const D: usize>(
     qs: &QuasiStatic<D>,
-    bracket: (f64, f64),
-    tolerance: f64,
+    spec: &StrengthReductionSpec,
     search: SearchContext,
     progress: &mut dyn FnMut(RunEvent),
 ) -> Result<FactorOfSafety, RunFailure> {
     let path = search.out_dir.join("strength_reduction.csv");
-    let (done, bytes) = match search.searching {
-        Some(c) => restart::saved_search(c).map(|(done, bytes)| (done, Some(bytes)))?,
-        None => (Vec::new(), None),
+    let (so_far, bytes) = match search.searching {
+        Some(c) => restart::saved_search(c, qs.model()).map(|(so_far, bytes)| (so_far, Some(bytes)))?,
+        None => (SearchSoFar::default(), None),
     };
     let mut csv = CsvWriter::open(&path, &TRIAL_COLUMNS, bytes)?;
-    if !done.is_empty() {
-        progress(RunEvent::Resumed { step: 0, trials: done.len() });
+    if !so_far.trials.is_empty() {
+        progress(RunEvent::Resumed { step: 0, trials: so_far.trials.len() });
     }
-    let srf = StrengthReduction { trial: qs.settings().clone(), bracket, tolerance };
-    let (saver, mut trials) = (search.saver, done.clone());
+    let start = match spec.start {
+        TrialStartSpec::LastHeld => TrialStart::LastHeld,
+        TrialStartSpec::Zero => TrialStart::Zero,
+    };
+    let srf =
+        StrengthReduction { trial: qs.settings().clone(), bracket: spec.bracket, tolerance: spec.tolerance, start };
+    let (saver, mut trials) = (search.saver, so_far.trials.clone());
     let mut written = Ok(());
-    let fos = srf.factor_of_safety_after(qs.model(), &done, |t| {
+    let fos = srf.factor_of_safety_after(qs.model(), so_far, |t, held| {
         progress(RunEvent::Trial(t));
         trials.push(t.clone());
         if written.is_ok() {
-            written = record_trial(&mut csv, t, &trials, saver).map(|w| {
+            written = record_trial(&mut csv, t, &trials, held, saver).map(|w| {
                 if let Some(w) = w {
                     progress(RunEvent::Checkpoint(w));
                 }
@@ -690,10 +699,11 @@ fn factor_of_safety<const D: usize>(
 }
 
 /// Trial `t`'s row, and a checkpoint after `trials` if one is due.
-fn record_trial(
+fn record_trial<const D: usize>(
     csv: &mut CsvWriter,
     t: &StrengthTrial,
     trials: &[StrengthTrial],
+    held: Option<&QuasiStatic<D>>,
     saver: &mut Checkpoints,
 ) -> Result<Option<CheckpointWritten>, OutputError> {
     csv.row_mixed(&[
@@ -709,7 +719,7 @@ fn record_trial(
         return Ok(None);
     }
     let mut c = saver.start();
-    restart::save_search(&mut c, trials, csv.bytes());
+    restart::save_search(&mut c, trials, held, csv.bytes());
     saver.write(&c, 0, trials.len()).map(Some)
 }
 

@@ -613,9 +613,10 @@ pub enum SchemeSpec {
     Musl,
 }
 
-/// A strength-reduction analysis (Griffiths & Lane 1999): each trial divides c and tan φ
-/// (σ_y for von Mises) by F and applies the loads in the analysis's load steps; F is
-/// bisected between `bracket.0` (must hold) and `bracket.1` (must fail) to `tolerance`.
+/// A strength-reduction analysis (Griffiths & Lane 1999): c and tan φ (σ_y for von Mises)
+/// divided by F; the loads are applied in the analysis's load steps at `bracket.0` (which
+/// must hold), then F is raised towards `bracket.1` (which must fail) until it is
+/// bracketed to `tolerance` (`start` says how).
 #[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct StrengthReductionSpec {
@@ -623,6 +624,19 @@ pub struct StrengthReductionSpec {
     pub bracket: (f64, f64),
     #[serde(default = "default_srf_tolerance")]
     pub tolerance: f64,
+    #[serde(default)]
+    pub start: TrialStartSpec,
+}
+
+/// Where each strength-reduction trial after the first starts.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+pub enum TrialStartSpec {
+    /// From the last state that held, its strength lowered in `load_steps` steps at full
+    /// load (the default).
+    #[default]
+    LastHeld,
+    /// From zero load, the loads applied anew at each trial's factor; bisection.
+    Zero,
 }
 
 fn default_bracket() -> (f64, f64) {

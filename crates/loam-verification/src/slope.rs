@@ -33,6 +33,12 @@ pub mod bounds {
     /// V4b: |F / [`super::GRIFFITHS_LANE_FACTOR_OF_SAFETY`] − 1| on the finest mesh.
     pub const GRIFFITHS_LANE: Bound =
         Bound::upper(0.05, "docs/verification.md §V4: within 5 % of Griffiths & Lane's 1.4, finest mesh");
+    /// V4b: |F from the last state that held − F from zero| over the search's tolerance,
+    /// on every mesh: the continued search brackets the same factor.
+    pub const SEARCH_PATHS: Bound = Bound::upper(
+        1.0,
+        "docs/verification.md §V4: F from the last state that held within the tolerance of F from zero",
+    );
     /// V4c: the largest difference between the implicit and explicit run-out profiles,
     /// in cells.
     pub const RUNOUT_PROFILES: Bound =
