@@ -384,7 +384,8 @@ impl<const D: usize> Engine<D> {
 
     /// Stage 4, Newton's method (docs/theory.md §6) from the increment in `du` (zero, a
     /// prescribed displacement or a predictor): update the points and the residual, then
-    /// until converged assemble, solve, update the points and check. `inertia` adds the
+    /// until converged assemble, solve, update the points along the correction (shortened
+    /// where the residual grew) and check. `inertia` adds the
     /// Newmark terms of a dynamic step. On success `du` holds the converged increment and
     /// the trial state is the step's; nothing is committed either way.
     pub fn newton(&mut self, mut inertia: Option<&mut Inertia>) -> Result<NewtonReport, NewtonError<PointUpdateError>> {
@@ -399,12 +400,40 @@ impl<const D: usize> Engine<D> {
             let fallbacks = self.fallbacks;
             let (iterations, setup) = self.solve(newton.linear_tolerance()).map_err(|e| newton.linear_failure(e))?;
             newton.linear_solved(iterations, setup, self.fallbacks > fallbacks);
-            newton.corrected(norm(&self.correction), norm(&self.du));
-            let reference =
-                self.update_points_and_residual(inertia.as_deref_mut()).map_err(|e| newton.problem_failure(e))?;
+            let (reference, alpha) =
+                self.update_along_correction(&newton, inertia.as_deref_mut()).map_err(|e| newton.problem_failure(e))?;
+            newton.corrected(alpha * norm(&self.correction), norm(&self.du));
             if newton.converged(norm(&self.residual), reference)? {
                 return Ok(newton.into_report());
             }
+        }
+    }
+
+    /// Stage 4c, update the points at the increment the correction just reached, with the
+    /// line search: while the residual's norm is above the one the correction was solved
+    /// for (or a point cannot be updated there) and `newton` allows, the same at a shorter
+    /// step along the correction (docs/theory.md §6). Returns the reference force norm and
+    /// the step length kept; a point that cannot be updated at the last length tried is
+    /// the error.
+    fn update_along_correction(
+        &mut self,
+        newton: &NewtonControl,
+        mut inertia: Option<&mut Inertia>,
+    ) -> Result<(f64, f64), PointUpdateError> {
+        // `rhs` holds −R of the iterate the correction was solved from.
+        let before = norm(&self.rhs);
+        let (mut alpha, mut backtracks) = (1.0, 0);
+        loop {
+            let updated = self.update_points_and_residual(inertia.as_deref_mut());
+            let after = if updated.is_ok() { norm(&self.residual) } else { f64::INFINITY };
+            let Some(shorter) = newton.backtrack(before, after, alpha, backtracks) else {
+                return updated.map(|reference| (reference, alpha));
+            };
+            for (u, c) in self.du.iter_mut().zip(&self.correction) {
+                *u -= (alpha - shorter) * c;
+            }
+            tracing::debug!(from = alpha, to = shorter, before, after, "Newton correction shortened");
+            (alpha, backtracks) = (shorter, backtracks + 1);
         }
     }
 

@@ -657,6 +657,8 @@ pub struct SolverSpec {
     pub residual_tolerance: f64,
     pub increment_tolerance: f64,
     pub max_iterations: usize,
+    /// Most backtracks of the line search along one Newton correction (0: none).
+    pub max_backtracks: usize,
     /// `None`: `Auto`.
     pub linear: Option<LinearSpec>,
     /// Quasi-static: start each load step from the last increment, scaled (default false).
@@ -670,6 +672,7 @@ impl Default for SolverSpec {
             residual_tolerance: n.residual_tolerance,
             increment_tolerance: n.increment_tolerance,
             max_iterations: n.max_iterations,
+            max_backtracks: n.max_backtracks,
             linear: None,
             extrapolate: QuasiStaticSettings::default().extrapolate,
         }

@@ -16,6 +16,9 @@ pub(super) struct Solver {
 /// would look hung.
 const MAX_NEWTON_ITERATIONS: usize = 1000;
 
+/// The most backtracks of the line search along one correction: 2⁻²⁰ of it is round-off.
+const MAX_BACKTRACKS: usize = 20;
+
 impl LoadedScene {
     /// Both tolerances in (0, 1), at least one iteration.
     pub(super) fn solver(&self) -> Result<Solver, SceneError> {
@@ -43,10 +46,21 @@ impl LoadedScene {
                 ),
             ));
         }
+        if sv.max_backtracks > MAX_BACKTRACKS {
+            return Err(self.error(
+                &at("max_backtracks"),
+                format!(
+                    "max_backtracks is {}; it must be 0 to {MAX_BACKTRACKS} (each backtrack at least halves the \
+                     step along the correction, so {MAX_BACKTRACKS} reach below 1e-6 of it)",
+                    sv.max_backtracks
+                ),
+            ));
+        }
         let newton = NewtonSettings {
             residual_tolerance: sv.residual_tolerance,
             increment_tolerance: sv.increment_tolerance,
             max_iterations: sv.max_iterations,
+            max_backtracks: sv.max_backtracks,
             ..NewtonSettings::default()
         };
         Ok(Solver {

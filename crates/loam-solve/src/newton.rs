@@ -2,7 +2,12 @@
 //! the caller's loop consults: the loop itself — update points and residual, assemble,
 //! solve, check — is written out in the implicit step, where it can be read.
 //!
-//! Each iteration solves K δ = −R, adds δ to the increment and re-evaluates. A step is
+//! Each iteration solves K δ = −R, adds δ to the increment and re-evaluates. Where the
+//! correction raised the residual's norm (a point crossed a yield surface's corner, a
+//! mechanism opened, the first iterate of a plastic step overshot), the caller backtracks
+//! along it ([`NewtonControl::backtrack`]): a line search on ½‖R‖² (Dennis & Schnabel,
+//! Numerical Methods for Unconstrained Optimization, 1983, §6.3.2), whose slope at the
+//! start is −‖R‖² for a Newton direction. A step is
 //! converged when the relative residual ‖R‖ / ‖reference force‖ and the relative correction
 //! ‖δ‖ / ‖Δu‖ are both below their tolerances, after at least one correction — or, for a
 //! step that starts in equilibrium, when its first correction keeps the residual there. It
@@ -29,11 +34,20 @@ pub struct NewtonSettings {
     pub max_iterations: usize,
     /// A relative residual this many times the initial one counts as divergence.
     pub divergence_factor: f64,
+    /// Most backtracks along one correction that raised the residual's norm (the line
+    /// search, module docs); 0 (the default) takes every correction whole.
+    pub max_backtracks: usize,
 }
 
 impl Default for NewtonSettings {
     fn default() -> Self {
-        Self { residual_tolerance: 1e-9, increment_tolerance: 1e-6, max_iterations: 20, divergence_factor: 1e8 }
+        Self {
+            residual_tolerance: 1e-9,
+            increment_tolerance: 1e-6,
+            max_iterations: 20,
+            divergence_factor: 1e8,
+            max_backtracks: 0,
+        }
     }
 }
 
@@ -140,6 +154,21 @@ impl NewtonControl {
     /// Record a correction of norm `correction` that left an increment of norm `increment`.
     pub fn corrected(&mut self, correction: f64, increment: f64) {
         self.report.increments.push(relative(correction, increment));
+    }
+
+    /// The line search (module docs): a correction taken at step length `alpha` left a
+    /// residual of norm `after` (infinite where the problem could not be evaluated there)
+    /// where it was `before`. Returns the shorter length to try next — the minimiser of the
+    /// quadratic that matches ½‖R‖² at 0 (value and slope −‖R₀‖²) and at `alpha`, kept
+    /// within [0.1, 0.5] `alpha` — or `None` to keep `alpha`: the residual did not grow, or
+    /// this correction has had its `max_backtracks`.
+    pub fn backtrack(&self, before: f64, after: f64, alpha: f64, backtracks: usize) -> Option<f64> {
+        if after <= before || backtracks >= self.settings.max_backtracks {
+            return None;
+        }
+        let (r0, ra) = (before * before, after * after);
+        let minimiser = if ra.is_finite() { alpha * alpha * r0 / (ra - r0 + 2.0 * r0 * alpha) } else { 0.0 };
+        Some(minimiser.clamp(0.1 * alpha, 0.5 * alpha))
     }
 
     /// Record the Krylov iterations and the set-up time of the last linear solve, and
@@ -334,5 +363,62 @@ mod tests {
         let err = p.solve(NewtonSettings { max_iterations: 2, ..Default::default() }, &mut du).unwrap_err();
         assert!(matches!(err, NewtonError::IterationLimit(_)), "{err}");
         assert_eq!(err.report().iterations(), 2);
+    }
+
+    /// Newton on r(x) = atan x − atan 1 from x = 3, the loop of the implicit step with its
+    /// line search: the full corrections overshoot ever further (3 → −1.64 → 5.0 → …,
+    /// the classic divergence of Newton on arctan) and fail; backtracking along them
+    /// converges to the root x = 1, quadratically once the full step is taken again.
+    #[test]
+    fn the_line_search_turns_a_diverging_newton_into_a_converging_one() {
+        let residual = |x: f64| x.atan() - 1f64.atan();
+        let solve = |max_backtracks: usize| -> Result<(f64, NewtonReport, usize), NewtonError<Never>> {
+            let settings = NewtonSettings { max_backtracks, residual_tolerance: 1e-12, ..Default::default() };
+            let (mut x, mut shortened) = (3.0, 0);
+            let mut newton = NewtonControl::start(settings, residual(x).abs(), 1.0)?;
+            loop {
+                newton.next_iteration()?;
+                let before = residual(x).abs();
+                let correction = -residual(x) * (1.0 + x * x);
+                let (mut alpha, mut backtracks) = (1.0, 0);
+                x += correction;
+                while let Some(shorter) = newton.backtrack(before, residual(x).abs(), alpha, backtracks) {
+                    x -= (alpha - shorter) * correction;
+                    (alpha, backtracks) = (shorter, backtracks + 1);
+                }
+                shortened += backtracks;
+                newton.corrected((alpha * correction).abs(), x.abs());
+                if newton.converged(residual(x).abs(), 1.0)? {
+                    return Ok((x, newton.into_report(), shortened));
+                }
+            }
+        };
+        assert!(solve(0).is_err(), "full Newton steps from x = 3 diverge");
+        let (x, report, shortened) = solve(4).unwrap();
+        assert!((x - 1.0).abs() < 1e-12, "{x}");
+        assert!(shortened > 0);
+        let r = &report.residuals;
+        let n = r.len();
+        assert!(r[n - 1].ln() / r[n - 2].ln() > 1.7, "quadratic at the end: {r:?}");
+    }
+
+    /// The step the line search proposes: none where the residual did not grow or the
+    /// backtracks are spent; the quadratic model's minimiser (exact for a quadratic ½‖R‖²)
+    /// within [0.1, 0.5] of the last length; a tenth where the residual is not finite.
+    #[test]
+    fn the_backtrack_is_the_quadratic_models_minimiser_within_its_safeguards() {
+        let settings = NewtonSettings { max_backtracks: 4, ..Default::default() };
+        let newton = NewtonControl::start::<Never>(settings, 1.0, 1.0).unwrap();
+        assert_eq!(newton.backtrack(1.0, 0.9, 1.0, 0), None);
+        assert_eq!(newton.backtrack(1.0, 2.0, 1.0, 4), None);
+        // ½‖R(α)‖² = ½(1 − α)² + ½ c α² with c = 3: ‖R(1)‖ = √3, minimiser 1/(1 + c) = 0.25.
+        assert!((newton.backtrack(1.0, 3f64.sqrt(), 1.0, 0).unwrap() - 0.25).abs() < 1e-15);
+        // A residual barely grown: 1 / (1.01² + 1), just under a half.
+        assert!((newton.backtrack(1.0, 1.01, 1.0, 0).unwrap() - 1.0 / 2.0201).abs() < 1e-15);
+        // From α = 0.5 with a residual that exploded: the model's minimiser is far below
+        // the last length, so a tenth of it.
+        assert_eq!(newton.backtrack(1.0, 1e9, 0.5, 1), Some(0.05));
+        assert_eq!(newton.backtrack(1.0, f64::INFINITY, 1.0, 0), Some(0.1));
+        assert_eq!(newton.backtrack(1.0, f64::NAN, 1.0, 0), Some(0.1));
     }
 }
