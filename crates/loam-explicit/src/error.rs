@@ -10,8 +10,9 @@ pub enum ExplicitError {
     InvalidSettings(InvalidSetting),
     #[error(
         "step {step}: the fixed time step {dt:e} exceeds the critical time step {critical:e} \
-         (h / (c_p + |v_p|), docs/theory.md §10); use TimeStep::Cfl, a smaller dt, or \
-         allow_above_critical to run anyway (it will blow up)"
+         (h / (c_p + |v_p|), docs/theory.md §10); use a CFL step (a scene's `time_step: \
+         Cfl(0.5)`), a smaller fixed step, or `allow_above_critical: true` to run anyway (it \
+         will blow up)"
     )]
     AboveCritical { step: usize, dt: f64, critical: f64 },
     /// The points could not be connected to the background, a point left the grid, or a
@@ -20,8 +21,9 @@ pub enum ExplicitError {
     Connect(#[from] ConnectError),
     #[error(
         "step {step} (from t = {time:e}): material point {point} became unstable: {reason}; the \
-         state of the last completed step is kept. Reduce the time step (TimeStep::Cfl with a \
-         smaller safety factor), or check the material and the loads"
+         state of the last completed step is kept. Reduce the time step (a CFL step with a \
+         smaller safety factor, e.g. a scene's `time_step: Cfl(0.25)`), or check the material \
+         and the loads"
     )]
     Unstable { step: usize, time: f64, point: usize, reason: String },
     #[error(
