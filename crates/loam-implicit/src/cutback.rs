@@ -88,6 +88,14 @@ impl CutBack {
         (!reached).then(|| self.full * 0.5f64.powi(self.depth as i32))
     }
 
+    /// Where the next attempt from `position` ends, or `None` once the target is reached:
+    /// `position` plus [`next`](Self::next)'s size, landing on the target where it ends
+    /// within round-off of it (no sliver sub-step after it).
+    pub fn next_end(&self, position: f64) -> Option<f64> {
+        let end = position + self.next(position)?;
+        Some(if end >= self.target - 4.0 * f64::EPSILON * self.target.abs() { self.target } else { end })
+    }
+
     /// An attempt on `active_nodes` active nodes converged with `report`.
     pub fn converged(&mut self, report: NewtonReport, active_nodes: usize) {
         let done = &mut self.done;
@@ -326,5 +334,10 @@ mod tests {
         assert_eq!(control.next(1.0 - 1e-11), Some(1.0));
         let time = CutBack::new(0.0, 1e-3, StepScale::Time(1e-3), 8);
         assert_eq!(time.next(1e-3 - 1e-16), None);
+        // 0.1 + 0.2 is 0.30000000000000004: the attempt ends on the target itself.
+        let sum = CutBack::new(0.1, 0.3, StepScale::LoadFactor, 8);
+        assert_ne!(0.1 + 0.2, 0.3);
+        assert_eq!(sum.next_end(0.1), Some(0.3));
+        assert_eq!(sum.next_end(0.3), None);
     }
 }

@@ -307,11 +307,8 @@ impl<const D: usize> QuasiStatic<D> {
         let floor = if self.engine.model.load_controlled() { self.settings.limit_resolution } else { 0.0 };
         let mut control =
             CutBack::new(self.load_factor, target, StepScale::LoadFactor, self.settings.max_cutbacks).with_floor(floor);
-        while let Some(size) = control.next(self.load_factor) {
+        while let Some(lambda) = control.next_end(self.load_factor) {
             self.engine.connect(step)?;
-            // A sub-step that ends within round-off of the target ends on it.
-            let end = self.load_factor + size;
-            let lambda = if end >= target - 4.0 * f64::EPSILON * target.abs() { target } else { end };
             match self.attempt(lambda) {
                 Ok(report) => control.converged(report, self.engine.conn.active_nodes().len()),
                 Err(e) => control.failed(step, self.load_factor, lambda, e.to_string(), e.report())?,

@@ -195,20 +195,15 @@ impl StrengthReduction {
         so_far: SearchSoFar<D>,
         mut on_trial: impl FnMut(&StrengthTrial, Option<&QuasiStatic<D>>),
     ) -> Result<FactorOfSafety, StrengthReductionError> {
-        let (lo, hi) = self.bracket;
-        let held = self.held_at_lower(model, &so_far, &mut on_trial)?;
-        let mut ladder = StrengthSteps::new(self, lo);
+        let (mut held, first) = self.held_at_lower(model, &so_far, &mut on_trial)?;
         let mut trials = so_far.trials;
-        if trials.is_empty() {
-            trials.push(held.1.expect("a search without trials ran its first"));
-        }
-        let mut held = held.0;
-        if let Some(result) = ladder.replay(&trials)? {
-            return Ok(FactorOfSafety { stable: result.0, failed: result.1, trials });
+        trials.extend(first);
+        let mut ladder = StrengthSteps::new(self);
+        if let Some((stable, failed)) = ladder.replay(&trials)? {
+            return Ok(FactorOfSafety { stable, failed, trials });
         }
         let mut clock = Instant::now();
         while let Some(target) = ladder.next_attempt() {
-            let before = held.model().materials().to_vec();
             match lower_strength(&mut held, model, target)? {
                 Ok(report) => {
                     let t = ladder.held(target, report, &held, clock.elapsed());
@@ -217,7 +212,6 @@ impl StrengthReduction {
                     clock = Instant::now();
                 }
                 Err(reason) => {
-                    held.engine.model.set_materials(before)?;
                     if let Some(t) = ladder.failed(target, reason, &held, clock.elapsed()) {
                         let stable = ladder.position;
                         on_trial(&t, Some(&held));
@@ -227,7 +221,7 @@ impl StrengthReduction {
                 }
             }
         }
-        Err(StrengthReductionError::HoldsAtUpper(hi))
+        Err(StrengthReductionError::HoldsAtUpper(self.bracket.1))
     }
 
     /// The analysis that held: run from zero at the lower factor (with that first trial),
@@ -364,8 +358,8 @@ fn saved_trial(t: &StrengthTrial, index: usize, factor: f64) -> Result<StrengthT
 
 /// Lower the strength of the state `held` holds to `factor` (of `model`'s): connect, the
 /// reduced laws, then Newton at the held load. Converged: the state is committed at
-/// `factor`. Not converged (or the body ran away): why, with the laws changed (the caller
-/// puts the old ones back). Other errors end the search.
+/// `factor`. Not converged (or the body ran away): why, and nothing changed, the laws
+/// included. Other errors end the search.
 fn lower_strength<const D: usize>(
     held: &mut QuasiStatic<D>,
     model: &Model<D>,
@@ -377,17 +371,23 @@ fn lower_strength<const D: usize>(
         Err(source) => return Err(StrengthReductionError::Trial { factor, source }),
         Ok(()) => {}
     }
+    let before = held.model().materials().to_vec();
     held.engine.model.set_materials(reduced_materials(model, factor)?)?;
-    Ok(held.attempt_at_held_load().map_err(|e| e.to_string()))
+    let attempt = held.attempt_at_held_load();
+    if attempt.is_err() {
+        held.engine.model.set_materials(before)?;
+    }
+    Ok(attempt.map_err(|e| e.to_string()))
 }
 
 /// The strength steps of a search from the last state that held: `steps` equal steps from
 /// the lower factor to the upper, each an attempt cut back as a load step is, down to half
 /// the tolerance.
 struct StrengthSteps {
-    lo: f64,
-    hi: f64,
+    /// The bracket and the number of equal steps across it.
+    bracket: (f64, f64),
     steps: usize,
+    /// The smallest increment an attempt takes: half the tolerance.
     floor: f64,
     /// The step being taken (1-based) and its control.
     step: usize,
@@ -399,42 +399,32 @@ struct StrengthSteps {
 }
 
 impl StrengthSteps {
-    fn new(search: &StrengthReduction, lo: f64) -> Self {
-        let (steps, floor) = (search.trial.load_steps.max(1), 0.5 * search.tolerance);
-        let mut ladder = Self {
-            lo,
-            hi: search.bracket.1,
-            steps,
-            floor,
-            step: 0,
-            control: CutBack::new(lo, lo, StepScale::LoadFactor, usize::MAX),
-            position: lo,
-            cutbacks: 0,
-        };
-        ladder.next_step();
-        ladder
+    /// At the lower factor, the first step begun.
+    fn new(search: &StrengthReduction) -> Self {
+        let (bracket, steps, floor) = (search.bracket, search.trial.load_steps.max(1), 0.5 * search.tolerance);
+        let control = Self::control(bracket, steps, floor, 1, bracket.0);
+        Self { bracket, steps, floor, step: 1, control, position: bracket.0, cutbacks: 0 }
     }
 
-    /// Start the next strength step from where the search holds.
-    fn next_step(&mut self) {
-        self.step += 1;
-        let target = self.lo + (self.hi - self.lo) * self.step as f64 / self.steps as f64;
-        self.control = CutBack::new(self.position, target, StepScale::LoadFactor, usize::MAX).with_floor(self.floor);
+    /// The control of step `step` from `position` to the step's factor, halved down to
+    /// `floor` (no limit on the number of halvings: the floor is the resolution).
+    fn control(bracket: (f64, f64), steps: usize, floor: f64, step: usize, position: f64) -> CutBack {
+        let (lo, hi) = bracket;
+        let target = lo + (hi - lo) * step as f64 / steps as f64;
+        CutBack::new(position, target, StepScale::LoadFactor, usize::MAX).with_floor(floor)
     }
 
     /// The factor of the next attempt, or `None` once the upper factor has held.
     fn next_attempt(&mut self) -> Option<f64> {
         loop {
-            if let Some(size) = self.control.next(self.position) {
-                let target = self.lo + (self.hi - self.lo) * self.step as f64 / self.steps as f64;
-                let end = self.position + size;
-                // A sub-step that ends within round-off of the step's target ends on it.
-                return Some(if end >= target - 4.0 * f64::EPSILON * target.abs() { target } else { end });
+            if let Some(end) = self.control.next_end(self.position) {
+                return Some(end);
             }
             if self.step >= self.steps {
                 return None;
             }
-            self.next_step();
+            self.step += 1;
+            self.control = Self::control(self.bracket, self.steps, self.floor, self.step, self.position);
         }
     }
 
