@@ -11,6 +11,9 @@
 //! - [`MohrCoulomb`]: Mohr–Coulomb in principal stresses (plane, edges, apex, optional
 //!   tension cut-off, linear softening of c, φ, ψ), consistent tangent mapped back
 //!   through the eigenbasis; φ = 0 is Tresca.
+//! - [`DruckerPrager`]: the smooth cone fitted to Mohr–Coulomb in plane strain, triaxial
+//!   compression or extension ([`ConeFit`]), cone and apex returns, the same softening,
+//!   consistent tangent.
 //! - [`small_strain_update`] and [`finite_strain_update`]: the two kinematic drivers
 //!   (docs/theory.md §3 and §2). The finite-strain spatial tangent is de Souza Neto, Perić &
 //!   Owen (2008), *Computational Methods for Plasticity*, eq. 14.103.
@@ -21,17 +24,21 @@
 
 pub mod tensor;
 
+mod drucker_prager;
 mod elastic;
+mod frictional;
 mod kinematics;
 mod mohr_coulomb;
 mod von_mises;
 
+pub use drucker_prager::{ConeFit, DruckerPrager, DruckerPragerRegion};
 pub use elastic::Elastic;
+pub use frictional::Softening;
 pub use kinematics::{
     finite_strain_stress, finite_strain_update, small_strain_stress, small_strain_update, FiniteStrainStress,
     FiniteStrainUpdate,
 };
-pub use mohr_coulomb::{MohrCoulomb, MohrCoulombRegion, MohrCoulombReturn, Softening};
+pub use mohr_coulomb::{MohrCoulomb, MohrCoulombRegion, MohrCoulombReturn};
 pub use tensor::Tensor4;
 pub use von_mises::{VonMises, VonMisesRegion};
 

@@ -82,24 +82,12 @@
 
 use nalgebra::{Matrix3, Matrix4, Matrix4x3, Vector3, Vector4};
 
+use crate::frictional::{Branch, FrictionalStrength};
 use crate::tensor::{flatten, spectral, Tensor4};
 use crate::{
-    check_finite, ConstitutiveError, ConstitutiveLaw, Elastic, MaterialState, StrengthReducible, StressUpdate,
+    check_finite, ConstitutiveError, ConstitutiveLaw, Elastic, MaterialState, Softening, StrengthReducible,
+    StressUpdate,
 };
-
-/// Linear softening of c, φ, ψ to residual values at κ = κ_res (angles in radians).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Softening {
-    /// Residual cohesion c_res.
-    pub cohesion: f64,
-    /// Residual friction angle φ_res (radians).
-    pub friction: f64,
-    /// Residual dilation angle ψ_res (radians).
-    pub dilation: f64,
-    /// κ_res: the accumulated equivalent deviatoric plastic strain at which the residual
-    /// values are reached.
-    pub kappa: f64,
-}
 
 /// Return region of a Mohr–Coulomb update (see the module documentation for the table).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -166,16 +154,6 @@ pub struct MohrCoulomb {
     /// Tension cut-off σ_t (σ₁ ≤ σ_t), at most the peak apex value c cot φ.
     pub tension_cutoff: Option<f64>,
     pub softening: Option<Softening>,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Branch {
-    /// No softening: peak values.
-    Peak,
-    /// X(κ) = X₀ + (X_res − X₀) κ/κ_res, not clamped (the clamp is the Residual branch).
-    Softening,
-    /// X = X_res.
-    Residual,
 }
 
 /// Strength parameters at some κ on a branch, with their κ-derivatives.
@@ -379,16 +357,7 @@ impl MohrCoulomb {
     fn validate(&self) -> Result<(), ConstitutiveError> {
         let bad = |name: &'static str, value: f64| Err(ConstitutiveError::InvalidParameter { name, value });
         Elastic::new(self.elastic.young, self.elastic.poisson)?;
-        let half_pi = std::f64::consts::FRAC_PI_2;
-        if !(self.cohesion.is_finite() && self.cohesion >= 0.0) {
-            return bad("cohesion", self.cohesion);
-        }
-        if !(self.friction.is_finite() && self.friction >= 0.0 && self.friction < half_pi) {
-            return bad("friction", self.friction);
-        }
-        if !(self.dilation.is_finite() && self.dilation >= 0.0 && self.dilation <= self.friction) {
-            return bad("dilation", self.dilation);
-        }
+        self.frictional().validate_peak()?;
         if let Some(t) = self.tension_cutoff {
             if !t.is_finite() {
                 return bad("tension_cutoff", t);
@@ -400,70 +369,45 @@ impl MohrCoulomb {
                 }
             }
         }
-        if let Some(s) = self.softening {
-            if !(s.cohesion.is_finite() && s.cohesion >= 0.0 && s.cohesion <= self.cohesion) {
-                return bad("residual cohesion", s.cohesion);
-            }
-            if !(s.friction.is_finite() && s.friction >= 0.0 && s.friction <= self.friction) {
-                return bad("residual friction", s.friction);
-            }
-            if !(s.dilation.is_finite() && s.dilation >= 0.0 && s.dilation <= self.dilation && s.dilation <= s.friction)
-            {
-                return bad("residual dilation", s.dilation);
-            }
-            if !(s.kappa.is_finite() && s.kappa > 0.0) {
-                return bad("kappa_res", s.kappa);
-            }
+        self.frictional().validate_softening()
+    }
+
+    /// The peak strength and its softening, as the frictional laws share them.
+    fn frictional(&self) -> FrictionalStrength {
+        FrictionalStrength {
+            cohesion: self.cohesion,
+            friction: self.friction,
+            dilation: self.dilation,
+            softening: self.softening,
         }
-        Ok(())
     }
 
     /// True when the softening law makes c, φ or ψ vary.
     fn softens(&self) -> bool {
-        self.softening
-            .is_some_and(|s| s.cohesion != self.cohesion || s.friction != self.friction || s.dilation != self.dilation)
+        self.frictional().softens()
     }
 
     /// (c, φ, ψ) at accumulated plastic strain κ (angles in radians).
     pub fn strength(&self, kappa: f64) -> (f64, f64, f64) {
-        match self.softening {
-            None => (self.cohesion, self.friction, self.dilation),
-            Some(s) => {
-                let w = (1.0 - kappa / s.kappa).max(0.0);
-                (
-                    s.cohesion + (self.cohesion - s.cohesion) * w,
-                    s.friction + (self.friction - s.friction) * w,
-                    s.dilation + (self.dilation - s.dilation) * w,
-                )
-            }
-        }
+        self.frictional().at(kappa)
     }
 
     fn branch_at(&self, kappa: f64) -> Branch {
-        match self.softening {
-            None => Branch::Peak,
-            Some(s) if kappa >= s.kappa => Branch::Residual,
-            Some(_) => Branch::Softening,
-        }
+        self.frictional().branch_at(kappa)
     }
 
     fn params(&self, kappa: f64, branch: Branch) -> Params {
-        let (c, phi, psi, dc, dphi, dpsi) = match (branch, self.softening) {
-            (Branch::Softening, Some(s)) => {
-                let r = kappa / s.kappa;
-                (
-                    self.cohesion + (s.cohesion - self.cohesion) * r,
-                    self.friction + (s.friction - self.friction) * r,
-                    self.dilation + (s.dilation - self.dilation) * r,
-                    (s.cohesion - self.cohesion) / s.kappa,
-                    (s.friction - self.friction) / s.kappa,
-                    (s.dilation - self.dilation) / s.kappa,
-                )
-            }
-            (Branch::Residual, Some(s)) => (s.cohesion, s.friction, s.dilation, 0.0, 0.0, 0.0),
-            _ => (self.cohesion, self.friction, self.dilation, 0.0, 0.0, 0.0),
-        };
-        Params { c, sphi: phi.sin(), cphi: phi.cos(), spsi: psi.sin(), cpsi: psi.cos(), dc, dphi, dpsi }
+        let s = self.frictional().on_branch(kappa, branch);
+        Params {
+            c: s.c,
+            sphi: s.phi.sin(),
+            cphi: s.phi.cos(),
+            spsi: s.psi.sin(),
+            cpsi: s.psi.cos(),
+            dc: s.dc,
+            dphi: s.dphi,
+            dpsi: s.dpsi,
+        }
     }
 
     /// (f_MC, f_t) of principal stresses in any order: f_MC = max over the six planes, f_t =
@@ -497,30 +441,7 @@ impl MohrCoulomb {
         kappa_n: f64,
         solve: impl Fn(Branch) -> Result<Option<Candidate>, ConstitutiveError>,
     ) -> Result<Option<Candidate>, ConstitutiveError> {
-        let Some(s) = self.softening else {
-            return solve(Branch::Peak);
-        };
-        if kappa_n >= s.kappa {
-            return solve(Branch::Residual);
-        }
-        let soft = solve(Branch::Softening);
-        if let Ok(Some(c)) = &soft {
-            if c.kappa <= s.kappa {
-                return soft;
-            }
-        }
-        let res = solve(Branch::Residual);
-        if let Ok(Some(c)) = &res {
-            if c.kappa >= s.kappa {
-                return res;
-            }
-        }
-        // Neither branch is self-consistent (not expected for a monotone softening law):
-        // prefer a converged answer over an error.
-        match (soft, res) {
-            (Ok(Some(c)), _) | (_, Ok(Some(c))) => Ok(Some(c)),
-            (soft, _) => soft,
-        }
+        self.frictional().on_branches(kappa_n, |c: &Candidate| c.kappa, solve)
     }
 
     /// Return to the planes `set` (1–3 of them) with as many multipliers, by Newton on the
@@ -989,26 +910,14 @@ impl StrengthReducible for MohrCoulomb {
     /// friction would break ψ ≤ φ), the tension cut-off over F (the apex c cot φ is
     /// unchanged) and the residual values of softening alike.
     fn with_strength_reduced(&self, factor: f64) -> Result<std::sync::Arc<dyn ConstitutiveLaw>, ConstitutiveError> {
-        if !(factor.is_finite() && factor > 0.0) {
-            return Err(ConstitutiveError::InvalidParameter { name: "strength reduction factor", value: factor });
-        }
-        let reduce = |phi: f64| (phi.tan() / factor).atan();
-        let friction = reduce(self.friction);
+        let reduced = self.frictional().reduced(factor)?;
         let law = Self {
             elastic: self.elastic,
-            cohesion: self.cohesion / factor,
-            friction,
-            dilation: self.dilation.min(friction),
+            cohesion: reduced.cohesion,
+            friction: reduced.friction,
+            dilation: reduced.dilation,
             tension_cutoff: self.tension_cutoff.map(|t| t / factor),
-            softening: self.softening.map(|s| {
-                let friction_res = reduce(s.friction);
-                Softening {
-                    cohesion: s.cohesion / factor,
-                    friction: friction_res,
-                    dilation: s.dilation.min(friction_res).min(self.dilation.min(friction)),
-                    kappa: s.kappa,
-                }
-            }),
+            softening: reduced.softening,
         };
         law.validate().map(|()| std::sync::Arc::new(law) as std::sync::Arc<dyn ConstitutiveLaw>)
     }

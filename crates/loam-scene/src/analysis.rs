@@ -188,7 +188,7 @@ impl LoadedScene {
             ));
         }
         if !has_strength(model) {
-            return Err(self.error(&[Seg::Key("materials")], "strength reduction needs a material with a strength (VonMises or MohrCoulomb); every material here is elastic"));
+            return Err(self.error(&[Seg::Key("materials")], "strength reduction needs a material with a strength (VonMises, MohrCoulomb or DruckerPrager); every material here is elastic"));
         }
         Ok(())
     }

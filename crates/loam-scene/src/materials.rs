@@ -2,8 +2,8 @@
 //! parameter checked against what is valid and refused at its own key.
 
 use super::locate::Seg;
-use super::{LawSpec, LoadedScene, MaterialSpec, SceneError, SofteningSpec};
-use loam_constitutive::{ConstitutiveError, ConstitutiveLaw, Elastic, MohrCoulomb, VonMises};
+use super::{ConeFitSpec, LawSpec, LoadedScene, MaterialSpec, SceneError, SofteningSpec};
+use loam_constitutive::{ConeFit, ConstitutiveError, ConstitutiveLaw, DruckerPrager, Elastic, MohrCoulomb, VonMises};
 use std::sync::Arc;
 
 impl LoadedScene {
@@ -67,6 +67,9 @@ impl LawChecks<'_> {
             LawSpec::MohrCoulomb { cohesion, friction, dilation, tension_cutoff, softening, .. } => {
                 Arc::new(self.mohr_coulomb(elastic, [cohesion, friction, dilation], tension_cutoff, softening)?)
             }
+            LawSpec::DruckerPrager { cohesion, friction, dilation, fit, softening, .. } => {
+                Arc::new(self.drucker_prager(elastic, [cohesion, friction, dilation], fit, softening)?)
+            }
         })
     }
 
@@ -75,7 +78,8 @@ impl LawChecks<'_> {
         let (young, poisson) = match self.m.law {
             LawSpec::Elastic { young, poisson }
             | LawSpec::VonMises { young, poisson, .. }
-            | LawSpec::MohrCoulomb { young, poisson, .. } => (young, poisson),
+            | LawSpec::MohrCoulomb { young, poisson, .. }
+            | LawSpec::DruckerPrager { young, poisson, .. } => (young, poisson),
         };
         self.check("young", young, young > 0.0, "positive (Young's modulus)")?;
         self.check("poisson", poisson, poisson > -1.0 && poisson < 0.5, "in (-1, 0.5) (Poisson's ratio)")?;
@@ -101,6 +105,15 @@ impl LawChecks<'_> {
         Ok(law)
     }
 
+    /// The peak `[cohesion, friction, dilation]` (angles in degrees) of a frictional law.
+    fn frictional(&self, [cohesion, friction, dilation]: [f64; 3]) -> Result<(), SceneError> {
+        self.check("friction", friction, (0.0..90.0).contains(&friction), "in [0, 90) degrees (0 is Tresca)")?;
+        let strong = cohesion >= 0.0 && (cohesion > 0.0 || friction > 0.0);
+        self.check("cohesion", cohesion, strong, "≥ 0, and > 0 when friction = 0")?;
+        let valid_dilation = "in [0, friction] degrees (= friction: associated flow)";
+        self.check("dilation", dilation, (0.0..=friction).contains(&dilation), valid_dilation)
+    }
+
     /// Mohr–Coulomb from its peak `[cohesion, friction, dilation]` (angles in degrees).
     fn mohr_coulomb(
         &self,
@@ -109,17 +122,37 @@ impl LawChecks<'_> {
         tension_cutoff: Option<f64>,
         softening: Option<SofteningSpec>,
     ) -> Result<MohrCoulomb, SceneError> {
-        self.check("friction", friction, (0.0..90.0).contains(&friction), "in [0, 90) degrees (0 is Tresca)")?;
-        let strong = cohesion >= 0.0 && (cohesion > 0.0 || friction > 0.0);
-        self.check("cohesion", cohesion, strong, "≥ 0, and > 0 when friction = 0")?;
-        let valid_dilation = "in [0, friction] degrees (= friction: associated flow)";
-        self.check("dilation", dilation, (0.0..=friction).contains(&dilation), valid_dilation)?;
+        self.frictional([cohesion, friction, dilation])?;
         let mut law = MohrCoulomb::from_degrees(elastic, cohesion, friction, dilation).map_err(|e| self.refused(e))?;
         if let Some(t) = tension_cutoff {
             let apex = if friction > 0.0 { cohesion / friction.to_radians().tan() } else { f64::INFINITY };
             self.check("tension_cutoff", t, t <= apex, "at most c cot φ (the apex of the cone)")?;
             law = law.with_tension_cutoff(t).map_err(|e| self.refused(e))?;
         }
+        if let Some(sf) = softening {
+            law = law
+                .with_softening(sf.cohesion, sf.friction, sf.dilation, sf.plastic_strain)
+                .map_err(|e| self.refused(e))?;
+        }
+        Ok(law)
+    }
+
+    /// Drucker–Prager from its peak `[cohesion, friction, dilation]` (angles in degrees).
+    fn drucker_prager(
+        &self,
+        elastic: Elastic,
+        [cohesion, friction, dilation]: [f64; 3],
+        fit: ConeFitSpec,
+        softening: Option<SofteningSpec>,
+    ) -> Result<DruckerPrager, SceneError> {
+        self.frictional([cohesion, friction, dilation])?;
+        let fit = match fit {
+            ConeFitSpec::PlaneStrain => ConeFit::PlaneStrain,
+            ConeFitSpec::Compression => ConeFit::Compression,
+            ConeFitSpec::Extension => ConeFit::Extension,
+        };
+        let mut law =
+            DruckerPrager::from_degrees(elastic, cohesion, friction, dilation, fit).map_err(|e| self.refused(e))?;
         if let Some(sf) = softening {
             law = law
                 .with_softening(sf.cohesion, sf.friction, sf.dilation, sf.plastic_strain)

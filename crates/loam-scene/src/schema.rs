@@ -279,9 +279,34 @@ pub enum LawSpec {
         #[serde(default)]
         softening: Option<SofteningSpec>,
     },
+    /// Drucker–Prager: the smooth cone fitted to Mohr–Coulomb's c, φ, ψ (degrees) in plane
+    /// strain (default), triaxial compression or extension; optional linear softening.
+    DruckerPrager {
+        young: f64,
+        poisson: f64,
+        cohesion: f64,
+        friction: f64,
+        dilation: f64,
+        #[serde(default)]
+        fit: ConeFitSpec,
+        #[serde(default)]
+        softening: Option<SofteningSpec>,
+    },
 }
 
-/// Linear softening of Mohr–Coulomb strength to residual values (angles in degrees),
+/// How a Drucker–Prager cone is fitted to Mohr–Coulomb.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+pub enum ConeFitSpec {
+    /// Mohr–Coulomb's collapse stresses in plane strain (inscribed for associated flow).
+    #[default]
+    PlaneStrain,
+    /// Through the triaxial-compression meridian.
+    Compression,
+    /// Through the triaxial-extension meridian.
+    Extension,
+}
+
+/// Linear softening of a Mohr–Coulomb or Drucker–Prager strength to residual values (angles in degrees),
 /// reached at the accumulated plastic shear strain `plastic_strain`.
 #[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]

@@ -68,6 +68,10 @@ fn softening(c: &str, kappa: &str) -> String {
     ))
 }
 
+fn dp(rest: &str) -> String {
+    format!("law: DruckerPrager(young: 1e5, poisson: 0.0, {rest})")
+}
+
 fn vm(rest: &str) -> String {
     format!("law: VonMises(young: 1e5, poisson: 0.0, {rest})")
 }
@@ -121,6 +125,20 @@ fn cases() -> Vec<(&'static str, usize, String)> {
         ("von mises residual neg", 2, c(&[(ELASTIC, &vm("yield_stress: 17.3, residual_yield_stress: Some(-1.0)"))])),
         ("mohr coulomb", 2, c(&[(ELASTIC, &mc("cohesion: 10.0, friction: 30.0, dilation: 5.0"))])),
         ("tresca", 2, c(&[(ELASTIC, &mc("cohesion: 10.0, friction: 0.0, dilation: 0.0"))])),
+        ("drucker prager", 2, c(&[(ELASTIC, &dp("cohesion: 10.0, friction: 30.0, dilation: 5.0"))])),
+        ("drucker prager fit", 2, c(&[(ELASTIC, &dp("cohesion: 10.0, friction: 30.0, dilation: 5.0, fit: Extension"))])),
+        ("drucker prager fit typo", 2, c(&[(ELASTIC, &dp("cohesion: 10.0, friction: 30.0, dilation: 5.0, fit: Triaxial"))])),
+        ("drucker prager dilation", 2, c(&[(ELASTIC, &dp("cohesion: 10.0, friction: 20.0, dilation: 25.0"))])),
+        ("drucker prager no strength", 2, c(&[(ELASTIC, &dp("cohesion: 0.0, friction: 0.0, dilation: 0.0"))])),
+        (
+            "drucker prager residual",
+            2,
+            c(&[(
+                ELASTIC,
+                &dp("cohesion: 10.0, friction: 30.0, dilation: 5.0, \
+                     softening: Some((cohesion: 12.0, friction: 20.0, dilation: 0.0, plastic_strain: 0.1))"),
+            )]),
+        ),
         ("friction 90", 2, c(&[(ELASTIC, &mc("cohesion: 10.0, friction: 90.0, dilation: 0.0"))])),
         ("friction negative", 2, c(&[(ELASTIC, &mc("cohesion: 10.0, friction: -1.0, dilation: 0.0"))])),
         ("no strength", 2, c(&[(ELASTIC, &mc("cohesion: 0.0, friction: 0.0, dilation: 0.0"))])),
