@@ -9,7 +9,7 @@
 use crate::report::{Report, Row};
 use crate::soil::{self, COHESION, POISSON, YOUNG};
 use anyhow::Result;
-use loam::constitutive::{ConstitutiveLaw, Elastic, MohrCoulomb};
+use loam::constitutive::{ConeFit, ConstitutiveLaw, DruckerPrager, Elastic, MohrCoulomb};
 use loam::format::output::plot::{Plot, Series};
 use loam::format::output::{CsvCell, CsvWriter};
 use loam::implicit::{AntiLocking, QuasiStatic, QuasiStaticSettings, StepReport};
@@ -132,7 +132,8 @@ struct FootingLaw {
     nc: f64,
 }
 
-/// Von Mises, von Mises with ν = 0.49, and associated Mohr–Coulomb at φ = 0°…30°.
+/// Von Mises, von Mises with ν = 0.49, associated Mohr–Coulomb at φ = 0°…30° and
+/// associated Drucker–Prager (plane-strain fit) at φ = 20°, 30°.
 fn laws() -> Result<Vec<FootingLaw>> {
     let elastic = Elastic::new(YOUNG, POISSON)?;
     let law = |name: &str, label: &str, law, nc| FootingLaw { name: name.into(), label: label.into(), law, nc };
@@ -145,6 +146,15 @@ fn laws() -> Result<Vec<FootingLaw>> {
             &format!("Mohr–Coulomb φ = ψ = {phi}°"),
             &format!("MC φ = {phi}°"),
             Arc::new(MohrCoulomb::from_degrees(elastic, COHESION, phi, phi)?),
+            prandtl_nc(phi),
+        ));
+    }
+    // The smooth cone fitted to Mohr–Coulomb's plane-strain collapse: the same N_c.
+    for phi in [20.0, 30.0] {
+        laws.push(law(
+            &format!("Drucker–Prager φ = ψ = {phi}°"),
+            &format!("DP φ = {phi}°"),
+            Arc::new(DruckerPrager::from_degrees(elastic, COHESION, phi, phi, ConeFit::PlaneStrain)?),
             prandtl_nc(phi),
         ));
     }
@@ -236,7 +246,7 @@ impl Sweep {
 /// The V3 section: every law with every treatment on its meshes.
 pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
     let finest_assumed = treatments(quick)[2].1.last().unwrap();
-    writeln!(report.md, "## V3 strip footing\n\nRigid rough footing, half-width b = 1 (B = 2b), pushed {SETTLEMENT} b = 0.1 B in {LOAD_STEPS} load steps (extrapolated start) into weightless soil; half model 10 b × 5 b, linear basis, 2×2 points per cell, small strain, geometrically linear (points held at their places, Prandtl's small-deformation setting), E = {YOUNG:e}, ν = {POISSON} (and 0.49 for the locking case), c = {COHESION}. q = footing reaction / b; q_u = q at the settlement of 0.1 B (docs/verification.md §V3), q(0.04 b) is shown beside it; reference (2 + π) c_u (von Mises, c_u = σ_y/√3) and c N_c (Mohr–Coulomb, associated). Plain: every point's own strain (locks); B-bar: cell-averaged dilatation; assumed strain: the cell's average strain plus β = {STABILIZATION} times each point's deviatoric deviation (docs/theory.md §13). The bound |q_u/q_ref − 1| ≤ 5 % is checked for every law with the assumed strain on the finest mesh of the full sweep ({finest_assumed} cells per b); every curve is checked to rise to its plateau without a drop. Curves: footing_curves.csv, footing_curves.svg.\n")?;
+    writeln!(report.md, "## V3 strip footing\n\nRigid rough footing, half-width b = 1 (B = 2b), pushed {SETTLEMENT} b = 0.1 B in {LOAD_STEPS} load steps (extrapolated start) into weightless soil; half model 10 b × 5 b, linear basis, 2×2 points per cell, small strain, geometrically linear (points held at their places, Prandtl's small-deformation setting), E = {YOUNG:e}, ν = {POISSON} (and 0.49 for the locking case), c = {COHESION}. q = footing reaction / b; q_u = q at the settlement of 0.1 B (docs/verification.md §V3), q(0.04 b) is shown beside it; reference (2 + π) c_u (von Mises, c_u = σ_y/√3) and c N_c (Mohr–Coulomb and Drucker–Prager fitted in plane strain, associated). Plain: every point's own strain (locks); B-bar: cell-averaged dilatation; assumed strain: the cell's average strain plus β = {STABILIZATION} times each point's deviatoric deviation (docs/theory.md §13). The bound |q_u/q_ref − 1| ≤ 5 % is checked for every law with the assumed strain on the finest mesh of the full sweep ({finest_assumed} cells per b); every curve is checked to rise to its plateau without a drop. Curves: footing_curves.csv, footing_curves.svg.\n")?;
     writeln!(report.md, "| law | treatment | cells per b | q(0.04 b)/c | q_u/c | reference | q_u/q_ref − 1 | largest drop / q_ref | max Newton its per sub-step | max corrections to 1e-9 | cut-backs | wall [s] |\n|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")?;
     let mut sweep = Sweep::new(&report.out)?;
     for law in &laws()? {

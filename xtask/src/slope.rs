@@ -6,7 +6,7 @@ use crate::report::{Report, Row};
 use crate::soil::{self, COHESION, POISSON, YOUNG};
 use anyhow::Result;
 use loam::analysis::Analysis;
-use loam::constitutive::{ConstitutiveLaw, Elastic, MohrCoulomb};
+use loam::constitutive::{ConeFit, ConstitutiveLaw, DruckerPrager, Elastic, MohrCoulomb};
 use loam::explicit::{Explicit, ExplicitSettings, TimeStep};
 use loam::grid::BasisKind;
 use loam::implicit::{
@@ -14,7 +14,9 @@ use loam::implicit::{
     StrengthReduction, TrialStart,
 };
 use loam::model::Model;
-use loam_verification::slope::bounds::{GRIFFITHS_LANE, RUNOUT_PROFILES, SEARCH_PATHS, TAYLOR as TAYLOR_BOUND};
+use loam_verification::slope::bounds::{
+    DRUCKER_PRAGER_FOS, GRIFFITHS_LANE, RUNOUT_PROFILES, SEARCH_PATHS, TAYLOR as TAYLOR_BOUND,
+};
 use loam_verification::slope::{GRIFFITHS_LANE_FACTOR_OF_SAFETY as GL_FOS, TAYLOR_STABILITY as TAYLOR};
 use loam_verification::{slope_model, slope_model_with, SlopeGeometry};
 use std::fmt::Write as _;
@@ -133,15 +135,21 @@ fn collapse_row(md: &mut String, cells: usize, treatment: &str, r: &Collapse) ->
 /// V4b: the factor of safety on every mesh, searched from the last state that held and
 /// from zero side by side; the bound on the finest, and the two searches' agreement on all.
 fn griffiths_lane_section(meshes: &[usize], report: &mut Report) -> Result<()> {
-    writeln!(report.md, "## V4b Griffiths & Lane slope: strength reduction\n\n2:1 slope (26.57°), H = 10, foundation layer H deep, 1.2 H before the toe, 2 H behind the crest; Mohr–Coulomb c = 10, φ = 20°, ψ = 0 (non-associated: sparse LU), γ = 20 (c/(γH) = 0.05), E = {YOUNG:e}, ν = {POISSON}; linear basis, B-bar. Gravity in 10 load steps (up to 4 halvings) at F = 1; then, from the last state that held (the default), c and tan φ divided by a factor raised towards 2 in 10 strength steps, each halved down to half the tolerance; or from zero, each trial applying gravity anew at its factor, F bisected. Tolerance 0.005. Reference: F ≈ {GL_FOS} (Griffiths & Lane 1999; Bishop's method gives 1.38). Bound: within 5 % on the finest mesh, and the two searches within the tolerance of each other.\n")?;
+    writeln!(report.md, "## V4b Griffiths & Lane slope: strength reduction\n\n2:1 slope (26.57°), H = 10, foundation layer H deep, 1.2 H before the toe, 2 H behind the crest; Mohr–Coulomb c = 10, φ = 20°, ψ = 0 (non-associated: sparse LU), and the Drucker–Prager cone fitted to it in plane strain (η = sin φ, ξ = cos φ at ψ = 0), γ = 20 (c/(γH) = 0.05), E = {YOUNG:e}, ν = {POISSON}; linear basis, B-bar. Gravity in 10 load steps (up to 4 halvings) at F = 1; then, from the last state that held (the default), c and tan φ divided by a factor raised towards 2 in 10 strength steps, each halved down to half the tolerance; or from zero, each trial applying gravity anew at its factor, F bisected. Tolerance 0.005. Reference: F ≈ {GL_FOS} (Griffiths & Lane 1999; Bishop's method gives 1.38). Bound: within 5 % on the finest mesh, the two searches within the tolerance of each other, and Drucker–Prager within 2 % of Mohr–Coulomb on the finest mesh.\n")?;
     report.mark_table("V4b")?;
-    writeln!(report.md, "| cells per H | trials start | F (bracket) | /1.4 − 1 | trials | Newton its | largest displacement at the last stable trial [m] | wall [s] |\n|---:|---|---:|---:|---:|---:|---:|---:|")?;
-    let mut finest = f64::NAN;
+    writeln!(report.md, "| cells per H | law | trials start | F (bracket) | /1.4 − 1 | trials | Newton its | largest displacement at the last stable trial [m] | wall [s] |\n|---:|---|---|---:|---:|---:|---:|---:|---:|")?;
+    let (mut finest, mut dp) = (f64::NAN, f64::NAN);
+    let runs = [
+        (SlopeLaw::MohrCoulomb, TrialStart::LastHeld, "last held"),
+        (SlopeLaw::MohrCoulomb, TrialStart::Zero, "zero"),
+        (SlopeLaw::DruckerPrager, TrialStart::LastHeld, "last held"),
+    ];
     for &cells in meshes {
         let mut factors = Vec::new();
-        for (start, name) in [(TrialStart::LastHeld, "last held"), (TrialStart::Zero, "zero")] {
-            eprintln!("verify: V4b Griffiths & Lane slope, {cells} cells per H, trials from {name}");
-            let (fos, wall) = griffiths_lane(cells, start)?;
+        for (law, start, name) in runs {
+            let law_name = law.name();
+            eprintln!("verify: V4b Griffiths & Lane slope, {law_name}, {cells} cells per H, trials from {name}");
+            let (fos, wall) = griffiths_lane(cells, law, start)?;
             let last_stable = fos
                 .trials
                 .iter()
@@ -152,44 +160,73 @@ fn griffiths_lane_section(meshes: &[usize], report: &mut Report) -> Result<()> {
             let rel = fos.value() / GL_FOS - 1.0;
             writeln!(
                 report.md,
-                "| {cells} | {name} | {:.3} ({:.4}–{:.4}) | {rel:+.3} | {} | {iterations} | {last_stable:.3} | {wall:.1} |",
+                "| {cells} | {law_name} | {name} | {:.3} ({:.4}–{:.4}) | {rel:+.3} | {} | {iterations} | {last_stable:.3} | {wall:.1} |",
                 fos.value(),
                 fos.stable,
                 fos.failed,
                 fos.trials.len()
             )?;
-            let case = format!("V4b Griffiths-Lane slope {cells}/H, from {name}");
+            let case = match law {
+                SlopeLaw::MohrCoulomb => format!("V4b Griffiths-Lane slope {cells}/H, from {name}"),
+                SlopeLaw::DruckerPrager => format!("V4b Griffiths-Lane slope {cells}/H, Drucker-Prager, from {name}"),
+            };
             report.rows.push(Row::info(case.clone(), "factor_of_safety", fos.value()));
             report.rows.push(Row::info(case.clone(), "newton_iterations", iterations as f64));
             report.rows.push(Row::info(case, "wall_s", wall));
-            if start == TrialStart::LastHeld {
+            if (law, start) == (SlopeLaw::MohrCoulomb, TrialStart::LastHeld) {
                 finest = rel;
             }
             factors.push(fos.value());
         }
         let apart = (factors[0] - factors[1]).abs() / GRIFFITHS_LANE_TOLERANCE;
-        report.rows.push(Row::checked(
-            format!("V4b Griffiths-Lane slope {cells}/H"),
-            "|F_last_held - F_zero|/tolerance",
-            apart,
-            SEARCH_PATHS,
-        ));
+        let case = format!("V4b Griffiths-Lane slope {cells}/H");
+        report.rows.push(Row::checked(&case, "|F_last_held - F_zero|/tolerance", apart, SEARCH_PATHS));
+        dp = factors[2] / factors[0] - 1.0;
+        report.rows.push(Row::info(&case, "F_Drucker-Prager/F_Mohr-Coulomb - 1", dp));
     }
     writeln!(report.md)?;
     let quantity = "abs_fos_over_1.4_minus_1";
     report.rows.push(Row::checked("V4b Griffiths-Lane slope (finest)", quantity, finest.abs(), GRIFFITHS_LANE));
+    let quantity = "|F_Drucker-Prager/F_Mohr-Coulomb - 1|";
+    report.rows.push(Row::checked("V4b Griffiths-Lane slope (finest)", quantity, dp.abs(), DRUCKER_PRAGER_FOS));
     Ok(())
+}
+
+/// The soil law of a V4b search: c = 10, φ = 20°, ψ = 0 as Mohr–Coulomb, or as the
+/// Drucker–Prager cone fitted to it in plane strain.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum SlopeLaw {
+    MohrCoulomb,
+    DruckerPrager,
+}
+
+impl SlopeLaw {
+    fn name(self) -> &'static str {
+        match self {
+            SlopeLaw::MohrCoulomb => "Mohr–Coulomb",
+            SlopeLaw::DruckerPrager => "Drucker–Prager",
+        }
+    }
+
+    fn law(self) -> Result<Arc<dyn ConstitutiveLaw>> {
+        let elastic = Elastic::new(YOUNG, POISSON)?;
+        Ok(match self {
+            SlopeLaw::MohrCoulomb => Arc::new(MohrCoulomb::from_degrees(elastic, 10.0, 20.0, 0.0)?),
+            SlopeLaw::DruckerPrager => {
+                Arc::new(DruckerPrager::from_degrees(elastic, 10.0, 20.0, 0.0, ConeFit::PlaneStrain)?)
+            }
+        })
+    }
 }
 
 /// The strength-reduction search's tolerance on F in V4b.
 const GRIFFITHS_LANE_TOLERANCE: f64 = 0.005;
 
-/// Strength reduction on the Griffiths & Lane slope, F bracketed in [1, 2] to 0.005 with
-/// trials from `start`, and its wall time.
-fn griffiths_lane(cells: usize, start: TrialStart) -> Result<(FactorOfSafety, f64)> {
+/// Strength reduction on the Griffiths & Lane slope with `law`, F bracketed in [1, 2] to
+/// 0.005 with trials from `start`, and its wall time.
+fn griffiths_lane(cells: usize, law: SlopeLaw, start: TrialStart) -> Result<(FactorOfSafety, f64)> {
     let g = SlopeGeometry::GRIFFITHS_LANE;
-    let law: Arc<dyn ConstitutiveLaw> =
-        Arc::new(MohrCoulomb::from_degrees(Elastic::new(YOUNG, POISSON)?, 10.0, 20.0, 0.0)?);
+    let law = law.law()?;
     let model = slope_model(&g, law, 2.0, 10.0, cells, AntiLocking::BBar);
     let srf = StrengthReduction {
         trial: QuasiStaticSettings { load_steps: 10, max_cutbacks: 4, ..Default::default() },

@@ -14,6 +14,10 @@
 //! - [`DruckerPrager`]: the smooth cone fitted to Mohr–Coulomb in plane strain, triaxial
 //!   compression or extension ([`ConeFit`]), cone and apex returns, the same softening,
 //!   consistent tangent.
+//! - [`ModifiedCamClay`]: the critical-state model with pressure-dependent elasticity,
+//!   an implicit return in (p, q) and its consistent tangent.
+//! - [`ElementTest`]: one point of a law along a laboratory path (triaxial, oedometer,
+//!   simple shear) under mixed strain and stress control.
 //! - [`small_strain_update`] and [`finite_strain_update`]: the two kinematic drivers
 //!   (docs/theory.md §3 and §2). The finite-strain spatial tangent is de Souza Neto, Perić &
 //!   Owen (2008), *Computational Methods for Plasticity*, eq. 14.103.
@@ -24,15 +28,19 @@
 
 pub mod tensor;
 
+mod cam_clay;
 mod drucker_prager;
 mod elastic;
+mod element;
 mod frictional;
 mod kinematics;
 mod mohr_coulomb;
 mod von_mises;
 
+pub use cam_clay::{CamClayInitial, CamClayShear, ModifiedCamClay};
 pub use drucker_prager::{ConeFit, DruckerPrager, DruckerPragerRegion};
 pub use elastic::Elastic;
+pub use element::{ElementPath, ElementTest, Held};
 pub use frictional::Softening;
 pub use kinematics::{
     finite_strain_stress, finite_strain_update, small_strain_stress, small_strain_update, FiniteStrainStress,
@@ -143,6 +151,14 @@ pub trait ConstitutiveLaw: Send + Sync + std::fmt::Debug {
     /// are turned into elastic strains with it.
     fn elasticity(&self, _state: &MaterialState) -> Option<Elastic> {
         None
+    }
+    /// The elastic strain that carries `stress` with history `history`: an initial stress
+    /// state is turned into the point's elastic strain with it. By default the inverse of
+    /// [`ConstitutiveLaw::elasticity`] at that state; a law whose elasticity is not linear
+    /// gives its own exact inverse. `None` where the law has none.
+    fn elastic_strain_of(&self, stress: &Matrix3<f64>, history: &[f64]) -> Option<Matrix3<f64>> {
+        let state = MaterialState { stress: *stress, elastic_strain: &ZERO, history };
+        self.elasticity(&state).map(|e| e.strain(stress))
     }
     /// Whether the law's stiffness is the same in every state ([`ConstitutiveLaw::p_wave_modulus`]
     /// and [`ConstitutiveLaw::elasticity`] ignore the state): callers may then take it once

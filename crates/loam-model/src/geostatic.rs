@@ -1,7 +1,6 @@
 //! The geostatic (K0) initial stress of level or layered ground.
 
 use crate::{Kinematics, Model, ModelError};
-use loam_constitutive::MaterialState;
 use nalgebra::Matrix3;
 
 impl<const D: usize> Model<D> {
@@ -13,7 +12,7 @@ impl<const D: usize> Model<D> {
     /// b^e = exp(2 C⁻¹σ)). Gravity then acts in full from the start
     /// (`gravity_preloaded`). K0 applies to level or layered ground; a slope is brought to
     /// equilibrium by gravity loading instead. Fails if gravity is not along one axis, a
-    /// law has no isotropic elasticity, or the state lies outside a yield surface.
+    /// law has no elasticity that carries it, or the state lies outside a yield surface.
     pub fn geostatic_stress(&mut self, k0: f64) -> Result<(), ModelError> {
         if !(k0.is_finite() && k0 > 0.0) {
             return Err(ModelError::Geostatic(format!("K0 is {k0}; it must be a positive number")));
@@ -112,8 +111,8 @@ impl<const D: usize> Model<D> {
     }
 
     /// The elastic strain state that carries `sigma` (K0 and σ_v given for the message) at
-    /// point `p` with history `history` (ε^e = C⁻¹σ, or b^e = exp(2 C⁻¹σ) in finite
-    /// strain), checked admissible: the law's own update from it returns the stress.
+    /// point `p` with history `history` (the law's inverse of its elasticity, ε^e = C⁻¹σ for
+    /// linear elasticity; b^e = exp(2 ε^e) in finite strain), checked admissible: the law's own update from it returns the stress.
     fn carrying_strain(
         &self,
         p: usize,
@@ -124,15 +123,13 @@ impl<const D: usize> Model<D> {
     ) -> Result<Matrix3<f64>, ModelError> {
         let pts = &self.points;
         let law = self.law(p);
-        let state = MaterialState { stress: *sigma, elastic_strain: &Matrix3::zeros(), history };
-        let Some(elastic) = law.elasticity(&state) else {
+        let Some(eps) = law.elastic_strain_of(sigma, history) else {
             return Err(ModelError::Geostatic(format!(
-                "material {} ({}) has no isotropic elasticity to carry an initial stress",
+                "material {} ({}) has no elasticity that carries the initial stress at point {p} (σ_v = {sv:.4e})",
                 pts.material()[p],
                 law.name()
             )));
         };
-        let eps = elastic.strain(sigma);
         let upd = law.update(&eps, history, h_out).map_err(|e| ModelError::Geostatic(format!("point {p}: {e}")))?;
         if (upd.stress - sigma).norm() > 1e-8 * sigma.norm().max(f64::MIN_POSITIVE) {
             return Err(ModelError::Geostatic(format!(

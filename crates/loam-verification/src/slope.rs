@@ -33,6 +33,13 @@ pub mod bounds {
     /// V4b: |F / [`super::GRIFFITHS_LANE_FACTOR_OF_SAFETY`] − 1| on the finest mesh.
     pub const GRIFFITHS_LANE: Bound =
         Bound::upper(0.05, "docs/verification.md §V4: within 5 % of Griffiths & Lane's 1.4, finest mesh");
+    /// V4b: |F with the Drucker–Prager cone fitted in plane strain / F with Mohr–Coulomb − 1|
+    /// on the finest mesh (the fit gives Mohr–Coulomb's collapse stresses in plane strain
+    /// once the flow is steady).
+    pub const DRUCKER_PRAGER_FOS: Bound = Bound::upper(
+        0.02,
+        "docs/verification.md §V4: F with Drucker–Prager (plane-strain fit) within 2 % of Mohr–Coulomb's, finest mesh",
+    );
     /// V4b: |F from the last state that held − F from zero| over the search's tolerance,
     /// on every mesh: the continued search brackets the same factor.
     pub const SEARCH_PATHS: Bound = Bound::upper(

@@ -1,0 +1,566 @@
+//! Modified Cam clay (Roscoe & Burland 1968) with pressure-dependent elasticity and an
+//! implicit return in the invariants, after Borja & Lee (1990), *Cam-clay plasticity,
+//! part I*, CMAME 78, 49–72, with the consistent tangent (docs/theory.md §16).
+//!
+//! # The model
+//! Pressures are compression-positive here (p = −tr σ/3, ε_v = −tr ε), stress tension-
+//! positive as everywhere else. With q = √(3J₂), the critical-state slope M and the
+//! preconsolidation pressure p_c:
+//!
+//! ```text
+//! f = q²/M² + p (p − p_c)              (associated flow)
+//! p = p_ref exp(ε^e_v / κ̂)            (elastic volume: the κ line, κ̂ = κ/(1 + e₀))
+//! G = G₀ or 3 (1 − 2ν) K / (2 (1 + ν)) with K = p/κ̂
+//! p_c = p_c,n exp(Δε^p_v / (λ̂ − κ̂))   (hardening: the λ line, λ̂ = λ/(1 + e₀))
+//! ```
+//!
+//! p_ref = 1 in the scene's stress unit: it fixes only where the elastic volumetric strain
+//! is counted from (the stress depends on its changes). Isotropic compression follows
+//! e = e₀ − (1 + e₀) ε_v, whose slopes against ln p are λ on the virgin line and κ in
+//! unloading, exactly.
+//!
+//! # Return
+//! With the trial ε^e_v,tr, ε^e_s,tr = √(2/3) ‖dev ε_tr‖ and n̂ = dev ε_tr/‖dev ε_tr‖, the
+//! unknowns Δε^p_v and Δγ solve
+//!
+//! ```text
+//! r₁ = Δε^p_v − Δγ (2p − p_c) = 0,    r₂ = f(p, q, p_c) = 0,
+//! p = p(ε^e_v,tr − Δε^p_v),  q = 3G ε^e_s,tr / (1 + 6GΔγ/M²),  p_c = p_c(Δε^p_v)
+//! ```
+//!
+//! by Newton's method (halving a step that raises the residual), and σ = −p I + √(2/3) q n̂.
+//! The tangent differentiates the converged system with respect to (ε^e_v,tr, ε^e_s,tr):
+//!
+//! ```text
+//! D = p_v I⊗I − √(2/3) p_s I⊗n̂ − √(2/3) q_v n̂⊗I + ⅔ q_s n̂⊗n̂ + 2G/(1 + 6GΔγ/M²) (I_d − n̂⊗n̂)
+//! ```
+//!
+//! (p_v = dp/dε^e_v,tr and so on; in the elastic case Δγ = 0 and the same formula gives the
+//! elastic tangent, not symmetric when G follows p).
+//!
+//! History slots: `[0]` the accumulated plastic shear strain Σ Δε^p_s (Δε^p_s = 2qΔγ/M²,
+//! the measure Mohr–Coulomb softens with), `[1]` the accumulated volumetric plastic strain
+//! (tension positive, as Mohr–Coulomb's), `[2]` p_c.
+
+use nalgebra::{Matrix2, Matrix3, Vector2};
+
+use crate::tensor::{flatten, identity_dyad, sym_identity, Tensor4};
+use crate::{check_finite, ConstitutiveError, ConstitutiveLaw, Elastic, MaterialState, StressUpdate};
+
+/// How the shear modulus is given.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum CamClayShear {
+    /// A constant shear modulus G.
+    Modulus(f64),
+    /// A constant Poisson's ratio ν: G = 3 (1 − 2ν) K / (2 (1 + ν)) follows p.
+    Poisson(f64),
+}
+
+/// How the preconsolidation pressure of a point follows from its initial stress.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum CamClayInitial {
+    /// p_c = OCR × the size of the yield surface through the initial stress
+    /// (p + q²/(M² p)): OCR = 1 is normally consolidated.
+    OverConsolidation(f64),
+    /// The same p_c everywhere; the initial stress must lie inside its surface.
+    Preconsolidation(f64),
+}
+
+/// Modified Cam clay (see the module documentation).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ModifiedCamClay {
+    lambda: f64,
+    kappa: f64,
+    void_ratio: f64,
+    m: f64,
+    shear: CamClayShear,
+    initial: CamClayInitial,
+}
+
+/// f ≤ ELASTIC_TOL p_c² is elastic.
+const ELASTIC_TOL: f64 = 1e-12;
+/// Newton's tolerance on the scaled residuals.
+const NEWTON_TOL: f64 = 1e-13;
+const MAX_ITERATIONS: usize = 60;
+const SQRT_2_3: f64 = 0.816_496_580_927_726;
+/// p_ref of the elastic volume law, in the scene's stress unit.
+const P_REF: f64 = 1.0;
+
+/// The trial state in invariants.
+struct Trial {
+    eps_v: f64,
+    eps_s: f64,
+    n_hat: Matrix3<f64>,
+    pc_n: f64,
+}
+
+/// A converged state: Δε^p_v, Δγ and what follows from them.
+#[derive(Debug, Clone, Copy)]
+struct Local {
+    x: f64,
+    dgamma: f64,
+    p: f64,
+    q: f64,
+    pc: f64,
+    g: f64,
+    /// 1 + 6GΔγ/M².
+    den: f64,
+}
+
+impl ModifiedCamClay {
+    /// λ and κ the slopes of the virgin and unloading lines in e–ln p, e₀ the void ratio
+    /// their modified forms use (λ̂ = λ/(1 + e₀)), M the critical-state slope. Validates
+    /// λ > κ > 0, e₀ > 0, M > 0, a positive G or −1 < ν < 0.5, OCR ≥ 1 or p_c > 0.
+    pub fn new(
+        lambda: f64,
+        kappa: f64,
+        void_ratio: f64,
+        m: f64,
+        shear: CamClayShear,
+        initial: CamClayInitial,
+    ) -> Result<Self, ConstitutiveError> {
+        let bad = |name: &'static str, value: f64| Err(ConstitutiveError::InvalidParameter { name, value });
+        if !(kappa.is_finite() && kappa > 0.0) {
+            return bad("kappa", kappa);
+        }
+        if !(lambda.is_finite() && lambda > kappa) {
+            return bad("lambda", lambda);
+        }
+        if !(void_ratio.is_finite() && void_ratio > 0.0) {
+            return bad("void_ratio", void_ratio);
+        }
+        if !(m.is_finite() && m > 0.0) {
+            return bad("critical state slope M", m);
+        }
+        match shear {
+            CamClayShear::Modulus(g) if !(g.is_finite() && g > 0.0) => return bad("shear_modulus", g),
+            CamClayShear::Poisson(nu) if !(nu.is_finite() && nu > -1.0 && nu < 0.5) => return bad("poisson", nu),
+            _ => {}
+        }
+        match initial {
+            CamClayInitial::OverConsolidation(ocr) if !(ocr.is_finite() && ocr >= 1.0) => {
+                return bad("over-consolidation ratio", ocr)
+            }
+            CamClayInitial::Preconsolidation(pc) if !(pc.is_finite() && pc > 0.0) => {
+                return bad("preconsolidation pressure", pc)
+            }
+            _ => {}
+        }
+        Ok(Self { lambda, kappa, void_ratio, m, shear, initial })
+    }
+
+    /// M = 6 sin φ/(3 − sin φ): the critical-state slope matched to Mohr–Coulomb in
+    /// triaxial compression at the critical-state friction angle φ (degrees).
+    pub fn slope_from_friction(friction_deg: f64) -> f64 {
+        let s = friction_deg.to_radians().sin();
+        6.0 * s / (3.0 - s)
+    }
+
+    /// κ̂ = κ/(1 + e₀) and λ̂ − κ̂.
+    fn moduli(&self) -> (f64, f64) {
+        let v = 1.0 + self.void_ratio;
+        (self.kappa / v, (self.lambda - self.kappa) / v)
+    }
+
+    /// G(p) = g₀ + g₁ p: (g₀, g₁).
+    fn shear_law(&self) -> (f64, f64) {
+        match self.shear {
+            CamClayShear::Modulus(g) => (g, 0.0),
+            CamClayShear::Poisson(nu) => (0.0, 3.0 * (1.0 - 2.0 * nu) / (2.0 * (1.0 + nu) * self.moduli().0)),
+        }
+    }
+
+    /// The critical-state slope M.
+    pub fn critical_state_slope(&self) -> f64 {
+        self.m
+    }
+
+    /// f = q²/M² + p (p − p_c) of `stress` with preconsolidation pressure p_c.
+    pub fn yield_function(&self, stress: &Matrix3<f64>, pc: f64) -> f64 {
+        let (p, q) = invariants(stress);
+        q * q / (self.m * self.m) + p * (p - pc)
+    }
+
+    /// The converged local state for the trial `tr` and its Jacobian's inverse, or the
+    /// elastic one (Δγ = 0) when the trial is inside the surface.
+    fn solve(&self, tr: &Trial) -> Result<(Local, Option<Matrix2<f64>>), ConstitutiveError> {
+        let at = |x: f64, dgamma: f64| self.local(tr, x, dgamma);
+        let elastic = at(0.0, 0.0);
+        let scale = tr.pc_n * tr.pc_n;
+        if self.residual(&elastic).1 <= ELASTIC_TOL * scale {
+            return Ok((elastic, None));
+        }
+        let (mut z, mut l) = (Vector2::zeros(), elastic);
+        for _ in 0..MAX_ITERATIONS {
+            let r = self.scaled_residual(&l, scale);
+            let jac = self.jacobian(tr, &l, scale);
+            let inv = jac.try_inverse().ok_or(ConstitutiveError::ReturnMappingFailed {
+                law: "modified-cam-clay",
+                iterations: 0,
+                residual: r.amax(),
+            })?;
+            if r.amax() <= NEWTON_TOL {
+                return Ok((l, Some(inv)));
+            }
+            let step = -(inv * r);
+            // Halve a step that does not lower the residual (the exponentials can carry a
+            // full step far from the solution) or that would make Δγ negative.
+            let mut t = 1.0;
+            loop {
+                let trial = z + step * t;
+                let next = at(trial[0], trial[1].max(0.0));
+                let better = self.scaled_residual(&next, scale).amax() < r.amax();
+                if better && next.p.is_finite() || t < 1e-6 {
+                    z = Vector2::new(trial[0], trial[1].max(0.0));
+                    l = next;
+                    break;
+                }
+                t *= 0.5;
+            }
+        }
+        Err(ConstitutiveError::ReturnMappingFailed {
+            law: "modified-cam-clay",
+            iterations: MAX_ITERATIONS,
+            residual: self.scaled_residual(&l, scale).amax(),
+        })
+    }
+
+    /// p, q, p_c, G at Δε^p_v = x and Δγ.
+    fn local(&self, tr: &Trial, x: f64, dgamma: f64) -> Local {
+        let (kh, hard) = self.moduli();
+        let (g0, g1) = self.shear_law();
+        let p = P_REF * ((tr.eps_v - x) / kh).exp();
+        let g = g0 + g1 * p;
+        let den = 1.0 + 6.0 * g * dgamma / (self.m * self.m);
+        let q = 3.0 * g * tr.eps_s / den;
+        let pc = tr.pc_n * (x / hard).exp();
+        Local { x, dgamma, p, q, pc, g, den }
+    }
+
+    /// (r₁, f) of a local state.
+    fn residual(&self, l: &Local) -> (f64, f64) {
+        (l.x - l.dgamma * (2.0 * l.p - l.pc), l.q * l.q / (self.m * self.m) + l.p * (l.p - l.pc))
+    }
+
+    /// The residual with r₁ scaled to a strain (by p_c/p_c) and f by p_c,n².
+    fn scaled_residual(&self, l: &Local, scale: f64) -> Vector2<f64> {
+        let (r1, f) = self.residual(l);
+        Vector2::new(r1, f / scale)
+    }
+
+    /// ∂(r₁, f/scale)/∂(Δε^p_v, Δγ).
+    fn jacobian(&self, tr: &Trial, l: &Local, scale: f64) -> Matrix2<f64> {
+        let (kh, hard) = self.moduli();
+        let (_, g1) = self.shear_law();
+        let m2 = self.m * self.m;
+        let dp_dx = -l.p / kh;
+        let dpc_dx = l.pc / hard;
+        let dq_dg = 3.0 * tr.eps_s / (l.den * l.den);
+        let dq_dx = dq_dg * g1 * dp_dx;
+        let dq_dgamma = -l.q * 6.0 * l.g / (m2 * l.den);
+        Matrix2::new(
+            1.0 - l.dgamma * (2.0 * dp_dx - dpc_dx),
+            -(2.0 * l.p - l.pc),
+            (2.0 * l.q * dq_dx / m2 + dp_dx * (2.0 * l.p - l.pc) - l.p * dpc_dx) / scale,
+            2.0 * l.q * dq_dgamma / m2 / scale,
+        )
+    }
+
+    /// The consistent tangent at a converged state (the module docs' D), `inv` the inverse
+    /// of the local Jacobian (None: elastic).
+    fn tangent(&self, tr: &Trial, l: &Local, inv: Option<Matrix2<f64>>) -> Tensor4 {
+        let (kh, _) = self.moduli();
+        let (_, g1) = self.shear_law();
+        let m2 = self.m * self.m;
+        let scale = tr.pc_n * tr.pc_n;
+        // Explicit derivatives at fixed (Δε^p_v, Δγ) with respect to a = (ε_v,tr, ε_s,tr).
+        let p_a = l.p / kh;
+        let dq_dg = 3.0 * tr.eps_s / (l.den * l.den);
+        let q_a = Vector2::new(dq_dg * g1 * p_a, 3.0 * l.g / l.den);
+        // dz/da = −J⁻¹ ∂R/∂a, z = (Δε^p_v, Δγ).
+        let dz = match inv {
+            None => Matrix2::zeros(),
+            Some(inv) => {
+                let dr = Matrix2::new(
+                    -l.dgamma * 2.0 * p_a,
+                    0.0,
+                    (2.0 * l.q * q_a[0] / m2 + p_a * (2.0 * l.p - l.pc)) / scale,
+                    2.0 * l.q * q_a[1] / m2 / scale,
+                );
+                -(inv * dr)
+            }
+        };
+        let dp = Vector2::new(p_a * (1.0 - dz[(0, 0)]), -p_a * dz[(0, 1)]);
+        let dq_dgamma = -l.q * 6.0 * l.g / (m2 * l.den);
+        let dq = Vector2::new(
+            dq_dg * g1 * dp[0] + dq_dgamma * dz[(1, 0)],
+            dq_dg * g1 * dp[1] + dq_dgamma * dz[(1, 1)] + 3.0 * l.g / l.den,
+        );
+        let (i, n) = (flatten(&Matrix3::identity()), flatten(&tr.n_hat));
+        let i_dev = sym_identity() - identity_dyad() / 3.0;
+        identity_dyad() * dp[0] - i * n.transpose() * (SQRT_2_3 * dp[1]) - n * i.transpose() * (SQRT_2_3 * dq[0])
+            + n * n.transpose() * (2.0 / 3.0 * dq[1])
+            + (i_dev - n * n.transpose()) * (2.0 * l.g / l.den)
+    }
+
+    /// The update with its tangent: the trial invariants, the return, the state.
+    fn returned(
+        &self,
+        eps_trial: &Matrix3<f64>,
+        h_n: &[f64],
+        h_out: &mut [f64],
+        with_tangent: bool,
+    ) -> Result<StressUpdate, ConstitutiveError> {
+        let (es_n, evp_n, pc_n) = check_inputs(eps_trial, h_n, h_out)?;
+        let eps = (eps_trial + eps_trial.transpose()) * 0.5;
+        let dev = eps - Matrix3::identity() * (eps.trace() / 3.0);
+        let nd = dev.norm();
+        let n_hat = if nd > 0.0 { dev / nd } else { Matrix3::zeros() };
+        let tr = Trial { eps_v: -eps.trace(), eps_s: SQRT_2_3 * nd, n_hat, pc_n };
+        let (l, inv) = self.solve(&tr)?;
+        let stress = Matrix3::identity() * -l.p + tr.n_hat * (SQRT_2_3 * l.q);
+        check_finite(&stress, "Modified Cam clay stress")?;
+        // ε^e = −ε^e_v/3 I + √(3/2) ε^e_s n̂ with ε^e_s = q/(3G).
+        let eps_s_e = if l.g > 0.0 { l.q / (3.0 * l.g) } else { 0.0 };
+        let elastic_strain = Matrix3::identity() * (-(tr.eps_v - l.x) / 3.0) + tr.n_hat * (eps_s_e / SQRT_2_3);
+        h_out[0] = es_n + 2.0 * l.q * l.dgamma / (self.m * self.m);
+        h_out[1] = evp_n - l.x;
+        h_out[2] = l.pc;
+        let tangent = if with_tangent { self.tangent(&tr, &l, inv) } else { Tensor4::zeros() };
+        if !tangent.iter().all(|v| v.is_finite()) {
+            return Err(ConstitutiveError::NonFinite { what: "Modified Cam clay tangent" });
+        }
+        Ok(StressUpdate { stress, elastic_strain, tangent })
+    }
+
+    /// K = p/κ̂ and G at pressure p (both zero for p ≤ 0).
+    fn moduli_at(&self, p: f64) -> (f64, f64) {
+        let p = p.max(0.0);
+        let (g0, g1) = self.shear_law();
+        (p / self.moduli().0, if p > 0.0 { g0 + g1 * p } else { 0.0 })
+    }
+}
+
+/// p = −tr σ/3 and q = √(3J₂) of a stress.
+fn invariants(stress: &Matrix3<f64>) -> (f64, f64) {
+    let p = -stress.trace() / 3.0;
+    let s = stress + Matrix3::identity() * p;
+    (p, (1.5 * s.norm_squared()).sqrt())
+}
+
+/// The input checks: a finite trial strain and the three history values, p_c > 0.
+fn check_inputs(eps_trial: &Matrix3<f64>, h_n: &[f64], h_out: &[f64]) -> Result<(f64, f64, f64), ConstitutiveError> {
+    check_finite(eps_trial, "trial strain")?;
+    for got in [h_n.len(), h_out.len()] {
+        if got != 3 {
+            return Err(ConstitutiveError::HistoryLength { expected: 3, got });
+        }
+    }
+    if !(h_n[0].is_finite() && h_n[1].is_finite()) {
+        return Err(ConstitutiveError::NonFinite { what: "Modified Cam clay history" });
+    }
+    if !(h_n[2].is_finite() && h_n[2] > 0.0) {
+        // A point whose initial stress had no pressure has no yield surface.
+        return Err(ConstitutiveError::InvalidParameter { name: "preconsolidation pressure", value: h_n[2] });
+    }
+    Ok((h_n[0], h_n[1], h_n[2]))
+}
+
+impl ConstitutiveLaw for ModifiedCamClay {
+    fn name(&self) -> &'static str {
+        "modified-cam-clay"
+    }
+
+    fn history_len(&self) -> usize {
+        3
+    }
+
+    fn history_names(&self) -> &'static [&'static str] {
+        &["plastic_shear_strain", "plastic_volumetric_strain", "preconsolidation_pressure"]
+    }
+
+    /// p_c from the initial stress (OCR × the surface through it) or as given; zero where
+    /// the initial stress has no pressure (the update then refuses the point).
+    fn init_history(&self, h: &mut [f64], initial_stress: &Matrix3<f64>) {
+        let (p, q) = invariants(initial_stress);
+        h[0] = 0.0;
+        h[1] = 0.0;
+        h[2] = match self.initial {
+            CamClayInitial::Preconsolidation(pc) => pc,
+            CamClayInitial::OverConsolidation(_) if p <= 0.0 => 0.0,
+            CamClayInitial::OverConsolidation(ocr) => ocr * (p + q * q / (self.m * self.m * p)),
+        };
+    }
+
+    fn plastic_strain(&self, h: &[f64]) -> f64 {
+        h[0]
+    }
+
+    fn is_yielding(&self, stress: &Matrix3<f64>, h: &[f64]) -> bool {
+        self.yield_function(stress, h[2]) >= -1e-6 * h[2] * h[2]
+    }
+
+    /// Not symmetric in general (G following p, the hardening's coupling).
+    fn symmetric_tangent(&self) -> bool {
+        false
+    }
+
+    /// On the dry side of critical (p < p_c/2) the surface shrinks as the clay dilates.
+    fn can_soften(&self) -> bool {
+        true
+    }
+
+    fn update(
+        &self,
+        eps_trial: &Matrix3<f64>,
+        h_n: &[f64],
+        h_out: &mut [f64],
+    ) -> Result<StressUpdate, ConstitutiveError> {
+        self.returned(eps_trial, h_n, h_out, true)
+    }
+
+    fn update_stress(
+        &self,
+        eps_trial: &Matrix3<f64>,
+        h_n: &[f64],
+        h_out: &mut [f64],
+    ) -> Result<(Matrix3<f64>, Matrix3<f64>), ConstitutiveError> {
+        self.returned(eps_trial, h_n, h_out, false).map(|u| (u.stress, u.elastic_strain))
+    }
+
+    /// The tangent elasticity K = p/κ̂, G at the state's pressure (None at p ≤ 0).
+    fn elasticity(&self, state: &MaterialState) -> Option<Elastic> {
+        let (k, g) = self.moduli_at(invariants(&state.stress).0);
+        let young = 9.0 * k * g / (3.0 * k + g);
+        let poisson = (3.0 * k - 2.0 * g) / (2.0 * (3.0 * k + g));
+        Elastic::new(young, poisson).ok()
+    }
+
+    /// ε^e_v = κ̂ ln(p/p_ref), dev ε^e = s/(2G): the exact inverse of the elastic law.
+    fn elastic_strain_of(&self, stress: &Matrix3<f64>, _history: &[f64]) -> Option<Matrix3<f64>> {
+        let (p, _) = invariants(stress);
+        let (_, g) = self.moduli_at(p);
+        if !(p > 0.0 && g > 0.0) {
+            return None;
+        }
+        let s = stress + Matrix3::identity() * p;
+        Some(Matrix3::identity() * (-self.moduli().0 * (p / P_REF).ln() / 3.0) + s / (2.0 * g))
+    }
+
+    fn constant_stiffness(&self) -> bool {
+        false
+    }
+
+    /// K + 4G/3 at the state's pressure.
+    fn p_wave_modulus(&self, state: &MaterialState) -> f64 {
+        let (k, g) = self.moduli_at(invariants(&state.stress).0);
+        k + 4.0 * g / 3.0
+    }
+
+    /// κ̂ p_ref (exp(ε^e_v/κ̂) − 1) + G dev ε^e : dev ε^e, G at the elastic strain's
+    /// pressure (exact for a constant G; with G following p the law is not hyperelastic and
+    /// this is the energy of the current shear modulus).
+    fn stored_energy(&self, elastic_strain: &Matrix3<f64>) -> f64 {
+        let kh = self.moduli().0;
+        let ev = -elastic_strain.trace();
+        let p = P_REF * (ev / kh).exp();
+        let dev = elastic_strain + Matrix3::identity() * (ev / 3.0);
+        kh * P_REF * ((ev / kh).exp() - 1.0) + self.moduli_at(p).1 * dev.norm_squared()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{ElementPath, ElementTest, Held};
+
+    /// λ = 0.2, κ = 0.04, e₀ = 1.5, M = 1.0 (a soft clay), G from ν = 0.25.
+    fn clay(initial: CamClayInitial) -> ModifiedCamClay {
+        ModifiedCamClay::new(0.2, 0.04, 1.5, 1.0, CamClayShear::Poisson(0.25), initial).unwrap()
+    }
+
+    /// Undrained triaxial compression from p₀ = 100 at OCR 1 and 1.5. Constant volume
+    /// fixes the path in closed form: ε^e_v = −ε^p_v, so p_c = p_c0 (p₀/p)^(κ̂/(λ̂ − κ̂))
+    /// and q = M √(p (p_c − p)) once yielding (vertical in p before); it ends at the
+    /// critical state p_f = (p_c0/2)^Λ p₀^(1−Λ), q_f = M p_f, Λ = (λ − κ)/λ. Every step's
+    /// (p, q) is on the closed form to 1e-9 (each step ends on the surface with the exact
+    /// exponentials); at 30 % axial strain (p, q) is within 0.1 % of the critical state.
+    #[test]
+    fn undrained_triaxial_follows_the_closed_form_path() {
+        for ocr in [1.0, 1.5] {
+            let law = clay(CamClayInitial::OverConsolidation(ocr));
+            let p0 = 100.0;
+            let start = Matrix3::identity() * -p0;
+            let mut t = ElementTest::new(&law, start).unwrap();
+            let (kh, hard) = law.moduli();
+            let pc0 = ocr * p0;
+            let big_lambda = (0.2 - 0.04) / 0.2;
+            for _ in 0..600 {
+                t.step(ElementPath::TriaxialUndrained.held(5e-4, &start)).unwrap();
+                let (p, q) = t.p_q();
+                let pc = pc0 * (p0 / p).powf(kh / hard);
+                let expected = if t.history()[0] == 0.0 { q } else { (p * (pc - p)).sqrt() };
+                assert!((q - expected).abs() <= 1e-9 * p0, "OCR {ocr}: q {q} vs {expected}");
+                assert!(t.strain().trace().abs() < 1e-15);
+            }
+            let pf = (pc0 / 2.0).powf(big_lambda) * p0.powf(1.0 - big_lambda);
+            let (p, q) = t.p_q();
+            assert!((p / pf - 1.0).abs() < 1e-3 && (q / pf - 1.0).abs() < 1e-3, "OCR {ocr}: ({p}, {q}) vs {pf}");
+        }
+    }
+
+    /// Isotropic compression on the virgin line and unloading: Δe/Δ ln p = −λ and −κ to
+    /// round-off (e = e₀ − (1 + e₀) ε_v).
+    #[test]
+    fn isotropic_lines_have_slopes_lambda_and_kappa() {
+        let law = clay(CamClayInitial::OverConsolidation(1.0));
+        let p0 = 50.0;
+        let mut t = ElementTest::new(&law, Matrix3::identity() * -p0).unwrap();
+        let e = |t: &ElementTest| 1.5 - 2.5 * -t.strain().trace();
+        let iso = |de: f64| {
+            [
+                Held::Strain(de),
+                Held::Strain(de),
+                Held::Strain(de),
+                Held::Strain(0.0),
+                Held::Strain(0.0),
+                Held::Strain(0.0),
+            ]
+        };
+        let (e_a, p_a) = (e(&t), t.p_q().0);
+        for _ in 0..50 {
+            t.step(iso(-1e-3)).unwrap();
+        }
+        let (e_b, p_b) = (e(&t), t.p_q().0);
+        let slope = (e_b - e_a) / (p_b / p_a).ln();
+        assert!((slope + 0.2).abs() < 1e-12, "virgin slope {slope}");
+        for _ in 0..20 {
+            t.step(iso(5e-4)).unwrap();
+        }
+        let (e_c, p_c) = (e(&t), t.p_q().0);
+        let slope = (e_c - e_b) / (p_c / p_b).ln();
+        assert!((slope + 0.04).abs() < 1e-12, "unloading slope {slope}");
+        assert!(t.history()[2] > p_b * (1.0 - 1e-12) && t.history()[2] < p_b * (1.0 + 1e-12));
+    }
+
+    #[test]
+    fn refuses_bad_parameters_and_a_point_without_pressure() {
+        let (s, i) = (CamClayShear::Modulus(1e3), CamClayInitial::OverConsolidation(1.0));
+        let name = |r: Result<ModifiedCamClay, ConstitutiveError>| match r {
+            Err(ConstitutiveError::InvalidParameter { name, .. }) => name,
+            other => panic!("{other:?}"),
+        };
+        assert_eq!(name(ModifiedCamClay::new(0.04, 0.04, 1.0, 1.0, s, i)), "lambda");
+        assert_eq!(name(ModifiedCamClay::new(0.2, 0.0, 1.0, 1.0, s, i)), "kappa");
+        assert_eq!(name(ModifiedCamClay::new(0.2, 0.04, 1.0, 0.0, s, i)), "critical state slope M");
+        assert_eq!(
+            name(ModifiedCamClay::new(0.2, 0.04, 1.0, 1.0, s, CamClayInitial::OverConsolidation(0.9))),
+            "over-consolidation ratio"
+        );
+        let law = clay(i);
+        let mut h = [0.0; 3];
+        law.init_history(&mut h, &Matrix3::zeros());
+        assert!(law.update(&Matrix3::zeros(), &h, &mut [0.0; 3]).is_err());
+        assert!((ModifiedCamClay::slope_from_friction(30.0) - 1.2).abs() < 1e-15);
+    }
+}
