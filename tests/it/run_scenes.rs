@@ -1,7 +1,7 @@
 //! The example scenes run end to end through the runner, and their outputs hold what the
 //! docs promise.
 
-use loam::run::{run_scene, RunEvent};
+use loam::run::{run_scene, run_scene_with, RunEvent, RunOptions};
 use loam::scene::LoadedScene;
 use std::path::Path;
 
@@ -357,4 +357,35 @@ fn a_tangent_lost_to_slivers_is_traced_to_them() {
     let stabilised = run(scene("ghost_penalty: Some(0.1),"));
     assert!(stabilised.collapse.is_none());
     assert_eq!(stabilised.load_factor, 1.0);
+}
+
+/// The soft-clay example (examples/footing_cam_clay.ron) starts at rest under its K0
+/// stress, normally consolidated: every point's σ_v is the weight of the clay above it
+/// (17 kN/m³ × depth: the points of a column sit at quarter-cell depths, so the overburden
+/// is exact to round-off, 1e-9), σ_h = K0 σ_v, and p_c is the size of the Cam-clay
+/// ellipse through that stress, p + q²/(M² p) (OCR 1), to 1e-12. Its first load steps
+/// settle the strip more with each step (the load grows, the clay hardens but does not
+/// stiffen faster than the load).
+#[test]
+fn cam_clay_footing_starts_normally_consolidated_at_rest() {
+    let scene = LoadedScene::read(Path::new("examples/footing_cam_clay.ron")).unwrap();
+    let analysis = scene.build::<2>().unwrap();
+    let pts = analysis.model().points();
+    let m = loam::constitutive::ModifiedCamClay::slope_from_friction(25.0);
+    for p in 0..pts.len() {
+        let (s, depth) = (pts.stress()[p], 5.0 - pts.position()[p][1]);
+        let sv = -17.0 * depth;
+        assert!((s[(1, 1)] - sv).abs() <= 1e-9 * 85.0, "σ_v {} at depth {depth}", s[(1, 1)]);
+        assert!((s[(0, 0)] - 0.58 * sv).abs() <= 1e-9 * 85.0 && (s[(2, 2)] - 0.58 * sv).abs() <= 1e-9 * 85.0);
+        let (pm, q) = (-s.trace() / 3.0, (0.58 * sv - sv).abs());
+        let pc = pts.history(p)[2];
+        assert!((pc / (pm + q * q / (m * m * pm)) - 1.0).abs() < 1e-12, "p_c {pc} at depth {depth}");
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let options = RunOptions { max_steps: Some(3), ..Default::default() };
+    run_scene_with(&scene, dir.path(), &options, &mut |_| {}).unwrap();
+    let (header, rows) = read_csv(&dir.path().join("run_log.csv"));
+    let uy = header.iter().position(|h| h == "monitor_centre_uy").unwrap();
+    assert_eq!(rows.len(), 3);
+    assert!(rows[0][uy] < 0.0 && rows[1][uy] < rows[0][uy] && rows[2][uy] < rows[1][uy]);
 }

@@ -28,7 +28,7 @@
 //! p = p(ε^e_v,tr − Δε^p_v),  q = 3G ε^e_s,tr / (1 + 6GΔγ/M²),  p_c = p_c(Δε^p_v)
 //! ```
 //!
-//! by Newton's method (halving a step that raises the residual), and σ = −p I + √(2/3) q n̂.
+//! (nested scalar solves, each by Newton's method kept in a bracket), and σ = −p I + √(2/3) q n̂.
 //! The tangent differentiates the converged system with respect to (ε^e_v,tr, ε^e_s,tr):
 //!
 //! ```text
@@ -182,46 +182,94 @@ impl ModifiedCamClay {
     }
 
     /// The converged local state for the trial `tr` and its Jacobian's inverse, or the
-    /// elastic one (Δγ = 0) when the trial is inside the surface.
+    /// elastic one (Δγ = 0) when the trial is inside the surface. The two equations are
+    /// solved nested, each by Newton's method kept inside a bracket (bisection where a
+    /// step leaves it): for a given Δγ, r₁ is increasing in Δε^p_v with one root; f along
+    /// those roots is positive at Δγ = 0 and negative for a Δγ large enough (the state then
+    /// nears the critical state, q → 0 with p_c → 2p), so a bracket of Δγ holds a root.
     fn solve(&self, tr: &Trial) -> Result<(Local, Option<Matrix2<f64>>), ConstitutiveError> {
-        let at = |x: f64, dgamma: f64| self.local(tr, x, dgamma);
-        let elastic = at(0.0, 0.0);
+        let elastic = self.local(tr, 0.0, 0.0);
         let scale = tr.pc_n * tr.pc_n;
         if self.residual(&elastic).1 <= ELASTIC_TOL * scale {
             return Ok((elastic, None));
         }
-        let (mut z, mut l) = (Vector2::zeros(), elastic);
-        for _ in 0..MAX_ITERATIONS {
-            let r = self.scaled_residual(&l, scale);
+        let failed = |residual: f64| ConstitutiveError::ReturnMappingFailed {
+            law: "modified-cam-clay",
+            iterations: MAX_ITERATIONS,
+            residual,
+        };
+        // f and df/dΔγ along r₁ = 0, scaled by p_c,n².
+        let along = |dgamma: f64| -> Result<(Local, f64, f64), ConstitutiveError> {
+            let l = self.local(tr, self.plastic_volume(tr, dgamma)?, dgamma);
             let jac = self.jacobian(tr, &l, scale);
-            let inv = jac.try_inverse().ok_or(ConstitutiveError::ReturnMappingFailed {
-                law: "modified-cam-clay",
-                iterations: 0,
-                residual: r.amax(),
-            })?;
-            if r.amax() <= NEWTON_TOL {
+            let dx = -jac[(0, 1)] / jac[(0, 0)];
+            Ok((l, self.residual(&l).1 / scale, jac[(1, 0)] * dx + jac[(1, 1)]))
+        };
+        let m2 = self.m * self.m;
+        // Δγ = M²/(6G) halves q: the first guess of the upper end.
+        let mut hi = m2 / (6.0 * elastic.g.max(f64::MIN_POSITIVE));
+        let mut lo = 0.0;
+        for _ in 0..MAX_ITERATIONS {
+            if along(hi)?.1 < 0.0 {
+                break;
+            }
+            (lo, hi) = (hi, hi * 4.0);
+        }
+        let mut dgamma = 0.5 * (lo + hi);
+        for _ in 0..MAX_ITERATIONS {
+            let (l, f, df) = along(dgamma)?;
+            // Round-off in f is relative to its largest term, not to p_c,n².
+            let terms = (l.q * l.q / m2).max(l.p * l.p).max(l.p * l.pc) / scale;
+            if f.abs() <= NEWTON_TOL * terms || hi - lo <= 4.0 * f64::EPSILON * hi {
+                let inv = self.jacobian(tr, &l, scale).try_inverse().ok_or_else(|| failed(f))?;
                 return Ok((l, Some(inv)));
             }
-            let step = -(inv * r);
-            // Halve a step that does not lower the residual (the exponentials can carry a
-            // full step far from the solution) or that would make Δγ negative.
-            let mut t = 1.0;
-            loop {
-                let trial = z + step * t;
-                let next = at(trial[0], trial[1].max(0.0));
-                let better = self.scaled_residual(&next, scale).amax() < r.amax();
-                if better && next.p.is_finite() || t < 1e-6 {
-                    z = Vector2::new(trial[0], trial[1].max(0.0));
-                    l = next;
-                    break;
-                }
-                t *= 0.5;
+            if f > 0.0 {
+                lo = dgamma;
+            } else {
+                hi = dgamma;
             }
+            let newton = dgamma - f / df;
+            dgamma = if newton > lo && newton < hi { newton } else { 0.5 * (lo + hi) };
+        }
+        Err(failed(f64::NAN))
+    }
+
+    /// Δε^p_v solving r₁ = Δε^p_v − Δγ (2p − p_c) = 0 for `dgamma` (r₁ increases with it).
+    fn plastic_volume(&self, tr: &Trial, dgamma: f64) -> Result<f64, ConstitutiveError> {
+        let (kh, hard) = self.moduli();
+        // r₁, its derivative and the size of its terms (round-off is relative to them).
+        let r1 = |x: f64| {
+            let l = self.local(tr, x, dgamma);
+            let terms = x.abs().max(dgamma * (2.0 * l.p + l.pc));
+            (l.x - dgamma * (2.0 * l.p - l.pc), 1.0 + dgamma * (2.0 * l.p / kh + l.pc / hard), terms)
+        };
+        // A bracket: widen from ±(κ̂ + λ̂ − κ̂) until r₁ changes sign.
+        let (mut lo, mut hi) = (-(kh + hard), kh + hard);
+        for _ in 0..MAX_ITERATIONS {
+            if r1(lo).0 <= 0.0 && r1(hi).0 >= 0.0 {
+                break;
+            }
+            (lo, hi) = (lo * 2.0, hi * 2.0);
+        }
+        let mut x = 0.0f64.clamp(lo, hi);
+        for _ in 0..2 * MAX_ITERATIONS {
+            let (r, dr, terms) = r1(x);
+            if r.abs() <= NEWTON_TOL * terms || hi - lo <= 4.0 * f64::EPSILON * x.abs() {
+                return Ok(x);
+            }
+            if r < 0.0 {
+                lo = x;
+            } else {
+                hi = x;
+            }
+            let newton = x - r / dr;
+            x = if newton > lo && newton < hi && newton.is_finite() { newton } else { 0.5 * (lo + hi) };
         }
         Err(ConstitutiveError::ReturnMappingFailed {
             law: "modified-cam-clay",
             iterations: MAX_ITERATIONS,
-            residual: self.scaled_residual(&l, scale).amax(),
+            residual: r1(x).0 / r1(x).2,
         })
     }
 
@@ -240,12 +288,6 @@ impl ModifiedCamClay {
     /// (r₁, f) of a local state.
     fn residual(&self, l: &Local) -> (f64, f64) {
         (l.x - l.dgamma * (2.0 * l.p - l.pc), l.q * l.q / (self.m * self.m) + l.p * (l.p - l.pc))
-    }
-
-    /// The residual with r₁ scaled to a strain (by p_c/p_c) and f by p_c,n².
-    fn scaled_residual(&self, l: &Local, scale: f64) -> Vector2<f64> {
-        let (r1, f) = self.residual(l);
-        Vector2::new(r1, f / scale)
     }
 
     /// ∂(r₁, f/scale)/∂(Δε^p_v, Δγ).

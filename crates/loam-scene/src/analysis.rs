@@ -5,7 +5,9 @@
 
 use super::locate::Seg;
 use super::solver::Solver;
-use super::{AnalysisSpec, ControlSpec, LinearSpec, LoadedScene, MethodSpec, SceneError, StrengthReductionSpec};
+use super::{
+    AnalysisSpec, ControlSpec, LawSpec, LinearSpec, LoadedScene, MethodSpec, SceneError, StrengthReductionSpec,
+};
 use loam_analysis::{Analysis, AnalysisError};
 use loam_explicit::{Explicit, ExplicitError, ExplicitSettings, TimeStep};
 use loam_implicit::{
@@ -184,6 +186,17 @@ impl LoadedScene {
                     "tolerance is {}; it must be positive and below the bracket's width {}",
                     srf.tolerance,
                     hi - lo
+                ),
+            ));
+        }
+        let cam_clay = self.scene.materials.iter().position(|m| matches!(m.law, LawSpec::ModifiedCamClay { .. }));
+        if let Some(i) = cam_clay {
+            return Err(self.error(
+                &[Seg::Key("materials"), Seg::Index(i), Seg::Key("law")],
+                format!(
+                    "material \"{}\": strength reduction is not defined for ModifiedCamClay (its strength follows its \
+                     state, with no c and tan φ to divide); use MohrCoulomb or DruckerPrager for a factor of safety",
+                    self.scene.materials[i].name
                 ),
             ));
         }

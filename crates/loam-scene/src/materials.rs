@@ -2,8 +2,14 @@
 //! parameter checked against what is valid and refused at its own key.
 
 use super::locate::Seg;
-use super::{ConeFitSpec, LawSpec, LoadedScene, MaterialSpec, SceneError, SofteningSpec};
-use loam_constitutive::{ConeFit, ConstitutiveError, ConstitutiveLaw, DruckerPrager, Elastic, MohrCoulomb, VonMises};
+use super::{
+    CamClayInitialSpec, CamClayShearSpec, ConeFitSpec, CriticalStateSpec, LawSpec, LoadedScene, MaterialSpec,
+    SceneError, SofteningSpec,
+};
+use loam_constitutive::{
+    CamClayInitial, CamClayShear, ConeFit, ConstitutiveError, ConstitutiveLaw, DruckerPrager, Elastic, ModifiedCamClay,
+    MohrCoulomb, VonMises,
+};
 use std::sync::Arc;
 
 impl LoadedScene {
@@ -58,29 +64,28 @@ impl LawChecks<'_> {
 
     /// The law: its elastic part, checked first, then its strength.
     fn law(&self) -> Result<Arc<dyn ConstitutiveLaw>, SceneError> {
-        let elastic = self.elastic()?;
         Ok(match self.m.law {
-            LawSpec::Elastic { .. } => Arc::new(elastic),
-            LawSpec::VonMises { yield_stress, hardening, residual_yield_stress, .. } => {
+            LawSpec::Elastic { young, poisson } => Arc::new(self.elastic(young, poisson)?),
+            LawSpec::VonMises { young, poisson, yield_stress, hardening, residual_yield_stress } => {
+                let elastic = self.elastic(young, poisson)?;
                 Arc::new(self.von_mises(elastic, yield_stress, hardening, residual_yield_stress)?)
             }
-            LawSpec::MohrCoulomb { cohesion, friction, dilation, tension_cutoff, softening, .. } => {
+            LawSpec::MohrCoulomb { young, poisson, cohesion, friction, dilation, tension_cutoff, softening } => {
+                let elastic = self.elastic(young, poisson)?;
                 Arc::new(self.mohr_coulomb(elastic, [cohesion, friction, dilation], tension_cutoff, softening)?)
             }
-            LawSpec::DruckerPrager { cohesion, friction, dilation, fit, softening, .. } => {
+            LawSpec::DruckerPrager { young, poisson, cohesion, friction, dilation, fit, softening } => {
+                let elastic = self.elastic(young, poisson)?;
                 Arc::new(self.drucker_prager(elastic, [cohesion, friction, dilation], fit, softening)?)
+            }
+            LawSpec::ModifiedCamClay { lambda, kappa, void_ratio, critical_state, shear, initial } => {
+                Arc::new(self.cam_clay([lambda, kappa, void_ratio], critical_state, shear, initial)?)
             }
         })
     }
 
-    /// The elastic part every law has: Young's modulus and Poisson's ratio.
-    fn elastic(&self) -> Result<Elastic, SceneError> {
-        let (young, poisson) = match self.m.law {
-            LawSpec::Elastic { young, poisson }
-            | LawSpec::VonMises { young, poisson, .. }
-            | LawSpec::MohrCoulomb { young, poisson, .. }
-            | LawSpec::DruckerPrager { young, poisson, .. } => (young, poisson),
-        };
+    /// The elastic part of a law: Young's modulus and Poisson's ratio.
+    fn elastic(&self, young: f64, poisson: f64) -> Result<Elastic, SceneError> {
         self.check("young", young, young > 0.0, "positive (Young's modulus)")?;
         self.check("poisson", poisson, poisson > -1.0 && poisson < 0.5, "in (-1, 0.5) (Poisson's ratio)")?;
         let at = [Seg::Key("materials"), Seg::Index(self.i), Seg::Key("law"), Seg::Key("young")];
@@ -159,5 +164,51 @@ impl LawChecks<'_> {
                 .map_err(|e| self.refused(e))?;
         }
         Ok(law)
+    }
+
+    /// Modified Cam clay from `[λ, κ, e₀]`, its critical state, shear and initial state.
+    fn cam_clay(
+        &self,
+        [lambda, kappa, void_ratio]: [f64; 3],
+        critical_state: CriticalStateSpec,
+        shear: CamClayShearSpec,
+        initial: CamClayInitialSpec,
+    ) -> Result<ModifiedCamClay, SceneError> {
+        self.check("kappa", kappa, kappa > 0.0, "positive (the unloading line's slope)")?;
+        self.check("lambda", lambda, lambda > kappa, "above kappa (the virgin line is steeper than unloading)")?;
+        self.check("void_ratio", void_ratio, void_ratio > 0.0, "positive")?;
+        let m = match critical_state {
+            CriticalStateSpec::Slope(m) => {
+                self.check("critical_state", m, m > 0.0, "Slope(M) with M > 0, or Friction(φ′) in degrees")?;
+                m
+            }
+            CriticalStateSpec::Friction(phi) => {
+                let valid = "Friction(φ′) with 0 < φ′ < 90 degrees, or Slope(M)";
+                self.check("critical_state", phi, phi > 0.0 && phi < 90.0, valid)?;
+                ModifiedCamClay::slope_from_friction(phi)
+            }
+        };
+        let shear = match shear {
+            CamClayShearSpec::Modulus(g) => {
+                self.check("shear", g, g > 0.0, "Modulus(G) with G > 0, or Poisson(ν)")?;
+                CamClayShear::Modulus(g)
+            }
+            CamClayShearSpec::Poisson(nu) => {
+                self.check("shear", nu, nu > -1.0 && nu < 0.5, "Poisson(ν) with ν in (-1, 0.5), or Modulus(G)")?;
+                CamClayShear::Poisson(nu)
+            }
+        };
+        let initial = match initial {
+            CamClayInitialSpec::OverConsolidation(ocr) => {
+                let valid = "OverConsolidation(OCR) with OCR ≥ 1 (1: normally consolidated), or Preconsolidation(p_c)";
+                self.check("initial", ocr, ocr >= 1.0, valid)?;
+                CamClayInitial::OverConsolidation(ocr)
+            }
+            CamClayInitialSpec::Preconsolidation(pc) => {
+                self.check("initial", pc, pc > 0.0, "Preconsolidation(p_c) with p_c > 0, or OverConsolidation(OCR)")?;
+                CamClayInitial::Preconsolidation(pc)
+            }
+        };
+        ModifiedCamClay::new(lambda, kappa, void_ratio, m, shear, initial).map_err(|e| self.refused(e))
     }
 }

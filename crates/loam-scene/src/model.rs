@@ -4,7 +4,7 @@
 
 use super::bodies::Bodies;
 use super::locate::Seg;
-use super::{AnalysisSpec, InitialStressSpec, LoadedScene, SceneError};
+use super::{AnalysisSpec, InitialStressSpec, LawSpec, LoadedScene, SceneError};
 use loam_constitutive::{ConstitutiveLaw, MaterialState};
 use loam_grid::Grid;
 use loam_model::{Load, Model, ModelError, PlaneConstraint};
@@ -141,9 +141,30 @@ impl LoadedScene {
             }
             model = model.with_water(water).map_err(refused("water"))?;
         }
+        self.check_cam_clay_starts_stressed()?;
         if let InitialStressSpec::Geostatic { k0 } = s.initial_stress {
             model.geostatic_stress(k0).map_err(refused("initial_stress"))?;
         }
         Ok(model)
+    }
+
+    /// Modified Cam clay has no stiffness and no yield surface without a mean pressure:
+    /// a scene that uses it must start from a geostatic stress.
+    fn check_cam_clay_starts_stressed(&self) -> Result<(), SceneError> {
+        if matches!(self.scene.initial_stress, InitialStressSpec::Geostatic { .. }) {
+            return Ok(());
+        }
+        let materials = &self.scene.materials;
+        let Some(i) = materials.iter().position(|m| matches!(m.law, LawSpec::ModifiedCamClay { .. })) else {
+            return Ok(());
+        };
+        Err(self.error(
+            &[Seg::Key("materials"), Seg::Index(i), Seg::Key("law")],
+            format!(
+                "material \"{}\": ModifiedCamClay has no stiffness and no yield surface at zero pressure; start \
+                 the scene from a stress with `initial_stress: Geostatic(k0: ...)`",
+                materials[i].name
+            ),
+        ))
     }
 }

@@ -279,6 +279,18 @@ pub enum LawSpec {
         #[serde(default)]
         softening: Option<SofteningSpec>,
     },
+    /// Modified Cam clay: λ and κ (e–ln p′ slopes), the void ratio e₀ of the modified
+    /// indices, the critical-state slope, the shear stiffness and the initial
+    /// preconsolidation (default normally consolidated, OCR 1). Needs an initial stress.
+    ModifiedCamClay {
+        lambda: f64,
+        kappa: f64,
+        void_ratio: f64,
+        critical_state: CriticalStateSpec,
+        shear: CamClayShearSpec,
+        #[serde(default = "normally_consolidated")]
+        initial: CamClayInitialSpec,
+    },
     /// Drucker–Prager: the smooth cone fitted to Mohr–Coulomb's c, φ, ψ (degrees) in plane
     /// strain (default), triaxial compression or extension; optional linear softening.
     DruckerPrager {
@@ -292,6 +304,34 @@ pub enum LawSpec {
         #[serde(default)]
         softening: Option<SofteningSpec>,
     },
+}
+
+/// Modified Cam clay's critical-state slope: M itself, or the critical-state friction
+/// angle φ′ (degrees) it is matched to in triaxial compression (M = 6 sin φ′/(3 − sin φ′)).
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+pub enum CriticalStateSpec {
+    Slope(f64),
+    Friction(f64),
+}
+
+/// Modified Cam clay's shear stiffness: a constant modulus G, or a Poisson's ratio ν with
+/// which G follows the pressure-dependent bulk modulus.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+pub enum CamClayShearSpec {
+    Modulus(f64),
+    Poisson(f64),
+}
+
+/// Modified Cam clay's initial preconsolidation pressure: an over-consolidation ratio on
+/// the surface through each point's initial stress, or one p_c for every point.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+pub enum CamClayInitialSpec {
+    OverConsolidation(f64),
+    Preconsolidation(f64),
+}
+
+fn normally_consolidated() -> CamClayInitialSpec {
+    CamClayInitialSpec::OverConsolidation(1.0)
 }
 
 /// How a Drucker–Prager cone is fitted to Mohr–Coulomb.

@@ -72,6 +72,11 @@ fn dp(rest: &str) -> String {
     format!("law: DruckerPrager(young: 1e5, poisson: 0.0, {rest})")
 }
 
+/// Modified Cam clay (λ = 0.2, κ = 0.04, e₀ = 1.5, M = 1) with `rest`.
+fn cc(rest: &str) -> String {
+    format!("law: ModifiedCamClay(lambda: 0.2, kappa: 0.04, void_ratio: 1.5, critical_state: Slope(1.0), {rest})")
+}
+
 fn vm(rest: &str) -> String {
     format!("law: VonMises(young: 1e5, poisson: 0.0, {rest})")
 }
@@ -316,6 +321,32 @@ fn cases() -> Vec<(&'static str, usize, String)> {
         ),
         ("geostatic", 2, c(&[(PLANE, &option("initial_stress: Geostatic(k0: 0.5),"))])),
         ("geostatic negative", 2, c(&[(PLANE, &option("initial_stress: Geostatic(k0: -0.5),"))])),
+        ("cam clay", 2, c(&[(PLANE, &option("initial_stress: Geostatic(k0: 0.6),")), (ELASTIC, &cc("shear: Poisson(0.3)"))])),
+        ("cam clay unstressed", 2, c(&[(ELASTIC, &cc("shear: Poisson(0.3)"))])),
+        (
+            "cam clay lambda",
+            2,
+            c(&[(PLANE, &option("initial_stress: Geostatic(k0: 0.6),")), (ELASTIC, &cc("shear: Poisson(0.3)").replace("lambda: 0.2", "lambda: 0.04"))]),
+        ),
+        (
+            "cam clay ocr",
+            2,
+            c(&[(PLANE, &option("initial_stress: Geostatic(k0: 0.6),")), (ELASTIC, &cc("shear: Modulus(1e3), initial: OverConsolidation(0.8)"))]),
+        ),
+        (
+            "cam clay preconsolidation too low",
+            2,
+            c(&[(PLANE, &option("initial_stress: Geostatic(k0: 0.6),")), (ELASTIC, &cc("shear: Modulus(1e3), initial: Preconsolidation(1.0)"))]),
+        ),
+        (
+            "cam clay strength reduction",
+            2,
+            c(&[
+                (PLANE, &option("initial_stress: Geostatic(k0: 0.6),")),
+                (ELASTIC, &cc("shear: Poisson(0.3)")),
+                ("load_steps: 40", "load_steps: 40,\n        strength_reduction: Some(())"),
+            ]),
+        ),
         ("load steps zero", 2, c(&[("load_steps: 40", "load_steps: 0")])),
         ("cutbacks zero", 2, c(&[("load_steps: 40", "load_steps: 40, max_cutbacks: 0")])),
         ("limit resolution", 2, c(&[("load_steps: 40", "load_steps: 40, limit_resolution: 1.0")])),
