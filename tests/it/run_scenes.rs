@@ -389,3 +389,38 @@ fn cam_clay_footing_starts_normally_consolidated_at_rest() {
     assert_eq!(rows.len(), 3);
     assert!(rows[0][uy] < 0.0 && rows[1][uy] < rows[0][uy] && rows[2][uy] < rows[1][uy]);
 }
+
+/// The element-test example (examples/element_cam_clay_undrained.ron) writes element.csv
+/// and its two plots; undrained, the clay ends at the critical state of the closed form,
+/// p′_f = q_f/M = p′₀ / 2^Λ with Λ = (λ − κ)/λ = 0.8, within 0.1 % at 30 % axial strain
+/// (the path approaches it asymptotically; crates/loam-constitutive checks every step).
+/// A bad file is refused at its place.
+#[test]
+fn element_test_reaches_the_critical_state() {
+    let dir = tempfile::tempdir().unwrap();
+    let test = loam::scene::LoadedElementTest::read(Path::new("examples/element_cam_clay_undrained.ron")).unwrap();
+    let summary = loam::run::run_element(&test, dir.path()).unwrap();
+    assert_eq!(summary.steps, 300);
+    let pf = 100.0 / 2f64.powf(0.8);
+    assert!((summary.p / pf - 1.0).abs() < 1e-3 && (summary.q / pf - 1.0).abs() < 1e-3, "{summary:?}");
+    let (header, rows) = read_csv(&dir.path().join("element.csv"));
+    assert_eq!(&header[..5], ["step", "axial_strain", "volumetric_strain", "p", "q"]);
+    assert_eq!(rows.len(), 301);
+    assert!(rows.iter().all(|r| r[2].abs() < 1e-15), "undrained: no volume change");
+    for plot in ["element_strain.svg", "element_pq.svg"] {
+        assert!(dir.path().join(plot).exists());
+    }
+    let bad = |edit: (&str, &str)| {
+        let text =
+            std::fs::read_to_string("examples/element_cam_clay_undrained.ron").unwrap().replacen(edit.0, edit.1, 1);
+        let path = dir.path().join("bad.ron");
+        std::fs::write(&path, text).unwrap();
+        let test = loam::scene::LoadedElementTest::read(&path)?;
+        test.build().map(|_| ())
+    };
+    let message = |edit| bad(edit).unwrap_err().to_string();
+    assert!(message(("steps: 300", "steps: 0")).contains("steps is 0; it must be from 1 to"));
+    assert!(message(("[-100.0, -100.0, -100.0]", "[-100.0, -100.0]")).contains("initial_stress has 2 components"));
+    assert!(message(("kappa: 0.04", "kappa: 0.4")).contains("lambda = 0.2; it must be above kappa"));
+    assert!(message(("TriaxialUndrained", "Triaxial")).contains("Unexpected variant named `Triaxial`"));
+}

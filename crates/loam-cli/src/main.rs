@@ -59,6 +59,16 @@ enum Command {
         /// The run's output folder.
         dir: PathBuf,
     },
+    /// Drive one point of a law along a laboratory path (triaxial, oedometer, simple shear)
+    /// and write element.csv (p′, q, strains, stresses, history) with element_strain.svg
+    /// and element_pq.svg; see docs/scene-format.md, "Element tests".
+    Element {
+        /// Element-test file (RON).
+        test: PathBuf,
+        /// Output folder [default: out/TEST, TEST the file's name without extension].
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
     /// Validate a scene completely (down to points and constraints) without running it.
     Check {
         /// Scene file (RON).
@@ -166,10 +176,22 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             }
             Ok(())
         }
+        Command::Element { test, out } => {
+            let out = out.unwrap_or_else(|| default_out(&test));
+            let loaded = loam_scene::LoadedElementTest::read(&test)?;
+            let summary = loam_run::run_element(&loaded, &out)?;
+            println!(
+                "{}: {} steps, ending at p′ = {:.6e}, q = {:.6e}; outputs in {}",
+                test.display(),
+                summary.steps,
+                summary.p,
+                summary.q,
+                out.display()
+            );
+            Ok(())
+        }
         Command::Run { scene, out, overwrite, flags } => {
-            let out = out.unwrap_or_else(|| {
-                PathBuf::from("out").join(scene.file_stem().map(|s| s.to_owned()).unwrap_or_default())
-            });
+            let out = out.unwrap_or_else(|| default_out(&scene));
             run_command(&scene, &out, &flags, overwrite, None)
         }
         Command::Resume { dir, scene, mut flags } => {
@@ -186,6 +208,11 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             run_command(&scene, &dir, &flags, false, Some(checkpoint))
         }
     }
+}
+
+/// The default output folder of a file: out/ and its name without extension.
+fn default_out(file: &Path) -> PathBuf {
+    PathBuf::from("out").join(file.file_stem().map(|s| s.to_owned()).unwrap_or_default())
 }
 
 /// `loam check`: build the scene's analysis, every check included, and say what it holds.

@@ -36,6 +36,7 @@ mod analysis;
 mod bodies;
 mod constraints;
 mod convert;
+mod element;
 mod excavation;
 mod grid;
 mod loads;
@@ -48,6 +49,7 @@ mod schema;
 mod solver;
 mod water;
 
+pub use element::{ElementPathSpec, ElementRun, ElementTestSpec, LoadedElementTest};
 pub use excavation::Excavation;
 pub use locate::SceneError;
 pub use memory::{default_memory_limit, MemoryEstimate};
@@ -74,6 +76,40 @@ fn parse_message(code: &ron::Error) -> String {
         ),
         other => other.to_string(),
     }
+}
+
+/// The text of a `kind` file (a scene, an element test), read up to [`MAX_SCENE_BYTES`]:
+/// such a file describes its problem in a few lines, so a larger one is not one
+/// (`/dev/zero` is refused, not read until memory runs out).
+fn read_text(path: &Path, kind: &str) -> Result<String, SceneError> {
+    let error = |message: String| SceneError { file: path.to_owned(), line: 0, column: 0, message };
+    let unreadable = |e: std::io::Error| error(format!("cannot read the {kind} file: {e}"));
+    let file = std::fs::File::open(path).map_err(unreadable)?;
+    let mut bytes = Vec::new();
+    file.take(MAX_SCENE_BYTES + 1).read_to_end(&mut bytes).map_err(unreadable)?;
+    if bytes.len() as u64 > MAX_SCENE_BYTES {
+        return Err(error(format!(
+            "the file is larger than {} MiB; a {kind} is a short text that describes its problem: is this the {kind} file?",
+            MAX_SCENE_BYTES >> 20
+        )));
+    }
+    text_of(path, bytes)
+}
+
+/// RON text parsed as a `T`, a leading byte-order mark (which some Windows editors write)
+/// skipped; the text kept for locating later errors.
+fn parse_ron<T: serde::de::DeserializeOwned>(path: &Path, source: String) -> Result<(String, T), SceneError> {
+    let source = match source.strip_prefix('\u{feff}') {
+        Some(rest) => rest.to_string(),
+        None => source,
+    };
+    let value = ron::from_str(&source).map_err(|e| SceneError {
+        file: path.to_owned(),
+        line: e.span.start.line,
+        column: e.span.start.col,
+        message: parse_message(&e.code),
+    })?;
+    Ok((source, value))
 }
 
 /// The text of a scene file, or an error at the first byte that is not UTF-8 (a binary
@@ -111,33 +147,13 @@ impl LoadedScene {
     /// read is bounded by [`MAX_SCENE_BYTES`]: a scene describes its bodies by shapes, so a
     /// larger file is not a scene (`/dev/zero` is refused, not read until memory runs out).
     pub fn read(path: &Path) -> Result<Self, SceneError> {
-        let error = |message: String| SceneError { file: path.to_owned(), line: 0, column: 0, message };
-        let unreadable = |e: std::io::Error| error(format!("cannot read the scene file: {e}"));
-        let file = std::fs::File::open(path).map_err(unreadable)?;
-        let mut bytes = Vec::new();
-        file.take(MAX_SCENE_BYTES + 1).read_to_end(&mut bytes).map_err(unreadable)?;
-        if bytes.len() as u64 > MAX_SCENE_BYTES {
-            return Err(error(format!(
-                "the file is larger than {} MiB; a scene is a short text that describes its bodies by shapes: is this the scene file?",
-                MAX_SCENE_BYTES >> 20
-            )));
-        }
-        Self::parse(path, text_of(path, bytes)?)
+        Self::parse(path, read_text(path, "scene")?)
     }
 
     /// Parse scene text; `path` is only used in error messages. A leading byte-order mark
     /// (which some Windows editors write) is skipped.
     pub fn parse(path: &Path, source: String) -> Result<Self, SceneError> {
-        let source = match source.strip_prefix('\u{feff}') {
-            Some(rest) => rest.to_string(),
-            None => source,
-        };
-        let scene: Scene = ron::from_str(&source).map_err(|e| SceneError {
-            file: path.to_owned(),
-            line: e.span.start.line,
-            column: e.span.start.col,
-            message: parse_message(&e.code),
-        })?;
+        let (source, scene) = parse_ron(path, source)?;
         Ok(Self { path: path.to_owned(), source, scene, memory_limit: None })
     }
 

@@ -3,8 +3,8 @@
 
 use super::locate::Seg;
 use super::{
-    CamClayInitialSpec, CamClayShearSpec, ConeFitSpec, CriticalStateSpec, LawSpec, LoadedScene, MaterialSpec,
-    SceneError, SofteningSpec,
+    CamClayInitialSpec, CamClayShearSpec, ConeFitSpec, CriticalStateSpec, LawSpec, LoadedScene, SceneError,
+    SofteningSpec,
 };
 use loam_constitutive::{
     CamClayInitial, CamClayShear, ConeFit, ConstitutiveError, ConstitutiveLaw, DruckerPrager, Elastic, ModifiedCamClay,
@@ -33,17 +33,20 @@ impl LoadedScene {
                 return Err(self
                     .error(&at("name"), format!("material name \"{}\" is used twice; names must be unique", m.name)));
             }
-            laws.push(LawChecks { scene: self, i, m }.law()?);
+            let base = [Seg::Key("materials"), Seg::Index(i), Seg::Key("law")];
+            let error = |path: &[Seg], message: String| self.error(path, message);
+            laws.push(LawChecks { error: &error, base: &base, label: format!("material \"{}\"", m.name) }.law(&m.law)?);
         }
         Ok(laws)
     }
 }
 
-/// The checks of material `i`'s law, each refusal placed at the parameter's key.
-struct LawChecks<'a> {
-    scene: &'a LoadedScene,
-    i: usize,
-    m: &'a MaterialSpec,
+/// The checks of a law (a scene material's, or an element test's), each refusal placed at
+/// the parameter's key under `base` by `error` and named by `label`.
+pub(super) struct LawChecks<'a> {
+    pub error: &'a dyn Fn(&[Seg], String) -> SceneError,
+    pub base: &'a [Seg<'a>],
+    pub label: String,
 }
 
 impl LawChecks<'_> {
@@ -52,19 +55,24 @@ impl LawChecks<'_> {
         if ok && value.is_finite() {
             return Ok(());
         }
-        let at = [Seg::Key("materials"), Seg::Index(self.i), Seg::Key("law"), Seg::Key(key)];
-        Err(self.scene.error(&at, format!("material \"{}\": {key} = {value}; it must be {valid}", self.m.name)))
+        Err(self.at(key, format!("{}: {key} = {value}; it must be {valid}", self.label)))
+    }
+
+    /// An error at the law's key `key`.
+    fn at(&self, key: &'static str, message: String) -> SceneError {
+        let mut path = self.base.to_vec();
+        path.push(Seg::Key(key));
+        (self.error)(&path, message)
     }
 
     /// Whatever the law still refuses (checked combinations) is reported at the law.
     fn refused(&self, e: ConstitutiveError) -> SceneError {
-        let at = [Seg::Key("materials"), Seg::Index(self.i), Seg::Key("law")];
-        self.scene.error(&at, format!("material \"{}\": {e}", self.m.name))
+        (self.error)(self.base, format!("{}: {e}", self.label))
     }
 
     /// The law: its elastic part, checked first, then its strength.
-    fn law(&self) -> Result<Arc<dyn ConstitutiveLaw>, SceneError> {
-        Ok(match self.m.law {
+    pub fn law(&self, law: &LawSpec) -> Result<Arc<dyn ConstitutiveLaw>, SceneError> {
+        Ok(match *law {
             LawSpec::Elastic { young, poisson } => Arc::new(self.elastic(young, poisson)?),
             LawSpec::VonMises { young, poisson, yield_stress, hardening, residual_yield_stress } => {
                 let elastic = self.elastic(young, poisson)?;
@@ -88,8 +96,7 @@ impl LawChecks<'_> {
     fn elastic(&self, young: f64, poisson: f64) -> Result<Elastic, SceneError> {
         self.check("young", young, young > 0.0, "positive (Young's modulus)")?;
         self.check("poisson", poisson, poisson > -1.0 && poisson < 0.5, "in (-1, 0.5) (Poisson's ratio)")?;
-        let at = [Seg::Key("materials"), Seg::Index(self.i), Seg::Key("law"), Seg::Key("young")];
-        Elastic::new(young, poisson).map_err(|e| self.scene.error(&at, e.to_string()))
+        Elastic::new(young, poisson).map_err(|e| self.at("young", e.to_string()))
     }
 
     fn von_mises(
