@@ -45,7 +45,7 @@
 use nalgebra::{Matrix2, Matrix3, Vector2};
 
 use crate::tensor::{flatten, identity_dyad, sym_identity, Tensor4};
-use crate::{check_finite, ConstitutiveError, ConstitutiveLaw, Elastic, MaterialState, StressUpdate};
+use crate::{check_finite, ConstitutiveError, ConstitutiveLaw, Elastic, MaterialState, StressUpdate, SQRT_2_3};
 
 /// How the shear modulus is given.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -82,7 +82,6 @@ const ELASTIC_TOL: f64 = 1e-12;
 /// Newton's tolerance on the scaled residuals.
 const NEWTON_TOL: f64 = 1e-13;
 const MAX_ITERATIONS: usize = 60;
-const SQRT_2_3: f64 = 0.816_496_580_927_726;
 /// p_ref of the elastic volume law, in the scene's stress unit.
 const P_REF: f64 = 1.0;
 

@@ -54,7 +54,7 @@ use crate::frictional::{Branch, FrictionalStrength};
 use crate::tensor::{flatten, identity_dyad, sym_identity, Tensor4};
 use crate::{
     check_finite, ConstitutiveError, ConstitutiveLaw, Elastic, MaterialState, Softening, StrengthReducible,
-    StressUpdate,
+    StressUpdate, SQRT_2_3,
 };
 
 /// How a Drucker–Prager cone is fitted to Mohr–Coulomb (the table in the module docs).
@@ -114,9 +114,8 @@ const ELASTIC_TOL: f64 = 1e-12;
 const NEWTON_TOL: f64 = 1e-13;
 const MAX_ITERATIONS: usize = 50;
 
-/// √3 and √(2/3).
+/// √3.
 const SQRT3: f64 = 1.732_050_807_568_877_2;
-const SQRT_2_3: f64 = 0.816_496_580_927_726;
 
 impl ConeFit {
     /// (η, ξ, η̄) at φ, ψ and the derivatives (∂η/∂φ, ∂η/∂ψ, ∂ξ/∂φ, ∂ξ/∂ψ, ∂η̄/∂ψ).

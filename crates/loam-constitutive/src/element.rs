@@ -80,11 +80,10 @@ impl<'a> ElementTest<'a> {
     pub fn new(law: &'a dyn ConstitutiveLaw, initial_stress: Matrix3<f64>) -> Result<Self, ConstitutiveError> {
         let mut history = vec![0.0; law.history_len()];
         law.init_history(&mut history, &initial_stress);
-        let elastic_strain =
-            law.elastic_strain_of(&initial_stress, &history).ok_or(ConstitutiveError::InvalidParameter {
-                name: "element test: no elastic strain carries the initial stress",
-                value: f64::NAN,
-            })?;
+        // No elastic strain carries the stress (Cam clay at p′ ≤ 0): nothing to start from.
+        let elastic_strain = law
+            .elastic_strain_of(&initial_stress, &history)
+            .ok_or(ConstitutiveError::NonFinite { what: "elastic strain of the initial stress" })?;
         Ok(Self { law, strain: Matrix3::zeros(), elastic_strain, stress: initial_stress, history })
     }
 

@@ -190,6 +190,9 @@ pub struct MaterialState<'a> {
     pub history: &'a [f64],
 }
 
+/// √(2/3): the equivalent deviatoric strain √(2/3) ‖dev ε‖ of the laws' histories.
+pub(crate) const SQRT_2_3: f64 = 0.816_496_580_927_726;
+
 static ZERO: Matrix3<f64> = Matrix3::from_array_storage(nalgebra::ArrayStorage([[0.0; 3]; 3]));
 
 impl<'a> MaterialState<'a> {
