@@ -16,6 +16,7 @@ mod report;
 mod scale;
 mod slope;
 mod soil;
+mod soil_models;
 mod steps;
 mod tangents;
 mod water;
@@ -44,7 +45,7 @@ enum Cmd {
         #[arg(long, default_value = "target/verify")]
         out: PathBuf,
         /// Run these sections only (comma separated): columns, dynamics, footing, slope,
-        /// hard_cases, loads, water, granular.
+        /// hard_cases, loads, water, granular, soil.
         #[arg(long, value_delimiter = ',')]
         only: Vec<String>,
         /// Write the result tables of docs/verification.md marked for this mode from the
@@ -114,7 +115,7 @@ fn main() -> Result<()> {
 /// fail when a bound fails (after writing, so that the report shows which).
 fn verify(quick: bool, out: &Path, only: &[String], update_docs: bool) -> Result<()> {
     type Section = fn(bool, &mut Report) -> Result<()>;
-    let sections: [(&str, Section); 8] = [
+    let sections: [(&str, Section); 9] = [
         ("columns", columns::verify),
         ("dynamics", dynamics::verify),
         ("footing", footing::verify),
@@ -123,6 +124,7 @@ fn verify(quick: bool, out: &Path, only: &[String], update_docs: bool) -> Result
         ("loads", loads::verify),
         ("water", water::verify),
         ("granular", granular::verify),
+        ("soil", soil_models::verify),
     ];
     if let Some(unknown) = only.iter().find(|o| !sections.iter().any(|(name, _)| name == o)) {
         let names: Vec<&str> = sections.iter().map(|(name, _)| *name).collect();

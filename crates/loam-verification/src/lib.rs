@@ -27,6 +27,7 @@
 pub mod bar;
 pub mod block;
 pub mod bound;
+pub mod cam_clay;
 pub mod cavity;
 pub mod column;
 pub mod conditioning;
