@@ -14,6 +14,9 @@ use std::hint::black_box;
 
 const STATES: usize = 1000;
 
+/// A benchmark case: its name, the law, the history the trials start from, the trials.
+type Case<'a> = (&'static str, &'a dyn ConstitutiveLaw, Vec<f64>, Vec<Matrix3<f64>>);
+
 /// Deterministic trial strains: `base` plus a deviatoric and volumetric increment of up to
 /// `size` in a rotating frame (a fixed sequence, no random generator).
 fn trials(base: Matrix3<f64>, size: f64) -> Vec<Matrix3<f64>> {
@@ -39,7 +42,7 @@ fn laws(c: &mut Criterion) {
     cc.init_history(&mut h_cc, &sigma0);
     let e_cc = cc.elastic_strain_of(&sigma0, &h_cc).unwrap();
     let e_frictional = el.strain(&sigma0);
-    let cases: [(&str, &dyn ConstitutiveLaw, Vec<f64>, Vec<Matrix3<f64>>); 3] = [
+    let cases: [Case; 3] = [
         ("mohr_coulomb", &mc, vec![0.0; 2], trials(e_frictional, 1e-2)),
         ("drucker_prager", &dp, vec![0.0; 2], trials(e_frictional, 1e-2)),
         ("modified_cam_clay", &cc, h_cc, trials(e_cc, 1e-2)),

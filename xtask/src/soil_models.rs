@@ -83,6 +83,9 @@ pub fn verify(_quick: bool, report: &mut Report) -> Result<()> {
     Ok(())
 }
 
+/// What each component does in a step of a given increment.
+type StepOf<'a> = dyn Fn(f64) -> [Held; 6] + 'a;
+
 /// Isotropic and oedometric compression along the virgin line, then unloading:
 /// Δe/Δln p′ = −λ, −κ. The oedometer starts normally consolidated at the stress ratio
 /// η_K0 that oedometric flow keeps (ε̇_s/ε̇_v = ⅔ with G following p:
@@ -99,7 +102,7 @@ fn compression_lines(report: &mut Report) -> Result<()> {
         -P0 - 2.0 * eta * P0 / 3.0,
     ));
     let oedometer = |d: f64| ElementPath::Oedometer.held(d, &k0);
-    let paths: [(&str, Matrix3<f64>, &dyn Fn(f64) -> [Held; 6]); 2] =
+    let paths: [(&str, Matrix3<f64>, &StepOf<'_>); 2] =
         [("isotropic", Matrix3::identity() * -P0, &iso), ("oedometric", k0, &oedometer)];
     let law = law(1.0)?;
     for (path, start, held) in paths {
