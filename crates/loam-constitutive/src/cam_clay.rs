@@ -14,6 +14,10 @@
 //! p_c = p_c,n exp(Δε^p_v / (λ̂ − κ̂))   (hardening: the λ line, λ̂ = λ/(1 + e₀))
 //! ```
 //!
+//! Optionally M follows the Lode angle ([`ModifiedCamClay::with_lode_dependence`]): M in
+//! triaxial compression, Mohr–Coulomb's ratio of it in extension, the Lode angle the
+//! trial's, kept through the return.
+//!
 //! p_ref = 1 in the scene's stress unit: it fixes only where the elastic volumetric strain
 //! is counted from (the stress depends on its changes). Isotropic compression follows
 //! e = e₀ − (1 + e₀) ε_v, whose slopes against ln p are λ on the virgin line and κ in
@@ -75,6 +79,9 @@ pub struct ModifiedCamClay {
     m: f64,
     shear: CamClayShear,
     initial: CamClayInitial,
+    /// M follows the Lode angle (Sheng, Sloan & Yu 2000), M in compression, Mohr–Coulomb's
+    /// ratio in extension.
+    lode: bool,
 }
 
 /// f ≤ ELASTIC_TOL p_c² is elastic.
@@ -85,12 +92,13 @@ const MAX_ITERATIONS: usize = 60;
 /// p_ref of the elastic volume law, in the scene's stress unit.
 const P_REF: f64 = 1.0;
 
-/// The trial state in invariants.
+/// The trial state in invariants, with M at its Lode angle.
 struct Trial {
     eps_v: f64,
     eps_s: f64,
     n_hat: Matrix3<f64>,
     pc_n: f64,
+    m: f64,
 }
 
 /// A converged state: Δε^p_v, Δγ and what follows from them.
@@ -145,7 +153,31 @@ impl ModifiedCamClay {
             }
             _ => {}
         }
-        Ok(Self { lambda, kappa, void_ratio, m, shear, initial })
+        Ok(Self { lambda, kappa, void_ratio, m, shear, initial, lode: false })
+    }
+
+    /// M follows the Lode angle θ (Sheng, Sloan & Yu 2000): M(θ) = M g(θ),
+    /// g = (2α⁴/(1 + α⁴ + (1 − α⁴) sin 3θ))^¼ with α = (3 − sin φ)/(3 + sin φ), φ the
+    /// critical-state friction angle of M: M in triaxial compression, α M in extension,
+    /// Mohr–Coulomb's ratio. The flow stays radial in the deviatoric plane: θ is the
+    /// trial's, kept through the return.
+    pub fn with_lode_dependence(mut self) -> Self {
+        self.lode = true;
+        self
+    }
+
+    /// M(θ) and dM/d(sin 3θ) for the deviatoric direction `n_hat` (unit, or zero), with
+    /// sin 3θ = √6 tr(n̂³) (−1 in triaxial compression, 1 in extension, tension positive).
+    fn slope_at(&self, n_hat: &Matrix3<f64>) -> (f64, f64) {
+        if !self.lode || n_hat.norm_squared() == 0.0 {
+            return (self.m, 0.0);
+        }
+        let s3 = (6f64.sqrt() * (n_hat * n_hat * n_hat).trace()).clamp(-1.0, 1.0);
+        let sin_phi = 3.0 * self.m / (6.0 + self.m);
+        let a4 = ((3.0 - sin_phi) / (3.0 + sin_phi)).powi(4);
+        let den = 1.0 + a4 + (1.0 - a4) * s3;
+        let g = (2.0 * a4 / den).powf(0.25);
+        (self.m * g, -0.25 * self.m * g * (1.0 - a4) / den)
     }
 
     /// M = 6 sin φ/(3 − sin φ): the critical-state slope matched to Mohr–Coulomb in
@@ -174,10 +206,12 @@ impl ModifiedCamClay {
         self.m
     }
 
-    /// f = q²/M² + p (p − p_c) of `stress` with preconsolidation pressure p_c.
+    /// f = q²/M² + p (p − p_c) of `stress` with preconsolidation pressure p_c (M at the
+    /// stress's Lode angle where it follows it).
     pub fn yield_function(&self, stress: &Matrix3<f64>, pc: f64) -> f64 {
         let (p, q) = invariants(stress);
-        q * q / (self.m * self.m) + p * (p - pc)
+        let m = self.slope_at(&unit_deviator(stress)).0;
+        q * q / (m * m) + p * (p - pc)
     }
 
     /// The converged local state for the trial `tr` and its Jacobian's inverse, or the
@@ -189,7 +223,7 @@ impl ModifiedCamClay {
     fn solve(&self, tr: &Trial) -> Result<(Local, Option<Matrix2<f64>>), ConstitutiveError> {
         let elastic = self.local(tr, 0.0, 0.0);
         let scale = tr.pc_n * tr.pc_n;
-        if self.residual(&elastic).1 <= ELASTIC_TOL * scale {
+        if self.residual(tr, &elastic).1 <= ELASTIC_TOL * scale {
             return Ok((elastic, None));
         }
         let failed = |residual: f64| ConstitutiveError::ReturnMappingFailed {
@@ -202,9 +236,9 @@ impl ModifiedCamClay {
             let l = self.local(tr, self.plastic_volume(tr, dgamma)?, dgamma);
             let jac = self.jacobian(tr, &l, scale);
             let dx = -jac[(0, 1)] / jac[(0, 0)];
-            Ok((l, self.residual(&l).1 / scale, jac[(1, 0)] * dx + jac[(1, 1)]))
+            Ok((l, self.residual(tr, &l).1 / scale, jac[(1, 0)] * dx + jac[(1, 1)]))
         };
-        let m2 = self.m * self.m;
+        let m2 = tr.m * tr.m;
         // Δγ = M²/(6G) halves q: the first guess of the upper end.
         let mut hi = m2 / (6.0 * elastic.g.max(f64::MIN_POSITIVE));
         let mut lo = 0.0;
@@ -278,22 +312,22 @@ impl ModifiedCamClay {
         let (g0, g1) = self.shear_law();
         let p = P_REF * ((tr.eps_v - x) / kh).exp();
         let g = g0 + g1 * p;
-        let den = 1.0 + 6.0 * g * dgamma / (self.m * self.m);
+        let den = 1.0 + 6.0 * g * dgamma / (tr.m * tr.m);
         let q = 3.0 * g * tr.eps_s / den;
         let pc = tr.pc_n * (x / hard).exp();
         Local { x, dgamma, p, q, pc, g, den }
     }
 
     /// (r₁, f) of a local state.
-    fn residual(&self, l: &Local) -> (f64, f64) {
-        (l.x - l.dgamma * (2.0 * l.p - l.pc), l.q * l.q / (self.m * self.m) + l.p * (l.p - l.pc))
+    fn residual(&self, tr: &Trial, l: &Local) -> (f64, f64) {
+        (l.x - l.dgamma * (2.0 * l.p - l.pc), l.q * l.q / (tr.m * tr.m) + l.p * (l.p - l.pc))
     }
 
     /// ∂(r₁, f/scale)/∂(Δε^p_v, Δγ).
     fn jacobian(&self, tr: &Trial, l: &Local, scale: f64) -> Matrix2<f64> {
         let (kh, hard) = self.moduli();
         let (_, g1) = self.shear_law();
-        let m2 = self.m * self.m;
+        let m2 = tr.m * tr.m;
         let dp_dx = -l.p / kh;
         let dpc_dx = l.pc / hard;
         let dq_dg = 3.0 * tr.eps_s / (l.den * l.den);
@@ -312,7 +346,7 @@ impl ModifiedCamClay {
     fn tangent(&self, tr: &Trial, l: &Local, inv: Option<Matrix2<f64>>) -> Tensor4 {
         let (kh, _) = self.moduli();
         let (_, g1) = self.shear_law();
-        let m2 = self.m * self.m;
+        let m2 = tr.m * tr.m;
         let scale = tr.pc_n * tr.pc_n;
         // Explicit derivatives at fixed (Δε^p_v, Δγ) with respect to a = (ε_v,tr, ε_s,tr).
         let p_a = l.p / kh;
@@ -339,9 +373,38 @@ impl ModifiedCamClay {
         );
         let (i, n) = (flatten(&Matrix3::identity()), flatten(&tr.n_hat));
         let i_dev = sym_identity() - identity_dyad() / 3.0;
-        identity_dyad() * dp[0] - i * n.transpose() * (SQRT_2_3 * dp[1]) - n * i.transpose() * (SQRT_2_3 * dq[0])
-            + n * n.transpose() * (2.0 / 3.0 * dq[1])
-            + (i_dev - n * n.transpose()) * (2.0 * l.g / l.den)
+        let d =
+            identity_dyad() * dp[0] - i * n.transpose() * (SQRT_2_3 * dp[1]) - n * i.transpose() * (SQRT_2_3 * dq[0])
+                + n * n.transpose() * (2.0 / 3.0 * dq[1])
+                + (i_dev - n * n.transpose()) * (2.0 * l.g / l.den);
+        match inv {
+            Some(inv) if self.lode => d + self.lode_term(tr, l, &inv),
+            _ => d,
+        }
+    }
+
+    /// What the Lode dependence adds to a plastic tangent: ∂σ/∂M ⊗ dM/dε_tr, M being the
+    /// trial's (dM/dε_tr = dM/d sin 3θ · 3√6 (dev n̂² − tr(n̂³) n̂)/‖dev ε_tr‖).
+    fn lode_term(&self, tr: &Trial, l: &Local, inv: &Matrix2<f64>) -> Tensor4 {
+        let e_norm = tr.eps_s / SQRT_2_3;
+        if e_norm == 0.0 {
+            return Tensor4::zeros();
+        }
+        let (kh, _) = self.moduli();
+        let (_, g1) = self.shear_law();
+        let (m, scale) = (tr.m, tr.pc_n * tr.pc_n);
+        let m2 = m * m;
+        // ∂q/∂M and ∂f/∂M at fixed (Δε^p_v, Δγ), then dz/dM = −J⁻¹ ∂R/∂M.
+        let q_m = l.q * 12.0 * l.g * l.dgamma / (m2 * m * l.den);
+        let r_m = (2.0 * l.q * q_m / m2 - 2.0 * l.q * l.q / (m2 * m)) / scale;
+        let dz = -(inv * Vector2::new(0.0, r_m));
+        let dp = -l.p / kh * dz[0];
+        let dq = 3.0 * tr.eps_s / (l.den * l.den) * g1 * dp - l.q * 6.0 * l.g / (m2 * l.den) * dz[1] + q_m;
+        let dsigma = Matrix3::identity() * -dp + tr.n_hat * (SQRT_2_3 * dq);
+        let n2 = tr.n_hat * tr.n_hat;
+        let ds3 = (n2 - Matrix3::identity() * (n2.trace() / 3.0) - tr.n_hat * (n2 * tr.n_hat).trace())
+            * (3.0 * 6f64.sqrt() / e_norm);
+        flatten(&dsigma) * flatten(&ds3).transpose() * self.slope_at(&tr.n_hat).1
     }
 
     /// The update with its tangent: the trial invariants, the return, the state.
@@ -357,14 +420,15 @@ impl ModifiedCamClay {
         let dev = eps - Matrix3::identity() * (eps.trace() / 3.0);
         let nd = dev.norm();
         let n_hat = if nd > 0.0 { dev / nd } else { Matrix3::zeros() };
-        let tr = Trial { eps_v: -eps.trace(), eps_s: SQRT_2_3 * nd, n_hat, pc_n };
+        let (m, _) = self.slope_at(&n_hat);
+        let tr = Trial { eps_v: -eps.trace(), eps_s: SQRT_2_3 * nd, n_hat, pc_n, m };
         let (l, inv) = self.solve(&tr)?;
         let stress = Matrix3::identity() * -l.p + tr.n_hat * (SQRT_2_3 * l.q);
         check_finite(&stress, "Modified Cam clay stress")?;
         // ε^e = −ε^e_v/3 I + √(3/2) ε^e_s n̂ with ε^e_s = q/(3G).
         let eps_s_e = if l.g > 0.0 { l.q / (3.0 * l.g) } else { 0.0 };
         let elastic_strain = Matrix3::identity() * (-(tr.eps_v - l.x) / 3.0) + tr.n_hat * (eps_s_e / SQRT_2_3);
-        h_out[0] = es_n + 2.0 * l.q * l.dgamma / (self.m * self.m);
+        h_out[0] = es_n + 2.0 * l.q * l.dgamma / (tr.m * tr.m);
         h_out[1] = evp_n - l.x;
         h_out[2] = l.pc;
         let tangent = if with_tangent { self.tangent(&tr, &l, inv) } else { Tensor4::zeros() };
@@ -379,6 +443,17 @@ impl ModifiedCamClay {
         let p = p.max(0.0);
         let (g0, g1) = self.shear_law();
         (p / self.moduli().0, if p > 0.0 { g0 + g1 * p } else { 0.0 })
+    }
+}
+
+/// The unit deviatoric direction of a stress (zero for an isotropic one).
+fn unit_deviator(stress: &Matrix3<f64>) -> Matrix3<f64> {
+    let s = stress - Matrix3::identity() * (stress.trace() / 3.0);
+    let n = s.norm();
+    if n > 0.0 {
+        s / n
+    } else {
+        Matrix3::zeros()
     }
 }
 
@@ -429,7 +504,10 @@ impl ConstitutiveLaw for ModifiedCamClay {
         h[2] = match self.initial {
             CamClayInitial::Preconsolidation(pc) => pc,
             CamClayInitial::OverConsolidation(_) if p <= 0.0 => 0.0,
-            CamClayInitial::OverConsolidation(ocr) => ocr * (p + q * q / (self.m * self.m * p)),
+            CamClayInitial::OverConsolidation(ocr) => {
+                let m = self.slope_at(&unit_deviator(initial_stress)).0;
+                ocr * (p + q * q / (m * m * p))
+            }
         };
     }
 
@@ -582,6 +660,32 @@ mod tests {
         let slope = (e_c - e_b) / (p_c / p_b).ln();
         assert!((slope + 0.04).abs() < 1e-12, "unloading slope {slope}");
         assert!(t.history()[2] > p_b * (1.0 - 1e-12) && t.history()[2] < p_b * (1.0 + 1e-12));
+    }
+
+    /// With M following the Lode angle, drained triaxial compression ends at q = M p′ and
+    /// drained extension (the axial stress unloaded, the lateral held) at q = α M p′,
+    /// α = (3 − sin φ)/(3 + sin φ) = 0.75 for M = 1 (sin φ = 3/7): Mohr–Coulomb's ratio,
+    /// to 1e-3 of the critical state after 100 % (compression) and 60 % (extension) axial
+    /// strain (small strain: the path only has to reach its asymptote).
+    #[test]
+    fn lode_dependent_slope_is_mohr_coulomb_in_extension() {
+        let law = clay(CamClayInitial::OverConsolidation(1.0)).with_lode_dependence();
+        let start = Matrix3::identity() * -100.0;
+        for (increment, ratio) in [(2.5e-3, 1.0), (-1.5e-3, 0.75)] {
+            let mut t = ElementTest::new(&law, start).unwrap();
+            for _ in 0..400 {
+                t.step(ElementPath::TriaxialDrained.held(increment, &start)).unwrap();
+            }
+            let (p, q) = t.p_q();
+            assert!((q / p / ratio - 1.0).abs() < 1e-3, "increment {increment}: q/p = {}", q / p);
+        }
+        // Without the option extension ends at M.
+        let plain = clay(CamClayInitial::OverConsolidation(1.0));
+        let mut t = ElementTest::new(&plain, start).unwrap();
+        for _ in 0..400 {
+            t.step(ElementPath::TriaxialDrained.held(-1.5e-3, &start)).unwrap();
+        }
+        assert!((t.p_q().1 / t.p_q().0 - 1.0).abs() < 1e-3);
     }
 
     #[test]

@@ -1,6 +1,7 @@
 //! Modified Cam clay's consistent tangent against central differences of the stress
 //! update at random states (docs/theory.md §16): normally and over-consolidated, loading
-//! and unloading, G constant or following p, wet and dry of critical.
+//! and unloading, G constant or following p, wet and dry of critical, M constant or
+//! following the Lode angle.
 //!
 //! Tolerance: `FD_TOL` = 1e-6 relative (docs/theory.md §16, as for the other laws).
 
@@ -11,9 +12,14 @@ use proptest::prelude::*;
 
 const FD_TOL: f64 = 1e-6;
 
-fn law(ocr: f64, constant_shear: bool) -> ModifiedCamClay {
+fn law(ocr: f64, constant_shear: bool, lode: bool) -> ModifiedCamClay {
     let shear = if constant_shear { CamClayShear::Modulus(2000.0) } else { CamClayShear::Poisson(0.3) };
-    ModifiedCamClay::new(0.25, 0.05, 1.2, 1.1, shear, CamClayInitial::OverConsolidation(ocr)).unwrap()
+    let law = ModifiedCamClay::new(0.25, 0.05, 1.2, 1.1, shear, CamClayInitial::OverConsolidation(ocr)).unwrap();
+    if lode {
+        law.with_lode_dependence()
+    } else {
+        law
+    }
 }
 
 /// Whether an update from `eps` flows (its history changes).
@@ -35,10 +41,11 @@ proptest! {
         q_ratio in 0.0f64..0.8,
         ocr in 1.0f64..4.0,
         constant_shear in any::<bool>(),
+        lode in any::<bool>(),
         d in prop::array::uniform3(-2e-2f64..2e-2),
         r in prop::array::uniform3(-3.0f64..3.0),
     ) {
-        let law = law(ocr, constant_shear);
+        let law = law(ocr, constant_shear, lode);
         // A triaxial initial stress inside (OCR > 1) or on (OCR = 1) the surface.
         let sigma0 = Matrix3::from_diagonal(&Vector3::new(-p0 + q_ratio * p0 / 3.0, -p0 + q_ratio * p0 / 3.0, -p0 - 2.0 * q_ratio * p0 / 3.0));
         let mut h = [0.0; 3];

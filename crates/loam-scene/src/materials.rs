@@ -86,8 +86,9 @@ impl LawChecks<'_> {
                 let elastic = self.elastic(young, poisson)?;
                 Arc::new(self.drucker_prager(elastic, [cohesion, friction, dilation], fit, softening)?)
             }
-            LawSpec::ModifiedCamClay { lambda, kappa, void_ratio, critical_state, shear, initial } => {
-                Arc::new(self.cam_clay([lambda, kappa, void_ratio], critical_state, shear, initial)?)
+            LawSpec::ModifiedCamClay { lambda, kappa, void_ratio, critical_state, shear, initial, lode_dependent } => {
+                let law = self.cam_clay([lambda, kappa, void_ratio], critical_state, shear, initial)?;
+                Arc::new(if lode_dependent { law.with_lode_dependence() } else { law })
             }
         })
     }

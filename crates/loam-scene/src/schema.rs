@@ -290,6 +290,10 @@ pub enum LawSpec {
         shear: CamClayShearSpec,
         #[serde(default = "normally_consolidated")]
         initial: CamClayInitialSpec,
+        /// M follows the Lode angle: M in triaxial compression, Mohr–Coulomb's ratio
+        /// (3 − sin φ′)/(3 + sin φ′) of it in extension (default false: M everywhere).
+        #[serde(default)]
+        lode_dependent: bool,
     },
     /// Drucker–Prager: the smooth cone fitted to Mohr–Coulomb's c, φ, ψ (degrees) in plane
     /// strain (default), triaxial compression or extension; optional linear softening.
