@@ -3,7 +3,7 @@
 //! `points_final.csv` bit for bit, and the same Newton iterations. The cases are the
 //! state the SIGKILL tests of the `loam` program (crates/loam-cli/tests/restart.rs) do not
 //! reach: a body-fitted mesh whose nodes move, loads whose vertices follow the surface, a
-//! dead load, two bodies in explicit FLIP, and 3D.
+//! dead load, two bodies in explicit FLIP, Cam clay from a geostatic start, and 3D.
 
 use loam::format::checkpoint::Checkpoint;
 use loam::run::{resume_scene, run_scene_with, CheckpointEvery, RunOptions, CHECKPOINT_FILE};
@@ -74,6 +74,13 @@ fn dead_loads_resume() {
 #[test]
 fn arc_length_control_resumes() {
     resumed_run_matches(&scene("footing_arc_length.ron", &[("steps: 60", "steps: 20")]), 9);
+}
+
+/// Modified Cam clay from a geostatic start: p_c in the history and the exactly carried
+/// initial elastic strain are saved and restored (15 steps to the footing's last load).
+#[test]
+fn cam_clay_resumes() {
+    resumed_run_matches(&scene("footing_cam_clay.ron", &[("load_steps: 50", "load_steps: 50, max_cutbacks: 2")]), 6);
 }
 
 /// Explicit FLIP with two bodies, and the last step landing on the end time.
