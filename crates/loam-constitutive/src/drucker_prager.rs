@@ -50,7 +50,7 @@
 
 use nalgebra::Matrix3;
 
-use crate::frictional::{Branch, FrictionalStrength};
+use crate::frictional::{frictional_inputs, Branch, FrictionalStrength};
 use crate::tensor::{flatten, identity_dyad, sym_identity, Tensor4};
 use crate::{
     check_finite, ConstitutiveError, ConstitutiveLaw, Elastic, MaterialState, Softening, StrengthReducible,
@@ -266,7 +266,7 @@ impl DruckerPrager {
         h_n: &[f64],
         h_out: &mut [f64],
     ) -> Result<(Returned, DruckerPragerRegion), ConstitutiveError> {
-        let (kappa_n, evp_n) = check_inputs(eps_trial, h_n, h_out)?;
+        let (kappa_n, evp_n) = frictional_inputs(eps_trial, h_n, h_out, "Drucker-Prager history")?;
         let tr = self.trial(eps_trial, kappa_n)?;
         let cone_n = self.cone_on(kappa_n, self.strength.branch_at(kappa_n));
         let f_tr = tr.j + cone_n.eta * tr.p - cone_n.strength().0;
@@ -382,22 +382,6 @@ impl DruckerPrager {
         let flow = Flow::Apex { slope: w_hat * (dpa * SQRT_2_3) };
         Ok((Returned { stress, elastic_strain, flow: Some(flow) }, deps_v, kappa, DruckerPragerRegion::Apex))
     }
-}
-
-/// The input checks: a finite trial strain and the law's two history values (κ ≥ 0, the
-/// accumulated plastic volumetric strain); returns them.
-fn check_inputs(eps_trial: &Matrix3<f64>, h_n: &[f64], h_out: &[f64]) -> Result<(f64, f64), ConstitutiveError> {
-    check_finite(eps_trial, "trial strain")?;
-    for got in [h_n.len(), h_out.len()] {
-        if got != 2 {
-            return Err(ConstitutiveError::HistoryLength { expected: 2, got });
-        }
-    }
-    let (kappa_n, evp_n) = (h_n[0], h_n[1]);
-    if !(kappa_n.is_finite() && kappa_n >= 0.0 && evp_n.is_finite()) {
-        return Err(ConstitutiveError::NonFinite { what: "Drucker-Prager history" });
-    }
-    Ok((kappa_n, evp_n))
 }
 
 /// The trial state of an update.

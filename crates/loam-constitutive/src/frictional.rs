@@ -7,7 +7,9 @@
 //! X(κ) = X_res + (X₀ − X_res) max(0, 1 − κ/κ_res) for X ∈ {c, φ, ψ}, κ the accumulated
 //! equivalent deviatoric plastic strain.
 
-use crate::ConstitutiveError;
+use nalgebra::Matrix3;
+
+use crate::{check_finite, ConstitutiveError};
 
 /// Linear softening of c, φ, ψ to residual values at κ = κ_res (angles in radians).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -199,4 +201,26 @@ impl FrictionalStrength {
             }),
         })
     }
+}
+
+/// The inputs of a frictional law's update: a finite trial strain and the law's two history
+/// values (κ ≥ 0, the accumulated plastic volumetric strain), returned; `what` names the
+/// history in the error.
+pub(crate) fn frictional_inputs(
+    eps_trial: &Matrix3<f64>,
+    h_n: &[f64],
+    h_out: &[f64],
+    what: &'static str,
+) -> Result<(f64, f64), ConstitutiveError> {
+    check_finite(eps_trial, "trial strain")?;
+    for got in [h_n.len(), h_out.len()] {
+        if got != 2 {
+            return Err(ConstitutiveError::HistoryLength { expected: 2, got });
+        }
+    }
+    let (kappa_n, evp_n) = (h_n[0], h_n[1]);
+    if !(kappa_n.is_finite() && kappa_n >= 0.0 && evp_n.is_finite()) {
+        return Err(ConstitutiveError::NonFinite { what });
+    }
+    Ok((kappa_n, evp_n))
 }

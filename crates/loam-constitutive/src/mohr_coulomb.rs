@@ -82,7 +82,7 @@
 
 use nalgebra::{Matrix3, Matrix4, Matrix4x3, Vector3, Vector4};
 
-use crate::frictional::{Branch, FrictionalStrength};
+use crate::frictional::{frictional_inputs, Branch, FrictionalStrength};
 use crate::tensor::{flatten, spectral, Tensor4};
 use crate::{
     check_finite, ConstitutiveError, ConstitutiveLaw, Elastic, MaterialState, Softening, StrengthReducible,
@@ -652,7 +652,7 @@ impl MohrCoulomb {
         h_n: &[f64],
         h_out: &mut [f64],
     ) -> Result<(Returned, MohrCoulombReturn), ConstitutiveError> {
-        let (kappa_n, evp_n) = check_inputs(eps_trial, h_n, h_out)?;
+        let (kappa_n, evp_n) = frictional_inputs(eps_trial, h_n, h_out, "Mohr-Coulomb history")?;
         let eps = (eps_trial + eps_trial.transpose()) * 0.5;
         let (tr, n) = self.principal_trial(&eps, kappa_n)?;
         let branch_n = self.branch_at(kappa_n);
@@ -739,22 +739,6 @@ impl MohrCoulomb {
             .min_by(|a, b| energy(a).total_cmp(&energy(b)))
             .map(|c| (*c, true)))
     }
-}
-
-/// The input checks: a finite trial strain and the law's two history values (κ, the
-/// accumulated plastic volumetric strain), κ ≥ 0; returns them.
-fn check_inputs(eps_trial: &Matrix3<f64>, h_n: &[f64], h_out: &[f64]) -> Result<(f64, f64), ConstitutiveError> {
-    check_finite(eps_trial, "trial strain")?;
-    for got in [h_n.len(), h_out.len()] {
-        if got != 2 {
-            return Err(ConstitutiveError::HistoryLength { expected: 2, got });
-        }
-    }
-    let (kappa_n, evp_n) = (h_n[0], h_n[1]);
-    if !(kappa_n.is_finite() && kappa_n >= 0.0 && evp_n.is_finite()) {
-        return Err(ConstitutiveError::NonFinite { what: "Mohr-Coulomb history" });
-    }
-    Ok((kappa_n, evp_n))
 }
 
 /// det m of a 4 × 4 by its 2 × 2 minors (Laplace along the first two rows): where nalgebra's
