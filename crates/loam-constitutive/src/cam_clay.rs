@@ -161,9 +161,16 @@ impl ModifiedCamClay {
     /// critical-state friction angle of M: M in triaxial compression, α M in extension,
     /// Mohr–Coulomb's ratio. The flow stays radial in the deviatoric plane: θ is the
     /// trial's, kept through the return.
-    pub fn with_lode_dependence(mut self) -> Self {
+    /// Refused for M ≥ 3 (no friction angle has it: sin φ = 3M/(6 + M) ≥ 1).
+    pub fn with_lode_dependence(mut self) -> Result<Self, ConstitutiveError> {
+        if self.m >= 3.0 {
+            return Err(ConstitutiveError::InvalidParameter {
+                name: "critical state slope M (Lode-dependent)",
+                value: self.m,
+            });
+        }
         self.lode = true;
-        self
+        Ok(self)
     }
 
     /// M(θ) and dM/d(sin 3θ) for the deviatoric direction `n_hat` (unit, or zero), with
@@ -242,15 +249,24 @@ impl ModifiedCamClay {
         // Δγ = M²/(6G) halves q: the first guess of the upper end.
         let mut hi = m2 / (6.0 * elastic.g.max(f64::MIN_POSITIVE));
         let mut lo = 0.0;
-        for _ in 0..MAX_ITERATIONS {
-            if along(hi)?.1 < 0.0 {
+        loop {
+            // f is positive at Δγ = 0 and negative for Δγ large enough: a bracket not found
+            // by 4⁶⁰ times the first guess, or a NaN f, is a failure, not a result.
+            let f = along(hi)?.1;
+            if f < 0.0 {
                 break;
+            }
+            if f.is_nan() || hi > 1e36 * m2 / elastic.g.max(f64::MIN_POSITIVE) {
+                return Err(failed(f));
             }
             (lo, hi) = (hi, hi * 4.0);
         }
         let mut dgamma = 0.5 * (lo + hi);
         for _ in 0..MAX_ITERATIONS {
             let (l, f, df) = along(dgamma)?;
+            if f.is_nan() {
+                return Err(failed(f));
+            }
             // Round-off in f is relative to its largest term, not to p_c,n².
             let terms = (l.q * l.q / m2).max(l.p * l.p).max(l.p * l.pc) / scale;
             if f.abs() <= NEWTON_TOL * terms || hi - lo <= 4.0 * f64::EPSILON * hi {
@@ -279,15 +295,26 @@ impl ModifiedCamClay {
         };
         // A bracket: widen from ±(κ̂ + λ̂ − κ̂) until r₁ changes sign.
         let (mut lo, mut hi) = (-(kh + hard), kh + hard);
-        for _ in 0..MAX_ITERATIONS {
-            if r1(lo).0 <= 0.0 && r1(hi).0 >= 0.0 {
-                break;
+        let mut widened = 0;
+        while !(r1(lo).0 <= 0.0 && r1(hi).0 >= 0.0) {
+            // r₁ runs from −∞ to ∞ (NaN where the exponentials overflow): no bracket within
+            // 2⁶⁰ times the first is a failure.
+            widened += 1;
+            if widened > MAX_ITERATIONS {
+                return Err(ConstitutiveError::ReturnMappingFailed {
+                    law: "modified-cam-clay",
+                    iterations: widened,
+                    residual: f64::NAN,
+                });
             }
             (lo, hi) = (lo * 2.0, hi * 2.0);
         }
         let mut x = 0.0f64.clamp(lo, hi);
-        for _ in 0..2 * MAX_ITERATIONS {
+        for _ in 0..MAX_ITERATIONS {
             let (r, dr, terms) = r1(x);
+            if r.is_nan() {
+                break;
+            }
             if r.abs() <= NEWTON_TOL * terms || hi - lo <= 4.0 * f64::EPSILON * x.abs() {
                 return Ok(x);
             }
@@ -669,7 +696,7 @@ mod tests {
     /// strain (small strain: the path only has to reach its asymptote).
     #[test]
     fn lode_dependent_slope_is_mohr_coulomb_in_extension() {
-        let law = clay(CamClayInitial::OverConsolidation(1.0)).with_lode_dependence();
+        let law = clay(CamClayInitial::OverConsolidation(1.0)).with_lode_dependence().unwrap();
         let start = Matrix3::identity() * -100.0;
         for (increment, ratio) in [(2.5e-3, 1.0), (-1.5e-3, 0.75)] {
             let mut t = ElementTest::new(&law, start).unwrap();

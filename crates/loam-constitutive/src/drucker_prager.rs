@@ -27,7 +27,7 @@
 //! # Return
 //! The cone: s = s_tr (1 − GΔγ/√J₂_tr), p = p_tr − K η̄ Δγ, and Δγ solves
 //! r(Δγ) = √J₂_tr − GΔγ + η (p_tr − K η̄ Δγ) − ξ c = 0, with η, ξ, η̄, c at
-//! κ = κ_n + Δγ/√3 (κ̇ = √(2/3) ‖ė^p‖, the measure Mohr–Coulomb softens with): in closed form
+//! κ = κ_n + Δγ/√3 (κ̇ = √(2/3) ‖ė^p‖, the measure Mohr–Coulomb softens with): in one step
 //! without softening, by Newton on the scalar r with it. Where the cone return would take
 //! √J₂ below zero (√J₂_tr < GΔγ) the stress returns to the apex, with
 //! κ = κ_n + √(2/3) ‖dev ε_tr‖ (the deviatoric trial strain is all plastic there). φ = 0 is
@@ -60,8 +60,9 @@ use crate::{
 /// How a Drucker–Prager cone is fitted to Mohr–Coulomb (the table in the module docs).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ConeFit {
-    /// Mohr–Coulomb's collapse stresses in plane strain (inscribed in the pyramid for
-    /// associated flow): never stronger than Mohr–Coulomb in 3D.
+    /// Mohr–Coulomb's collapse stresses in plane strain. For associated flow it is the
+    /// cone inscribed in the pyramid, never stronger in 3D; for ψ < φ it is wider (at
+    /// ψ = 0, η = sin φ) and can be stronger than Mohr–Coulomb near its edges in 3D.
     PlaneStrain,
     /// Through the triaxial-compression meridian (circumscribes the pyramid).
     Compression,
@@ -304,7 +305,7 @@ impl DruckerPrager {
         Ok(Trial { eps, dev, s, j, p, g, k, kappa_n, scale })
     }
 
-    /// The return to the cone on `branch`: Δγ from r(Δγ) = 0 (closed form without
+    /// The return to the cone on `branch`: Δγ from r(Δγ) = 0 (one Newton step without
     /// softening, Newton otherwise), Δγ ≥ 0. `Ok(None)` where Newton meets a flat residual.
     fn cone_return(&self, tr: &Trial, branch: Branch) -> Result<Option<ConeReturn>, ConstitutiveError> {
         let mut dgamma = 0.0f64;

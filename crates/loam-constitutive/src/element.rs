@@ -69,21 +69,27 @@ pub struct ElementTest<'a> {
     history: Vec<f64>,
 }
 
-/// Newton's tolerance on the held stresses, relative to the stress scale.
+/// Newton's tolerance on the held stresses, relative to the largest stress.
 const TOLERANCE: f64 = 1e-10;
 const MAX_ITERATIONS: usize = 25;
 
 impl<'a> ElementTest<'a> {
     /// The point at rest under `initial_stress` (the law's history initialised from it, the
-    /// elastic strain its elasticity gives); an error for a law without elasticity or a
-    /// stress it cannot bear (f > 0 after initialisation is the law's to refuse).
+    /// elastic strain that carries it); an error where no elastic strain carries it or it
+    /// lies outside the yield surface (the law's update from that strain does not return it).
     pub fn new(law: &'a dyn ConstitutiveLaw, initial_stress: Matrix3<f64>) -> Result<Self, ConstitutiveError> {
         let mut history = vec![0.0; law.history_len()];
         law.init_history(&mut history, &initial_stress);
-        // No elastic strain carries the stress (Cam clay at p′ ≤ 0): nothing to start from.
-        let elastic_strain = law
-            .elastic_strain_of(&initial_stress, &history)
-            .ok_or(ConstitutiveError::NonFinite { what: "elastic strain of the initial stress" })?;
+        let elastic_strain =
+            law.elastic_strain_of(&initial_stress, &history).ok_or(ConstitutiveError::InitialStress {
+                why: "has no elastic strain that carries it (Cam clay needs a compressive mean stress)",
+            })?;
+        // The law's own update from that strain must give the stress back: inside the surface.
+        let mut h_out = history.clone();
+        let back = law.update_stress(&elastic_strain, &history, &mut h_out)?.0;
+        if (back - initial_stress).norm() > 1e-8 * initial_stress.norm().max(f64::MIN_POSITIVE) {
+            return Err(ConstitutiveError::InitialStress { why: "lies outside the law's yield surface" });
+        }
         Ok(Self { law, strain: Matrix3::zeros(), elastic_strain, stress: initial_stress, history })
     }
 
@@ -119,9 +125,12 @@ impl<'a> ElementTest<'a> {
                 d[(j, i)] = de;
             }
         }
-        let scale = self.stress.amax().max(1.0);
+        // The held stresses' scale: the largest stress now or held (a stress-free start
+        // that holds nothing is held to round-off of the law's own stresses).
+        let held_scale = held.iter().fold(0.0f64, |m, h| if let Held::Stress(s) = h { m.max(s.abs()) } else { m });
         let mut h_out = vec![0.0; self.history.len()];
-        for _ in 0..MAX_ITERATIONS {
+        let mut residual = f64::NAN;
+        for iteration in 0..MAX_ITERATIONS {
             let up = self.law.update(&(self.elastic_strain + d), &self.history, &mut h_out)?;
             let r = DVector::from_iterator(
                 free.len(),
@@ -130,7 +139,9 @@ impl<'a> ElementTest<'a> {
                     up.stress[(i, j)] - if let Held::Stress(s) = held[a] { s } else { 0.0 }
                 }),
             );
-            if r.amax() <= TOLERANCE * scale {
+            let scale = self.stress.amax().max(held_scale).max(up.stress.amax()).max(f64::MIN_POSITIVE);
+            residual = r.amax() / scale;
+            if residual <= TOLERANCE {
                 self.strain += d;
                 self.elastic_strain = up.elastic_strain;
                 self.stress = up.stress;
@@ -147,9 +158,9 @@ impl<'a> ElementTest<'a> {
                 v
             });
             let delta = jacobian.lu().solve(&(-r)).ok_or(ConstitutiveError::ReturnMappingFailed {
-                law: "element test",
-                iterations: 0,
-                residual: f64::NAN,
+                law: "element test's Newton on the held stresses (singular tangent)",
+                iterations: iteration,
+                residual,
             })?;
             for (n, &a) in free.iter().enumerate() {
                 let (i, j) = COMPONENTS[a];
@@ -158,9 +169,9 @@ impl<'a> ElementTest<'a> {
             }
         }
         Err(ConstitutiveError::ReturnMappingFailed {
-            law: "element test",
+            law: "element test's Newton on the held stresses",
             iterations: MAX_ITERATIONS,
-            residual: f64::NAN,
+            residual,
         })
     }
 }

@@ -70,6 +70,8 @@ pub enum ConstitutiveError {
     InvalidParameter { name: &'static str, value: f64 },
     #[error("history slice has length {got}, law needs {expected}")]
     HistoryLength { expected: usize, got: usize },
+    #[error("the initial stress {why}")]
+    InitialStress { why: &'static str },
     #[error("{law} return mapping did not converge after {iterations} iterations (residual {residual})")]
     ReturnMappingFailed { law: &'static str, iterations: usize, residual: f64 },
 }

@@ -16,7 +16,7 @@ fn law(ocr: f64, constant_shear: bool, lode: bool) -> ModifiedCamClay {
     let shear = if constant_shear { CamClayShear::Modulus(2000.0) } else { CamClayShear::Poisson(0.3) };
     let law = ModifiedCamClay::new(0.25, 0.05, 1.2, 1.1, shear, CamClayInitial::OverConsolidation(ocr)).unwrap();
     if lode {
-        law.with_lode_dependence()
+        law.with_lode_dependence().unwrap()
     } else {
         law
     }

@@ -118,10 +118,7 @@ impl LoadedElementTest {
         }
         let initial_stress = Matrix3::from_diagonal(&nalgebra::Vector3::new(s[0], s[1], s[2]));
         if let Err(e) = ElementTest::new(law.as_ref(), initial_stress) {
-            return Err(self.error(
-                &[Seg::Key("initial_stress")],
-                format!("the law cannot start at this stress ({e}); Modified Cam clay needs a compressive mean stress"),
-            ));
+            return Err(self.error(&[Seg::Key("initial_stress")], format!("the law cannot start here: {e}")));
         }
         let title = self.spec.title.clone();
         Ok(ElementRun { title, law, initial_stress, path, increment: strain / steps as f64, steps })

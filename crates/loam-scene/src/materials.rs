@@ -88,7 +88,15 @@ impl LawChecks<'_> {
             }
             LawSpec::ModifiedCamClay { lambda, kappa, void_ratio, critical_state, shear, initial, lode_dependent } => {
                 let law = self.cam_clay([lambda, kappa, void_ratio], critical_state, shear, initial)?;
-                Arc::new(if lode_dependent { law.with_lode_dependence() } else { law })
+                Arc::new(match lode_dependent {
+                    true => law.with_lode_dependence().map_err(|e| {
+                        self.at(
+                            "critical_state",
+                            format!("{}: {e}; a Lode-dependent M is below 3 (φ′ < 90°)", self.label),
+                        )
+                    })?,
+                    false => law,
+                })
             }
         })
     }

@@ -341,7 +341,8 @@ fn normally_consolidated() -> CamClayInitialSpec {
 /// How a Drucker–Prager cone is fitted to Mohr–Coulomb.
 #[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
 pub enum ConeFitSpec {
-    /// Mohr–Coulomb's collapse stresses in plane strain (inscribed for associated flow).
+    /// Mohr–Coulomb's collapse stresses in plane strain (inscribed for associated flow,
+    /// wider for ψ < φ).
     #[default]
     PlaneStrain,
     /// Through the triaxial-compression meridian.
