@@ -49,7 +49,10 @@
 use nalgebra::{Matrix2, Matrix3, Vector2};
 
 use crate::tensor::{flatten, identity_dyad, sym_identity, Tensor4};
-use crate::{check_finite, ConstitutiveError, ConstitutiveLaw, Elastic, MaterialState, StressUpdate, SQRT_2_3};
+use crate::{
+    check_finite, check_update_inputs, ConstitutiveError, ConstitutiveLaw, Elastic, MaterialState, StressUpdate,
+    SQRT_2_3,
+};
 
 /// How the shear modulus is given.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -493,12 +496,7 @@ fn invariants(stress: &Matrix3<f64>) -> (f64, f64) {
 
 /// The input checks: a finite trial strain and the three history values, p_c > 0.
 fn check_inputs(eps_trial: &Matrix3<f64>, h_n: &[f64], h_out: &[f64]) -> Result<(f64, f64, f64), ConstitutiveError> {
-    check_finite(eps_trial, "trial strain")?;
-    for got in [h_n.len(), h_out.len()] {
-        if got != 3 {
-            return Err(ConstitutiveError::HistoryLength { expected: 3, got });
-        }
-    }
+    check_update_inputs(eps_trial, h_n, h_out, 3)?;
     if !(h_n[0].is_finite() && h_n[1].is_finite()) {
         return Err(ConstitutiveError::NonFinite { what: "Modified Cam clay history" });
     }

@@ -9,7 +9,7 @@
 
 use nalgebra::Matrix3;
 
-use crate::{check_finite, ConstitutiveError};
+use crate::{check_update_inputs, ConstitutiveError};
 
 /// Linear softening of c, φ, ψ to residual values at κ = κ_res (angles in radians).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -212,12 +212,7 @@ pub(crate) fn frictional_inputs(
     h_out: &[f64],
     what: &'static str,
 ) -> Result<(f64, f64), ConstitutiveError> {
-    check_finite(eps_trial, "trial strain")?;
-    for got in [h_n.len(), h_out.len()] {
-        if got != 2 {
-            return Err(ConstitutiveError::HistoryLength { expected: 2, got });
-        }
-    }
+    check_update_inputs(eps_trial, h_n, h_out, 2)?;
     let (kappa_n, evp_n) = (h_n[0], h_n[1]);
     if !(kappa_n.is_finite() && kappa_n >= 0.0 && evp_n.is_finite()) {
         return Err(ConstitutiveError::NonFinite { what });

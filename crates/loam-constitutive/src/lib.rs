@@ -214,6 +214,22 @@ pub trait StrengthReducible {
     fn with_strength_reduced(&self, factor: f64) -> Result<std::sync::Arc<dyn ConstitutiveLaw>, ConstitutiveError>;
 }
 
+/// The checks every law's update starts with: a finite trial strain, and `expected`
+/// history values in and out.
+#[inline]
+pub(crate) fn check_update_inputs(
+    eps_trial: &Matrix3<f64>,
+    h_n: &[f64],
+    h_out: &[f64],
+    expected: usize,
+) -> Result<(), ConstitutiveError> {
+    check_finite(eps_trial, "trial strain")?;
+    match [h_n.len(), h_out.len()].into_iter().find(|&got| got != expected) {
+        Some(got) => Err(ConstitutiveError::HistoryLength { expected, got }),
+        None => Ok(()),
+    }
+}
+
 #[inline]
 pub(crate) fn check_finite(m: &Matrix3<f64>, what: &'static str) -> Result<(), ConstitutiveError> {
     // v · 0 is ±0 for a finite v and NaN for ±∞ or NaN: one test of a branch-free sum

@@ -10,7 +10,8 @@ use nalgebra::Matrix3;
 
 use crate::tensor::{flatten, identity_dyad, sym_identity, Tensor4};
 use crate::{
-    check_finite, ConstitutiveError, ConstitutiveLaw, Elastic, MaterialState, StrengthReducible, StressUpdate,
+    check_finite, check_update_inputs, ConstitutiveError, ConstitutiveLaw, Elastic, MaterialState, StrengthReducible,
+    StressUpdate,
 };
 
 /// Which branch of the return mapping an update took (see [`VonMises::update_with_region`]).
@@ -188,12 +189,7 @@ impl Flow {
 /// The input checks: a finite trial strain and one history value, the equivalent plastic
 /// strain ε̄p ≥ 0; returns it.
 fn check_inputs(eps_trial: &Matrix3<f64>, h_n: &[f64], h_out: &[f64]) -> Result<f64, ConstitutiveError> {
-    check_finite(eps_trial, "trial strain")?;
-    for got in [h_n.len(), h_out.len()] {
-        if got != 1 {
-            return Err(ConstitutiveError::HistoryLength { expected: 1, got });
-        }
-    }
+    check_update_inputs(eps_trial, h_n, h_out, 1)?;
     let eqps_n = h_n[0];
     if !(eqps_n.is_finite() && eqps_n >= 0.0) {
         return Err(ConstitutiveError::NonFinite { what: "equivalent plastic strain history" });
