@@ -95,6 +95,14 @@ const MAX_ITERATIONS: usize = 60;
 /// p_ref of the elastic volume law, in the scene's stress unit.
 const P_REF: f64 = 1.0;
 
+impl Local {
+    /// ∂q/∂G and ∂q/∂Δγ of q = 3G ε^e_s,tr/(1 + 6GΔγ/M²) at this state (trial shear
+    /// strain `eps_s`, slope `m`): the derivatives the Jacobian and the tangents share.
+    fn q_derivatives(&self, eps_s: f64, m: f64) -> (f64, f64) {
+        (3.0 * eps_s / (self.den * self.den), -self.q * 6.0 * self.g / (m * m * self.den))
+    }
+}
+
 /// The trial state in invariants, with M at its Lode angle.
 struct Trial {
     eps_v: f64,
@@ -360,9 +368,8 @@ impl ModifiedCamClay {
         let m2 = tr.m * tr.m;
         let dp_dx = -l.p / kh;
         let dpc_dx = l.pc / hard;
-        let dq_dg = 3.0 * tr.eps_s / (l.den * l.den);
+        let (dq_dg, dq_dgamma) = l.q_derivatives(tr.eps_s, tr.m);
         let dq_dx = dq_dg * g1 * dp_dx;
-        let dq_dgamma = -l.q * 6.0 * l.g / (m2 * l.den);
         Matrix2::new(
             1.0 - l.dgamma * (2.0 * dp_dx - dpc_dx),
             -(2.0 * l.p - l.pc),
@@ -380,7 +387,7 @@ impl ModifiedCamClay {
         let scale = tr.pc_n * tr.pc_n;
         // Explicit derivatives at fixed (Δε^p_v, Δγ) with respect to a = (ε_v,tr, ε_s,tr).
         let p_a = l.p / kh;
-        let dq_dg = 3.0 * tr.eps_s / (l.den * l.den);
+        let (dq_dg, dq_dgamma) = l.q_derivatives(tr.eps_s, tr.m);
         let q_a = Vector2::new(dq_dg * g1 * p_a, 3.0 * l.g / l.den);
         // dz/da = −J⁻¹ ∂R/∂a, z = (Δε^p_v, Δγ).
         let dz = match inv {
@@ -396,7 +403,6 @@ impl ModifiedCamClay {
             }
         };
         let dp = Vector2::new(p_a * (1.0 - dz[(0, 0)]), -p_a * dz[(0, 1)]);
-        let dq_dgamma = -l.q * 6.0 * l.g / (m2 * l.den);
         let dq = Vector2::new(
             dq_dg * g1 * dp[0] + dq_dgamma * dz[(1, 0)],
             dq_dg * g1 * dp[1] + dq_dgamma * dz[(1, 1)] + 3.0 * l.g / l.den,
@@ -429,7 +435,8 @@ impl ModifiedCamClay {
         let r_m = (2.0 * l.q * q_m / m2 - 2.0 * l.q * l.q / (m2 * m)) / scale;
         let dz = -(inv * Vector2::new(0.0, r_m));
         let dp = -l.p / kh * dz[0];
-        let dq = 3.0 * tr.eps_s / (l.den * l.den) * g1 * dp - l.q * 6.0 * l.g / (m2 * l.den) * dz[1] + q_m;
+        let (dq_dg, dq_dgamma) = l.q_derivatives(tr.eps_s, m);
+        let dq = dq_dg * g1 * dp + dq_dgamma * dz[1] + q_m;
         let dsigma = Matrix3::identity() * -dp + tr.n_hat * (SQRT_2_3 * dq);
         let n2 = tr.n_hat * tr.n_hat;
         let ds3 = (n2 - Matrix3::identity() * (n2.trace() / 3.0) - tr.n_hat * (n2 * tr.n_hat).trace())
