@@ -30,8 +30,9 @@ fn drive(
     let start = Matrix3::identity() * -P0;
     let mut t = ElementTest::new(law, start)?;
     let mut out = Vec::with_capacity(steps);
+    let held = path.held(strain / steps as f64, &start);
     for _ in 0..steps {
-        t.step(path.held(strain / steps as f64, &start))?;
+        t.step(held)?;
         out.push((-t.strain()[(2, 2)], t.p_q().1));
     }
     Ok((out, t))

@@ -48,8 +48,9 @@ pub fn run_element(test: &LoadedElementTest, out_dir: &Path) -> Result<ElementSu
     let mut curve = vec![row(&point, run.path, 0)];
     csv.row(&curve[0])?;
     let mut failure = None;
+    // Every step of a path holds the same: its strain increments and the starting stresses.
+    let held = run.path.held(run.increment, &run.initial_stress);
     for step in 1..=run.steps {
-        let held = run.path.held(run.increment, &run.initial_stress);
         if let Err(e) = point.step(held) {
             failure = Some(ElementFailure::Law { step, steps: run.steps, message: e.to_string() });
             break;
