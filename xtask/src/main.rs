@@ -6,6 +6,7 @@
 //! `cargo xtask bench`: run the criterion benchmarks.
 
 mod columns;
+mod contact;
 mod docs_tables;
 mod dynamics;
 mod footing;
@@ -45,7 +46,7 @@ enum Cmd {
         #[arg(long, default_value = "target/verify")]
         out: PathBuf,
         /// Run these sections only (comma separated): columns, dynamics, footing, slope,
-        /// hard_cases, loads, water, granular, soil.
+        /// hard_cases, loads, water, granular, soil, contact.
         #[arg(long, value_delimiter = ',')]
         only: Vec<String>,
         /// Write the result tables of docs/verification.md marked for this mode from the
@@ -115,7 +116,7 @@ fn main() -> Result<()> {
 /// fail when a bound fails (after writing, so that the report shows which).
 fn verify(quick: bool, out: &Path, only: &[String], update_docs: bool) -> Result<()> {
     type Section = fn(bool, &mut Report) -> Result<()>;
-    let sections: [(&str, Section); 9] = [
+    let sections: [(&str, Section); 10] = [
         ("columns", columns::verify),
         ("dynamics", dynamics::verify),
         ("footing", footing::verify),
@@ -125,6 +126,7 @@ fn verify(quick: bool, out: &Path, only: &[String], update_docs: bool) -> Result
         ("water", water::verify),
         ("granular", granular::verify),
         ("soil", soil_models::verify),
+        ("contact", contact::verify),
     ];
     if let Some(unknown) = only.iter().find(|o| !sections.iter().any(|(name, _)| name == o)) {
         let names: Vec<&str> = sections.iter().map(|(name, _)| *name).collect();

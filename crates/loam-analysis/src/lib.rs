@@ -90,7 +90,9 @@ pub struct Progress {
     pub final_residual: f64,
     pub active_nodes: usize,
     pub dofs: usize,
-    /// Support reaction of each constraint (implicit analyses; empty for explicit steps).
+    /// The force of each support on the material, in the order: grid-plane constraints,
+    /// inclined rollers, body constraints, frictional planes. Implicit analyses give the
+    /// first three; explicit ones the rollers' and frictional planes' (NaN for the rest).
     pub reactions: Vec<[f64; 3]>,
     pub wall_time: Duration,
 }
@@ -325,12 +327,23 @@ impl<const D: usize> Analysis<D> {
                     final_residual: f64::NAN,
                     active_nodes: r.active_nodes,
                     dofs: r.active_nodes * D,
-                    reactions: Vec::new(),
+                    reactions: explicit_reactions(a.model(), &r.plane_forces),
                     wall_time: r.wall_time,
                 }
             }
         })
     }
+}
+
+/// An explicit step's supports' forces in the order of [`Progress::reactions`]: the
+/// rollers' and frictional planes' from `plane_forces` (rollers first), NaN for the rest.
+fn explicit_reactions<const D: usize>(model: &Model<D>, plane_forces: &[[f64; 3]]) -> Vec<[f64; 3]> {
+    let unknown = |n: usize| std::iter::repeat_n([f64::NAN; 3], n);
+    let rollers = model.inclined_rollers().len();
+    (unknown(model.constraints().len()).chain(plane_forces[..rollers].iter().copied()))
+        .chain(unknown(model.body_constraints().len()))
+        .chain(plane_forces[rollers..].iter().copied())
+        .collect()
 }
 
 #[cfg(test)]
@@ -370,7 +383,8 @@ mod tests {
     /// The interface reports each analysis's step the same way: a quasi-static step is a
     /// load increment of 1/4 with Newton iterations and a reaction (the base carries the
     /// weight, 4 m² × 1 × 10 / 4 = 10 per step, to Newton's tolerance); an explicit step
-    /// reports its time step as the increment, no Newton iterations and NaN residual.
+    /// reports its time step as the increment, no Newton iterations, NaN residual and NaN
+    /// reactions of grid planes.
     #[test]
     fn steps_report_their_progress() {
         let mut qs = quasi_static();
@@ -382,7 +396,9 @@ mod tests {
         let mut ex = Analysis::Explicit(Explicit::new(block(), ExplicitSettings::new(0.01)).unwrap());
         let r = ex.step().unwrap();
         assert_eq!((r.step, r.iterations, r.substeps), (1, 0, 1));
-        assert!(r.final_residual.is_nan() && r.reactions.is_empty());
+        // The block's grid-plane constraints have no explicit reaction: NaN, one each.
+        let unknown = r.reactions.iter().all(|f| f.iter().all(|v| v.is_nan()));
+        assert!(r.final_residual.is_nan() && r.reactions.len() == ex.model().constraints().len() && unknown);
         assert_eq!((r.increment, r.time, ex.time()), (r.time, r.time, r.time));
         assert_eq!((ex.name(), ex.end_time(), ex.load_factor()), ("explicit", 0.01, 1.0));
     }

@@ -1,5 +1,6 @@
 //! The explicit analysis: one time step as described in the crate docs.
 
+use crate::contact::{GridUpdate, PlaneContacts};
 use crate::{ExplicitError, ExplicitSettings, TimeStep, UpdateScheme};
 use loam_grid::{ActiveNodes, AxisBasis, BasisError, NodeLayout, PointBasisError};
 use loam_kernels::{
@@ -38,6 +39,9 @@ pub struct ExplicitStepReport {
     pub wall_time: Duration,
     /// Where the wall time went, stage by stage.
     pub phases: StepPhases,
+    /// The force each inclined roller, then each frictional plane, exerted on the
+    /// material over the step (D components used).
+    pub plane_forces: Vec<[f64; 3]>,
 }
 
 /// The wall time of a step's stages (the crate docs' numbering): where to look first when
@@ -87,13 +91,13 @@ impl StepPhases {
 
 /// The record the points scatter to every grid node: its mass, momentum (D) and force (D),
 /// `WIDTH` values in that order.
-struct NodeRecord<const D: usize>;
+pub(crate) struct NodeRecord<const D: usize>;
 
 impl<const D: usize> NodeRecord<D> {
-    const WIDTH: usize = 1 + 2 * D;
-    const MASS: usize = 0;
-    const MOMENTUM: usize = 1;
-    const FORCE: usize = 1 + D;
+    pub(crate) const WIDTH: usize = 1 + 2 * D;
+    pub(crate) const MASS: usize = 0;
+    pub(crate) const MOMENTUM: usize = 1;
+    pub(crate) const FORCE: usize = 1 + D;
 }
 
 /// Nodal scratch of one step, reused across steps: dense over the grid's nodes (an empty
@@ -187,6 +191,8 @@ pub struct Explicit<const D: usize> {
     loaded: ActiveNodes,
     /// The load vertices on the nodes of `loaded`.
     loads: LoadSupports,
+    /// The inclined rollers and frictional planes at their grid nodes.
+    contacts: PlaneContacts<D>,
     /// Nodes with mass in the step.
     active_nodes: usize,
     nodes: NodalScratch,
@@ -213,6 +219,7 @@ impl<const D: usize> Explicit<D> {
         let every_node = ActiveNodes::all(model.grid().num_nodes());
         model.constrained_dofs(&NodeLayout::motion(D), &every_node, &mut constrained);
         let on_planes = if model.body_constraints().is_empty() { Vec::new() } else { constrained.clone() };
+        let contacts = PlaneContacts::of(&model);
         Ok(Self {
             basis: AxisBasis::new(model.basis()),
             model,
@@ -225,6 +232,7 @@ impl<const D: usize> Explicit<D> {
             on_planes,
             loaded: ActiveNodes::default(),
             loads: LoadSupports::default(),
+            contacts,
             active_nodes: 0,
             nodes: NodalScratch::default(),
             points: PointScratch::default(),
@@ -401,7 +409,7 @@ impl<const D: usize> Explicit<D> {
         let dt = self.time_step(step, critical)?;
         self.check_time_advances(step, dt)?;
         if self.settings.scheme == UpdateScheme::Usf {
-            self.update_stress_first(step, dt)?;
+            self.update_stress_first(step, dt, m_min)?;
         }
         let to_grid = clock.lap();
         self.update_grid(dt, m_min);
@@ -436,6 +444,7 @@ impl<const D: usize> Explicit<D> {
             active_nodes,
             wall_time: start.elapsed(),
             phases,
+            plane_forces: self.contacts.forces().to_vec(),
         })
     }
 
@@ -558,8 +567,11 @@ impl<const D: usize> Explicit<D> {
     /// USF: the stress updated from the start-of-step nodal velocity p_I / m_I (the carried
     /// velocity the critical step was taken from) before the grid update, and the internal
     /// force of that stress.
-    fn update_stress_first(&mut self, step: usize, dt: f64) -> Result<(), ExplicitError> {
+    fn update_stress_first(&mut self, step: usize, dt: f64, m_min: f64) -> Result<(), ExplicitError> {
         let nodes = &mut self.nodes;
+        if !self.contacts.is_empty() {
+            self.contacts.project(&nodes.gathered, &self.constrained, m_min, &mut nodes.strain_velocity);
+        }
         let updated = update_stress(&self.model, &self.basis, &nodes.strain_velocity, dt, &mut self.points);
         updated.map_err(|e| self.failure(step, e))?;
         let (basis, bands) = (&self.basis, &self.bands);
@@ -567,7 +579,7 @@ impl<const D: usize> Explicit<D> {
         Ok(())
     }
 
-    /// Stages 3–4: local damping and the grid momentum update.
+    /// Stages 3–4: local damping, the grid momentum update and the rigid planes.
     fn update_grid(&mut self, dt: f64, m_min: f64) {
         let nodes = &mut self.nodes;
         let internal = (self.settings.scheme == UpdateScheme::Usf).then_some(&nodes.internal[..]);
@@ -581,6 +593,17 @@ impl<const D: usize> Explicit<D> {
             &mut nodes.velocity,
             &mut nodes.acceleration,
         );
+        if !self.contacts.is_empty() {
+            let grid = GridUpdate {
+                gathered: &nodes.gathered,
+                internal,
+                constrained: &self.constrained,
+                m_min,
+                dt,
+                damping: self.settings.damping,
+            };
+            self.contacts.apply(&grid, &mut nodes.velocity, &mut nodes.acceleration);
+        }
     }
 
     /// Stage 6 for USL (the new grid velocity) and MUSL (the velocity re-mapped from the
@@ -594,6 +617,9 @@ impl<const D: usize> Explicit<D> {
                 let velocity = &self.points.fields.velocity;
                 remap_momentum(model, basis, &self.bands, velocity, &mut nodes.strain_velocity);
                 momentum_to_velocity::<D>(&nodes.gathered, &self.constrained, m_min, &mut nodes.strain_velocity);
+                if !self.contacts.is_empty() {
+                    self.contacts.project(&nodes.gathered, &self.constrained, m_min, &mut nodes.strain_velocity);
+                }
                 update_stress(model, basis, &nodes.strain_velocity, dt, &mut self.points)
             }
         };

@@ -14,7 +14,9 @@
 //! 3. Local non-viscous damping (Cundall 1987; Itasca FLAC/PFC "local damping"):
 //!    f_I ← f_I − α |f_I| sign(v_I), per component.
 //! 4. Grid momentum update v_I^{n+1} = (p_I + Δt f_I) / m_I, a_I = f_I / m_I at a free
-//!    dof; at a held one v_I^{n+1} = 0 and a_I = −p_I / (m_I Δt).
+//!    dof; at a held one v_I^{n+1} = 0 and a_I = −p_I / (m_I Δt). At the nodes of an
+//!    inclined roller or a frictional plane the velocity is then made admissible (no
+//!    approach, Coulomb slip; `contact`) and a_I = (v_I^{n+1} − p_I / m_I) / Δt.
 //! 5. Grid → point: v_p ← flip (v_p + Δt Σ N_I a_I) + (1 − flip) Σ N_I v_I^{n+1}
 //!    (FLIP of Brackbill & Ruppel 1986 blended with PIC), x_p ← x_p + Δt Σ N_I v_I^{n+1},
 //!    with Δt a_I = v_I^{n+1} − p_I / m_I the node's change of velocity: at a held dof
@@ -50,6 +52,7 @@
 //! every point loop is independent, so results are bitwise identical for any number of
 //! threads (docs/theory.md §7).
 
+mod contact;
 mod energy;
 mod error;
 mod explicit;

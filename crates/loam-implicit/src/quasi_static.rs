@@ -12,7 +12,7 @@ use crate::engine::Engine;
 use crate::points::PointUpdateError;
 use crate::{IterationProfile, StepError, StepReport};
 use loam_kernels::{on_pool, RunError};
-use loam_model::{LoadLevel, Model, ModelError, ModelState, PointChange};
+use loam_model::{AnalysisKind, LoadLevel, Model, ModelError, ModelState, PointChange};
 use loam_solve::{
     norm, BlockPattern, LinearSolver, LinearSolverChoice, LinearSolverKind, LinearSolverTimings, NewtonError,
     NewtonReport, NewtonSettings,
@@ -244,11 +244,13 @@ impl<const D: usize> QuasiStatic<D> {
         self.engine.linear_solver().timings()
     }
 
-    /// Check what can only be checked against the connectivity: every constraint must
+    /// Check that the analysis takes every option of the model (`loam_model::options`), and
+    /// what can only be checked against the connectivity: every constraint must
     /// hold at least one active node, and together they must hold the body against every
     /// rigid-body motion (without inertia its tangent would be singular). Scene validation
     /// calls this before the first step.
     pub fn check(&mut self) -> Result<(), StepError> {
+        self.engine.model.check_accepted_by(AnalysisKind::QuasiStatic)?;
         self.engine.check(self.step + 1)?;
         let bodies = self.engine.free_rigid_bodies();
         if bodies.is_empty() {

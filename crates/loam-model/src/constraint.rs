@@ -111,7 +111,7 @@ impl<const D: usize> InclinedRoller<D> {
     pub fn new(point: SVector<f64, D>, normal: SVector<f64, D>) -> Result<Self, String> {
         let length = normal.norm();
         if !(point.iter().chain(normal.iter()).all(|v| v.is_finite()) && length > 0.0) {
-            return Err("an inclined roller needs a finite point and a finite, non-zero normal".into());
+            return Err("the plane needs a finite point and a finite, non-zero normal".into());
         }
         Ok(Self { point, normal: normal / length })
     }
@@ -150,6 +150,40 @@ impl<const D: usize> InclinedRoller<D> {
             _ => {}
         }
         q
+    }
+}
+
+/// A rigid plane with Coulomb friction (a rough base, a wall the material runs into;
+/// docs/theory.md §5): at every node on the plane or beyond it (the nodes an inclined
+/// roller there would hold), a grid velocity that moves into the plane loses its normal
+/// component, and its tangential component loses μ times the normal component lost, down
+/// to zero (stick); a velocity that leaves the plane is free (the material separates).
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrictionalPlane<const D: usize> {
+    /// The plane and its normal into the material.
+    plane: InclinedRoller<D>,
+    friction: f64,
+}
+
+impl<const D: usize> FrictionalPlane<D> {
+    /// The plane through `point` with `normal` into the material and Coulomb coefficient
+    /// `friction` (0: smooth); refused unless the plane is finite with a non-zero normal and
+    /// the coefficient finite and not negative.
+    pub fn new(point: SVector<f64, D>, normal: SVector<f64, D>, friction: f64) -> Result<Self, String> {
+        if !(friction.is_finite() && friction >= 0.0) {
+            return Err(format!("a friction coefficient must be finite and ≥ 0, not {friction}"));
+        }
+        Ok(Self { plane: InclinedRoller::new(point, normal)?, friction })
+    }
+
+    /// The plane (point and unit normal into the material).
+    pub fn plane(&self) -> &InclinedRoller<D> {
+        &self.plane
+    }
+
+    /// The Coulomb coefficient μ.
+    pub fn friction(&self) -> f64 {
+        self.friction
     }
 }
 

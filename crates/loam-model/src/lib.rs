@@ -20,7 +20,7 @@ mod population;
 mod rigid;
 mod water;
 
-pub use constraint::{BodyConstraint, InclinedRoller, PlaneConstraint};
+pub use constraint::{BodyConstraint, FrictionalPlane, InclinedRoller, PlaneConstraint};
 pub use energy::ExternalWork;
 pub use loads::{Load, LoadKind, LoadLevel, TimeFunction};
 pub use options::{AnalysisKind, ModelOption, Unaccepted};
@@ -143,6 +143,8 @@ pub enum ModelError {
     BodyConstraint { index: usize, what: String },
     #[error("inclined roller: {0}")]
     InclinedRoller(String),
+    #[error("frictional plane {index}: {what}")]
+    FrictionalPlane { index: usize, what: String },
     #[error("removing points: {0}")]
     Removal(String),
     #[error("adding points: {0}")]
@@ -176,6 +178,8 @@ pub struct Model<const D: usize> {
     constraints: Vec<PlaneConstraint>,
     /// Rollers on inclined planes, held in a local frame at the nodes.
     inclined: Vec<InclinedRoller<D>>,
+    /// Rigid planes with Coulomb friction that the material may leave.
+    frictional: Vec<FrictionalPlane<D>>,
     /// Constraints on the nodes bodies' points reach.
     body_constraints: Vec<BodyConstraint>,
     /// Body force per unit mass at full load.
@@ -236,6 +240,7 @@ impl<const D: usize> Model<D> {
             materials,
             constraints,
             inclined: Vec::new(),
+            frictional: Vec::new(),
             body_constraints: Vec::new(),
             gravity,
             point_forces: Vec::new(),
@@ -387,6 +392,34 @@ impl<const D: usize> Model<D> {
     pub fn inclined_roller_nodes(&self, active: &ActiveNodes, k: usize) -> Vec<usize> {
         let roller = &self.inclined[k];
         (0..active.len()).filter(|&a| self.roller_holds(roller, active.active_to_grid[a] as usize)).collect()
+    }
+
+    /// Rigid planes with Coulomb friction (docs/theory.md §5), which the material may
+    /// leave; on a grid, each holding some of its nodes.
+    pub fn with_frictional_planes(mut self, planes: Vec<FrictionalPlane<D>>) -> Result<Self, ModelError> {
+        for (index, plane) in planes.iter().enumerate() {
+            let what = if self.background.moves_with_body() {
+                "the updated Lagrangian FEM reference's nodes move with the body; hold it on grid planes"
+            } else if self.nodes_beyond(plane.plane()).is_empty() {
+                "no node of the grid lies on the plane or beyond it (on the side away from the material)"
+            } else {
+                continue;
+            };
+            return Err(ModelError::FrictionalPlane { index, what: what.into() });
+        }
+        self.frictional = planes;
+        Ok(self)
+    }
+
+    /// The rigid planes with Coulomb friction.
+    pub fn frictional_planes(&self) -> &[FrictionalPlane<D>] {
+        &self.frictional
+    }
+
+    /// The background nodes on `plane` or beyond it (those an inclined roller there holds),
+    /// in increasing order.
+    pub fn nodes_beyond(&self, plane: &InclinedRoller<D>) -> Vec<usize> {
+        (0..self.grid().num_nodes()).filter(|&node| self.roller_holds(plane, node)).collect()
     }
 
     /// Whether `roller` holds background node `node`: on its plane or beyond it, to within

@@ -38,6 +38,8 @@ pub enum ModelOption {
     DisplacedConstraint { index: usize },
     /// A roller on an inclined plane.
     InclinedRoller { index: usize },
+    /// A rigid plane with Coulomb friction.
+    FrictionalPlane { index: usize },
     /// A constraint on a body that holds its nodes.
     BodyConstraint { index: usize },
     /// A constraint on a body that prescribes a non-zero displacement.
@@ -53,7 +55,7 @@ struct Acceptance {
 }
 
 /// Which analyses accept each option (the module docs).
-const ACCEPTED: [Acceptance; 9] = [
+const ACCEPTED: [Acceptance; 10] = [
     Acceptance {
         is: |o| matches!(o, ModelOption::BodyFittedMesh),
         by: [true, true, false],
@@ -86,8 +88,13 @@ const ACCEPTED: [Acceptance; 9] = [
     },
     Acceptance {
         is: |o| matches!(o, ModelOption::InclinedRoller { .. }),
-        by: [true, false, false],
-        why: "is a roller on an inclined plane, held in a local frame at the nodes; the quasi-static analysis takes it (the dynamic and explicit ones not yet)",
+        by: [true, false, true],
+        why: "is a roller on an inclined plane, held in a local frame at the nodes; the quasi-static and explicit analyses take it (the implicit dynamic one not yet)",
+    },
+    Acceptance {
+        is: |o| matches!(o, ModelOption::FrictionalPlane { .. }),
+        by: [false, false, true],
+        why: "is applied to the grid velocities by the explicit analysis only; the implicit analyses have no frictional contact yet (a roller, on a grid plane or inclined, holds without friction)",
     },
     Acceptance {
         is: |o| matches!(o, ModelOption::BodyConstraint { .. }),
@@ -115,6 +122,7 @@ impl Unaccepted {
         match self.option {
             ModelOption::DisplacedConstraint { index } => format!("constraint {index} {}", self.why),
             ModelOption::InclinedRoller { index } => format!("inclined roller {index} {}", self.why),
+            ModelOption::FrictionalPlane { index } => format!("frictional plane {index} {}", self.why),
             ModelOption::BodyConstraint { index } | ModelOption::DisplacedBodyConstraint { index } => {
                 format!("body constraint {index} {}", self.why)
             }
@@ -145,6 +153,7 @@ impl<const D: usize> Model<D> {
         let displaced = self.constraints.iter().enumerate().filter(|(_, c)| c.is_displaced());
         options.extend(displaced.map(|(index, _)| ModelOption::DisplacedConstraint { index }));
         options.extend((0..self.inclined.len()).map(|index| ModelOption::InclinedRoller { index }));
+        options.extend((0..self.frictional.len()).map(|index| ModelOption::FrictionalPlane { index }));
         options.extend((self.body_constraints().iter().enumerate()).map(|(index, c)| match c.is_displaced() {
             true => ModelOption::DisplacedBodyConstraint { index },
             false => ModelOption::BodyConstraint { index },

@@ -503,8 +503,9 @@ impl<'a, const D: usize> Outputs<'a, D> {
 /// `run_log.csv`: one row per step (load factor, Newton iterations, final residual, wall
 /// time, ...). Every constraint adds its reaction per held component (implicit analyses;
 /// NaN in explicit ones), a displaced one (a footing) its prescribed displacement before
-/// it: the load–displacement curve; every inclined roller its reaction per component;
-/// every body constraint, as a plane constraint does, its displacement and reaction.
+/// it: the load–displacement curve; every inclined roller its reaction per component
+/// (implicit and explicit); every body constraint, as a plane constraint does, its
+/// displacement and reaction; every frictional plane its force on the material (explicit).
 /// Every load adds its resultant at the step's load factor or time, per component, and
 /// every monitoring point its displacement and stress.
 struct RunLog {
@@ -588,6 +589,9 @@ impl RunLog {
             header.extend(AXES[..D].iter().map(|a| format!("incline{k}_reaction_{a}")));
         }
         Self::held_columns(&mut header, &bodies);
+        for k in 0..model.frictional_planes().len() {
+            header.extend(AXES[..D].iter().map(|a| format!("frictional_plane{k}_reaction_{a}")));
+        }
         for k in 0..model.loads().len() {
             header.extend(AXES[..D].iter().map(|a| format!("load{k}_{a}")));
         }
@@ -625,12 +629,12 @@ impl RunLog {
             CsvCell::Float(r.wall_time.as_secs_f64()),
         ];
         Self::held_cells(&mut cells, &self.planes, r);
-        let planes = model.constraints().len();
-        for k in 0..model.inclined_rollers().len() {
-            let reaction = r.reactions.get(planes + k);
-            cells.extend((0..D).map(|i| CsvCell::Float(reaction.map_or(f64::NAN, |f| f[i]))));
-        }
+        let (planes, rollers) = (model.constraints().len(), model.inclined_rollers().len());
+        let reaction = |k: usize| (0..D).map(move |i| CsvCell::Float(r.reactions.get(k).map_or(f64::NAN, |f| f[i])));
+        (planes..planes + rollers).for_each(|k| cells.extend(reaction(k)));
         Self::held_cells(&mut cells, &self.bodies, r);
+        let frictional = planes + rollers + model.body_constraints().len();
+        (frictional..frictional + model.frictional_planes().len()).for_each(|k| cells.extend(reaction(k)));
         for (k, load) in model.loads().iter().enumerate() {
             cells.extend(load.resultant(model.load_scale(k, r.level)).iter().map(|&f| CsvCell::Float(f)));
         }

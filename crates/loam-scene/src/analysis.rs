@@ -14,7 +14,7 @@ use loam_implicit::{
     has_strength, ArcLengthSettings, Dynamic, DynamicSettings, LoadControl, QuasiStatic, QuasiStaticSettings, StepError,
 };
 use loam_kernels::{ConnectError, InvalidSetting};
-use loam_model::{Model, ModelOption, Unaccepted};
+use loam_model::{AnalysisKind, Model, ModelOption, Unaccepted};
 
 /// The path of the analysis's `key`.
 fn analysis_key(key: &str) -> [Seg<'_>; 2] {
@@ -58,6 +58,7 @@ impl LoadedScene {
                     control,
                     limit_resolution,
                 };
+                model.check_accepted_by(AnalysisKind::QuasiStatic).map_err(|r| self.unaccepted(&r))?;
                 Analysis::QuasiStatic(QuasiStatic::new(model, settings))
             }
             AnalysisSpec::ImplicitDynamic { time_step, duration, beta, gamma, bossak_alpha, mass, max_cutbacks } => {
@@ -221,6 +222,7 @@ impl LoadedScene {
     fn unaccepted(&self, refusal: &Unaccepted) -> SceneError {
         let at: Vec<Seg> = match refusal.option {
             ModelOption::InclinedRoller { index } => vec![Seg::Key("inclined_rollers"), Seg::Index(index)],
+            ModelOption::FrictionalPlane { index } => vec![Seg::Key("frictional_planes"), Seg::Index(index)],
             ModelOption::BodyConstraint { index } | ModelOption::DisplacedBodyConstraint { index } => {
                 vec![Seg::Key("body_constraints"), Seg::Index(index)]
             }

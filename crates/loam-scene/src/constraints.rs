@@ -5,7 +5,7 @@
 use super::locate::Seg;
 use super::{AnalysisSpec, Axis, BodyConstraintSpec, ConstraintSpec, LoadedScene, RegionSpec, SceneError};
 use loam_grid::Grid;
-use loam_model::{BodyConstraint, InclinedRoller, PlaneConstraint};
+use loam_model::{BodyConstraint, FrictionalPlane, InclinedRoller, Model, ModelError, PlaneConstraint};
 use nalgebra::SVector;
 
 impl LoadedScene {
@@ -44,6 +44,25 @@ impl LoadedScene {
                     .map_err(|e| self.error(&at("normal"), format!("inclined roller {k}: {e}")))
             })
             .collect()
+    }
+
+    /// The model with the frictional planes, each checked at its place in the file.
+    pub(super) fn with_frictional_planes<const D: usize>(&self, model: Model<D>) -> Result<Model<D>, SceneError> {
+        let key = |k| [Seg::Key("frictional_planes"), Seg::Index(k)];
+        let planes = (self.scene.frictional_planes.iter().enumerate())
+            .map(|(k, f)| {
+                let at = |field| [Seg::Key("frictional_planes"), Seg::Index(k), Seg::Key(field)];
+                let point = self.vector(&f.point, &at("point"), "a frictional plane's point")?;
+                let normal = self.vector(&f.normal, &at("normal"), "a frictional plane's normal")?;
+                let field = if f.friction.is_finite() && f.friction >= 0.0 { "normal" } else { "friction" };
+                FrictionalPlane::new(point, normal, f.friction)
+                    .map_err(|e| self.error(&at(field), format!("frictional plane {k}: {e}")))
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        model.with_frictional_planes(planes).map_err(|e| match e {
+            ModelError::FrictionalPlane { index, .. } => self.error(&key(index), e.to_string()),
+            _ => self.error(&[Seg::Key("frictional_planes")], e.to_string()),
+        })
     }
 
     /// The constraints on bodies, each body found by its name; a prescribed displacement

@@ -53,6 +53,10 @@ pub struct Scene {
     /// (QuasiStatic; default none).
     #[serde(default)]
     pub inclined_rollers: Vec<InclinedRollerSpec>,
+    /// Rigid planes with Coulomb friction that the material may leave (Explicit; default
+    /// none).
+    #[serde(default)]
+    pub frictional_planes: Vec<FrictionalPlaneSpec>,
     /// Constraints on named bodies: the nodes each body's points (inside a box, if given)
     /// reach, held or displaced; they follow the body through the grid (implicit
     /// analyses; default none).
@@ -155,6 +159,18 @@ pub struct InclinedRollerSpec {
     pub point: Vec<f64>,
     /// The plane's normal, pointing into the material.
     pub normal: Vec<f64>,
+}
+
+/// A rigid plane with Coulomb friction.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct FrictionalPlaneSpec {
+    /// A point of the plane.
+    pub point: Vec<f64>,
+    /// The plane's normal, pointing into the material.
+    pub normal: Vec<f64>,
+    /// The Coulomb coefficient μ (0: smooth).
+    pub friction: f64,
 }
 
 /// A monitoring point.

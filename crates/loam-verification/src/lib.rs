@@ -16,6 +16,7 @@
 //!   a spherical cavity expanded from a small radius;
 //! - [`water`]: V7, columns under a water table and submerged;
 //! - [`granular`]: V8, the collapse of a granular column (explicit);
+//! - [`sliding`]: V9, a block on a frictional incline (explicit);
 //! - [`hard_cases`]: where implicit MPM usually breaks (softening, small cuts, ...).
 //!
 //! Shared tools: [`block`] (the elastic block that sizes the solvers), [`dynamics`] (time histories and the periods measured from them),
@@ -37,6 +38,7 @@ pub mod dynamics;
 pub mod footing;
 pub mod granular;
 pub mod hard_cases;
+pub mod sliding;
 pub mod slope;
 pub mod sphere;
 pub mod water;

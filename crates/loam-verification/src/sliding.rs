@@ -1,0 +1,151 @@
+//! V9, a block on a frictional incline (docs/verification.md §V9): an elastic block resting
+//! on a rigid plane with Coulomb friction μ, under gravity g at θ to the plane's normal,
+//! slides with the acceleration of a rigid block, a = g (sin θ − μ cos θ), when tan θ > μ,
+//! and stays when tan θ < μ. Once every node under the block slips, the plane's tangential
+//! force is μ times its normal force at every step, so the centre of mass follows the
+//! rigid block's law whatever the block's elastic vibration; a block released unstressed
+//! bounces, though, and a bouncing block ratchets down a slope it would rest on, so the
+//! sticking case is run with local damping.
+//!
+//! Two ways of posing the slope: a level base with gravity turned by θ (the block is a box
+//! of the grid), and a plane inclined at θ with gravity vertical (the block a polygon
+//! across the cells, the plane cutting them); in 3D the level base with gravity turned
+//! along the diagonal of x and z, so that friction has to oppose a slip along no axis.
+//! Explicit MPM only (the frictional planes' analysis); units m, t, s, kN, kPa.
+
+use crate::Bound;
+use loam_constitutive::{ConstitutiveLaw, Elastic};
+use loam_grid::{BasisKind, Grid};
+use loam_model::{FrictionalPlane, Kinematics, Model};
+use loam_points::{PointStore, Shape};
+use nalgebra::{SVector, Vector2, Vector3};
+use std::sync::Arc;
+
+/// The block and its slope.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SlidingBlock {
+    /// θ, the slope's angle, in degrees.
+    pub slope_deg: f64,
+    /// μ.
+    pub friction: f64,
+    /// Posed on a plane inclined at θ (gravity vertical) instead of a level base.
+    pub inclined: bool,
+}
+
+const LENGTH: f64 = 1.0;
+const HEIGHT: f64 = 0.5;
+const CELL: f64 = 0.1;
+const DENSITY: f64 = 2.0;
+const GRAVITY: f64 = 10.0;
+/// c_p = 83 m/s: the block rings at about 40 Hz, many periods within a run.
+const YOUNG: f64 = 1e4;
+const POISSON: f64 = 0.3;
+
+impl SlidingBlock {
+    /// The rigid block's acceleration down the slope, g (sin θ − μ cos θ), or zero when
+    /// friction holds it.
+    pub fn acceleration(&self) -> f64 {
+        let theta = self.slope_deg.to_radians();
+        (GRAVITY * (theta.sin() - self.friction * theta.cos())).max(0.0)
+    }
+
+    /// The block's weight component normal to the slope, m g cos θ, and its mass.
+    pub fn normal_weight(&self) -> f64 {
+        DENSITY * LENGTH * HEIGHT * GRAVITY * self.slope_deg.to_radians().cos()
+    }
+
+    /// The unit vector down the slope.
+    pub fn downhill(&self) -> Vector2<f64> {
+        let theta = self.slope_deg.to_radians();
+        if self.inclined {
+            Vector2::new(-theta.cos(), -theta.sin())
+        } else {
+            Vector2::new(1.0, 0.0)
+        }
+    }
+
+    /// The 2D model: a 1 × 0.5 m block at 2 × 2 points a cell of 0.1 m, GIMP, finite strain,
+    /// with room for `travel` metres of sliding.
+    pub fn model(&self, travel: f64) -> Model<2> {
+        let theta = self.slope_deg.to_radians();
+        let (tangent, normal) = (Vector2::new(theta.cos(), theta.sin()), Vector2::new(-theta.sin(), theta.cos()));
+        let (grid, shape, gravity, normal) = if self.inclined {
+            // The block's lower uphill corner `travel` + one cell up the plane from the origin.
+            let start = tangent * (travel + CELL);
+            let (along, up) = (tangent * LENGTH, normal * HEIGHT);
+            let corners = [start, start + along, start + along + up, start + up];
+            let top = (start + along + up).y + CELL;
+            let nx = ((start + along).x / CELL).ceil() as usize + 3;
+            let grid = Grid::new(
+                Vector2::new(-2.0 * CELL, -2.0 * CELL),
+                Vector2::repeat(CELL),
+                [nx, (top / CELL) as usize + 3],
+            );
+            (grid, Shape::Polygon(corners.to_vec()), Vector2::new(0.0, -GRAVITY), normal)
+        } else {
+            let grid = Grid::new(Vector2::zeros(), Vector2::repeat(CELL), [((LENGTH + travel) / CELL) as usize + 4, 8]);
+            let shape = Shape::Box { min: Vector2::new(CELL, 0.0), max: Vector2::new(CELL + LENGTH, HEIGHT) };
+            (grid, shape, Vector2::new(theta.sin(), -theta.cos()) * GRAVITY, Vector2::new(0.0, 1.0))
+        };
+        let grid = grid.expect("valid V9 grid");
+        self.on(grid, shape, gravity, FrictionalPlane::new(Vector2::zeros(), normal, self.friction))
+    }
+
+    /// The 3D model on a level base, gravity turned by θ along the diagonal of x and z: a
+    /// 1 × 0.5 × 0.4 m block, room for `travel` metres along x and z.
+    pub fn model_3d(&self, travel: f64) -> Model<3> {
+        let theta = self.slope_deg.to_radians();
+        let side = travel / std::f64::consts::SQRT_2;
+        let cells = [((LENGTH + side) / CELL) as usize + 4, 8, ((0.4 + side) / CELL) as usize + 4];
+        let grid = Grid::new(Vector3::zeros(), Vector3::repeat(CELL), cells).expect("valid V9 grid");
+        let shape =
+            Shape::Box { min: Vector3::new(CELL, 0.0, CELL), max: Vector3::new(CELL + LENGTH, HEIGHT, CELL + 0.4) };
+        let along = GRAVITY * theta.sin() / std::f64::consts::SQRT_2;
+        let gravity = Vector3::new(along, -GRAVITY * theta.cos(), along);
+        self.on(
+            grid,
+            shape,
+            gravity,
+            FrictionalPlane::new(Vector3::zeros(), Vector3::new(0.0, 1.0, 0.0), self.friction),
+        )
+    }
+
+    fn on<const D: usize>(
+        &self,
+        grid: Grid<D>,
+        shape: Shape<D>,
+        gravity: SVector<f64, D>,
+        plane: Result<FrictionalPlane<D>, String>,
+    ) -> Model<D> {
+        let mut points = PointStore::new();
+        points.fill(&grid, &shape, 2, DENSITY, 0).expect("the block fits the grid");
+        let law: Arc<dyn ConstitutiveLaw> = Arc::new(Elastic::new(YOUNG, POISSON).expect("valid elasticity"));
+        let model = Model::new(grid, BasisKind::Gimp, Kinematics::FiniteStrain, points, vec![law], Vec::new(), gravity)
+            .expect("valid V9 model");
+        model.with_frictional_planes(vec![plane.expect("valid plane")]).expect("the plane holds nodes")
+    }
+}
+
+/// The least-squares slope of `values` against `times`: the mean acceleration of a sampled
+/// velocity, which averages the block's elastic ringing out.
+pub fn fitted_slope(times: &[f64], values: &[f64]) -> f64 {
+    let n = times.len().min(values.len()) as f64;
+    let (mt, mv) = (times.iter().sum::<f64>() / n, values.iter().sum::<f64>() / n);
+    let covariance: f64 = times.iter().zip(values).map(|(t, v)| (t - mt) * (v - mv)).sum();
+    let variance: f64 = times.iter().map(|t| (t - mt).powi(2)).sum();
+    covariance / variance
+}
+
+/// The bounds of V9.
+pub mod bounds {
+    use super::Bound;
+    /// |a / (g (sin θ − μ cos θ)) − 1| of the sliding block.
+    pub const SLIDING_ACCELERATION: Bound =
+        Bound::upper(0.01, "docs/verification.md §V9: a = g (sin θ − μ cos θ) within 1 % (issue 35)");
+    /// |mean tangential / mean normal force of the plane| / μ − 1 while it slides.
+    pub const COULOMB_RATIO: Bound =
+        Bound::upper(0.01, "docs/verification.md §V9: the plane's force on the cone of Coulomb while sliding, 1 %");
+    /// The stuck block's mean displacement over the frictionless block's travel.
+    pub const STUCK_DISPLACEMENT: Bound =
+        Bound::upper(1e-3, "docs/verification.md §V9: stays put when tan θ < μ (elastic shear only)");
+}

@@ -1,0 +1,158 @@
+//! V9, a block on a frictional incline (docs/verification.md §V9): explicit runs of
+//! `loam_verification::sliding` against the rigid block's a = g (sin θ − μ cos θ), the
+//! plane's force against Coulomb's cone, and a block that friction holds.
+
+use crate::report::{Report, Row};
+use anyhow::Result;
+use loam::explicit::{Explicit, ExplicitSettings, TimeStep};
+use loam::model::Model;
+use loam_verification::sliding::{bounds, fitted_slope, SlidingBlock};
+use nalgebra::SVector;
+use std::fmt::Write as _;
+use std::time::Instant;
+
+/// One case: the block, how it is posed, how long it runs and its local damping.
+struct Case {
+    name: &'static str,
+    block: SlidingBlock,
+    dimension: usize,
+    duration: f64,
+    damping: f64,
+}
+
+/// What a run measured: the fitted acceleration down the slope, the plane's mean
+/// tangential over normal force, the mean displacement down the slope, steps and wall time.
+struct Measured {
+    acceleration: f64,
+    force_ratio: f64,
+    displacement: f64,
+    steps: usize,
+    wall: f64,
+}
+
+/// Run `model` for the case, sampling the centre of mass's velocity along `downhill`; the
+/// first fifth of the run (the block settling onto the plane) is left out of the fits.
+fn run<const D: usize>(case: &Case, model: Model<D>, downhill: SVector<f64, D>) -> Result<Measured> {
+    let settings = ExplicitSettings {
+        time_step: TimeStep::Cfl { safety: 0.5 },
+        damping: case.damping,
+        ..ExplicitSettings::new(case.duration)
+    };
+    let start = Instant::now();
+    let mut ex = Explicit::new(model, settings)?;
+    let (mut times, mut speeds) = (Vec::new(), Vec::new());
+    let (mut normal, mut tangential) = (0.0, 0.0);
+    let mut steps = 0;
+    while !ex.is_finished() {
+        let r = ex.step()?;
+        steps = r.step;
+        if r.time < 0.2 * case.duration {
+            continue;
+        }
+        let pts = ex.model().points();
+        times.push(r.time);
+        speeds.push(pts.momentum().dot(&downhill) / pts.total_mass());
+        let f = SVector::<f64, D>::from_fn(|i, _| r.plane_forces[0][i]);
+        let along = f.dot(&downhill) * downhill;
+        normal += (f - along).norm() * r.dt;
+        tangential += along.norm() * r.dt;
+    }
+    let pts = ex.model().points();
+    let moved = (pts.position().iter().zip(pts.position0())).map(|(x, x0)| (x - x0).dot(&downhill)).sum::<f64>();
+    Ok(Measured {
+        acceleration: fitted_slope(&times, &speeds),
+        force_ratio: tangential / normal,
+        displacement: moved / pts.len() as f64,
+        steps,
+        wall: start.elapsed().as_secs_f64(),
+    })
+}
+
+pub fn verify(_quick: bool, report: &mut Report) -> Result<()> {
+    let slide = |friction, inclined| SlidingBlock { slope_deg: 30.0, friction, inclined };
+    let cases = [
+        Case {
+            name: "level base, gravity turned",
+            block: slide(0.3, false),
+            dimension: 2,
+            duration: 1.0,
+            damping: 0.0,
+        },
+        Case { name: "level base, smooth", block: slide(0.0, false), dimension: 2, duration: 0.6, damping: 0.0 },
+        Case { name: "inclined plane", block: slide(0.3, true), dimension: 2, duration: 1.0, damping: 0.0 },
+        Case {
+            name: "level base, 3D, slip along x = z",
+            block: slide(0.3, false),
+            dimension: 3,
+            duration: 0.5,
+            damping: 0.0,
+        },
+        Case {
+            name: "level base, stuck (damping 0.5)",
+            block: slide(0.7, false),
+            dimension: 2,
+            duration: 1.0,
+            damping: 0.5,
+        },
+    ];
+    writeln!(report.md, "## V9 block on a frictional incline\n\nAn elastic block (1 × 0.5 m, 0.4 m deep in 3D; ρ = 2 t/m³, E = 10 MPa, ν = 0.3) released unstressed on a rigid frictional plane (`frictional_planes`), θ = 30°, g = 10 m/s², cells of 0.1 m, 2 points a cell per axis, GIMP, finite strain, explicit MUSL, CFL 0.5. Acceleration: the least-squares slope of the centre of mass's velocity down the slope after the first fifth of the run; force ratio: the plane's time-averaged tangential over normal force over the same window. References: a = g (sin θ − μ cos θ), the ratio μ while sliding; a block with tan θ < μ stays put (its mean displacement over the frictionless block's travel ½ g sin θ t²).\n")?;
+    report.mark_table("sliding")?;
+    writeln!(report.md, "| case | μ | steps | a [m/s²] | reference | a / ref − 1 | force ratio / μ − 1 | displacement / free travel |\n|---|---:|---:|---:|---:|---:|---:|---:|")?;
+    for case in &cases {
+        let b = case.block;
+        let travel = 0.5 * b.acceleration() * case.duration.powi(2) + 0.1;
+        let m = match case.dimension {
+            3 => {
+                let d = std::f64::consts::FRAC_1_SQRT_2;
+                run(case, b.model_3d(travel), nalgebra::Vector3::new(d, 0.0, d))?
+            }
+            _ => run(case, b.model(travel), b.downhill())?,
+        };
+        let reference = b.acceleration();
+        let label = format!("V9 {} mu {}", case.name, b.friction);
+        let free_travel = 0.5 * 10.0 * b.slope_deg.to_radians().sin() * case.duration.powi(2);
+        let stuck = m.displacement / free_travel;
+        let (error, ratio) = if reference > 0.0 {
+            let ratio = if b.friction > 0.0 { m.force_ratio / b.friction - 1.0 } else { f64::NAN };
+            (m.acceleration / reference - 1.0, ratio)
+        } else {
+            (f64::NAN, f64::NAN)
+        };
+        writeln!(
+            report.md,
+            "| {} | {} | {} | {:.4} | {reference:.4} | {} | {} | {} |",
+            case.name,
+            b.friction,
+            m.steps,
+            m.acceleration,
+            signed(error),
+            signed(ratio),
+            if reference > 0.0 { "—".to_string() } else { format!("{stuck:.1e}") }
+        )?;
+        if reference > 0.0 {
+            report.rows.push(Row::checked(&label, "acceleration_error", error.abs(), bounds::SLIDING_ACCELERATION));
+            if b.friction > 0.0 {
+                report.rows.push(Row::checked(&label, "coulomb_ratio_error", ratio.abs(), bounds::COULOMB_RATIO));
+            }
+        } else {
+            report.rows.push(Row::checked(
+                &label,
+                "displacement_over_free_travel",
+                stuck.abs(),
+                bounds::STUCK_DISPLACEMENT,
+            ));
+        }
+        report.rows.push(Row::info(&label, "wall_time_s", m.wall));
+    }
+    writeln!(report.md)?;
+    Ok(())
+}
+
+/// A relative difference as the table prints it (— where there is none).
+fn signed(x: f64) -> String {
+    if x.is_nan() {
+        "—".into()
+    } else {
+        format!("{x:+.1e}")
+    }
+}
