@@ -13,6 +13,7 @@
 //! impulse over the step gives the force the plane exerts on the material.
 
 use crate::explicit::NodeRecord;
+use crate::fields::Fields;
 use loam_model::{InclinedRoller, Model};
 use nalgebra::SVector;
 
@@ -35,7 +36,7 @@ pub(crate) struct PlaneContacts<const D: usize> {
     /// Every node some plane acts on, in increasing order.
     nodes: Vec<usize>,
     forces: Vec<[f64; 3]>,
-    /// Per node of `nodes`, its damped velocity (D) and whether a plane changed it.
+    /// Per node of `nodes` and field, its damped velocity (D) and whether a plane changed it.
     damped: Vec<f64>,
     touched: Vec<bool>,
 }
@@ -45,11 +46,29 @@ pub(crate) struct PlaneContacts<const D: usize> {
 /// time step and the local damping coefficient.
 pub(crate) struct GridUpdate<'a> {
     pub gathered: &'a [f64],
+    pub fields: Fields,
     pub internal: Option<&'a [f64]>,
     pub constrained: &'a [bool],
     pub m_min: f64,
     pub dt: f64,
     pub damping: f64,
+}
+
+impl GridUpdate<'_> {
+    /// The undamped trial velocity (p + Δt f) / m of `field` at grid node `node`, zero in
+    /// its held components, for a slot with mass.
+    pub(crate) fn undamped_trial<const D: usize>(&self, node: usize, field: usize) -> SVector<f64, D> {
+        let slot = self.fields.slot(node, field);
+        let r = &self.gathered[slot * self.fields.width..(slot + 1) * self.fields.width];
+        let m = r[NodeRecord::<D>::MASS];
+        SVector::from_fn(|i, _| {
+            if self.constrained[node * D + i] {
+                return 0.0;
+            }
+            let force = r[NodeRecord::<D>::FORCE + i] + self.internal.map_or(0.0, |fi| fi[slot * D + i]);
+            (r[NodeRecord::<D>::MOMENTUM + i] + self.dt * force) / m
+        })
+    }
 }
 
 impl<const D: usize> PlaneContacts<D> {
@@ -74,7 +93,7 @@ impl<const D: usize> PlaneContacts<D> {
             })
             .collect();
         let forces = vec![[f64::NAN; 3]; planes.len()];
-        Self { damped: vec![0.0; nodes.len() * D], touched: vec![false; nodes.len()], planes, nodes, forces }
+        Self { damped: Vec::new(), touched: Vec::new(), planes, nodes, forces }
     }
 
     /// The force each plane exerted on the material over the last step, inclined rollers
@@ -84,69 +103,85 @@ impl<const D: usize> PlaneContacts<D> {
     }
 
     /// After the grid momentum update: at every node with mass on a plane, the planes act
-    /// on the undamped trial velocity (p_I + Δt f_I) / m_I, so that local damping does not
-    /// change the normal force that friction is taken from; a node no plane acts on keeps
-    /// its damped velocity, one in contact is not damped (friction dissipates there). Then
-    /// the FLIP acceleration (v_I − p_I / m_I) / Δt and each plane's force Σ m_I Δv_I / Δt.
-    /// Serial over the planes' nodes (a surface of the grid), so forces sum in one order.
+    /// on each field's undamped trial velocity (p_I + Δt f_I) / m_I, so that local damping
+    /// does not change the normal force that friction is taken from; a field no plane acts
+    /// on keeps its damped velocity, one in contact is not damped (friction dissipates
+    /// there). Then the FLIP acceleration (v_I − p_I / m_I) / Δt and each plane's force
+    /// Σ m_I Δv_I / Δt. Serial over the planes' nodes (a surface of the grid), so forces sum
+    /// in one order.
     pub(crate) fn apply(&mut self, grid: &GridUpdate, velocity: &mut [f64], acceleration: &mut [f64]) {
-        let width = NodeRecord::<D>::WIDTH;
-        let mass = |node: usize| grid.gathered[node * width + NodeRecord::<D>::MASS];
+        let fields = grid.fields;
+        let record = |slot: usize| &grid.gathered[slot * fields.width..(slot + 1) * fields.width];
+        let slots = self.nodes.len() * fields.count;
+        self.damped.resize(slots * D, 0.0);
+        self.touched.resize(slots, false);
         for (k, &node) in self.nodes.iter().enumerate() {
-            self.touched[k] = false;
-            let (m, v) = (mass(node), &mut velocity[node * D..(node + 1) * D]);
-            if m <= grid.m_min || grid.damping == 0.0 {
-                continue;
-            }
-            self.damped[k * D..(k + 1) * D].copy_from_slice(v);
-            for i in (0..D).filter(|&i| !grid.constrained[node * D + i]) {
-                let f = grid.gathered[node * width + NodeRecord::<D>::FORCE + i]
-                    + grid.internal.map_or(0.0, |fi| fi[node * D + i]);
-                v[i] = (grid.gathered[node * width + NodeRecord::<D>::MOMENTUM + i] + grid.dt * f) / m;
+            for f in 0..fields.count {
+                let (at, slot) = (k * fields.count + f, fields.slot(node, f));
+                self.touched[at] = false;
+                let (r, v) = (record(slot), &mut velocity[slot * D..(slot + 1) * D]);
+                let m = r[NodeRecord::<D>::MASS];
+                if m <= grid.m_min || grid.damping == 0.0 {
+                    continue;
+                }
+                self.damped[at * D..(at + 1) * D].copy_from_slice(v);
+                v.copy_from_slice(grid.undamped_trial::<D>(node, f).as_slice());
             }
         }
         for (plane, force) in self.planes.iter().zip(&mut self.forces) {
             *force = [0.0; 3];
-            for &k in &plane.slots {
-                let (node, m) = (self.nodes[k], mass(self.nodes[k]));
+            for (&k, f) in plane.slots.iter().flat_map(|k| std::iter::repeat(k).zip(0..fields.count)) {
+                let node = self.nodes[k];
+                let (slot, m) = (fields.slot(node, f), record(fields.slot(node, f))[NodeRecord::<D>::MASS]);
                 if m <= grid.m_min {
                     continue;
                 }
-                let v = &mut velocity[node * D..(node + 1) * D];
+                let v = &mut velocity[slot * D..(slot + 1) * D];
                 let before = SVector::<f64, D>::from_column_slice(v);
                 let after = plane.admissible(before, &grid.constrained[node * D..(node + 1) * D]);
                 if after != before {
-                    self.touched[k] = true;
+                    self.touched[k * fields.count + f] = true;
                     v.copy_from_slice(after.as_slice());
                     (0..D).for_each(|i| force[i] += m * (after[i] - before[i]) / grid.dt);
                 }
             }
         }
         for (k, &node) in self.nodes.iter().enumerate() {
-            let m = mass(node);
-            if m <= grid.m_min {
-                continue;
-            }
-            let v = &mut velocity[node * D..(node + 1) * D];
-            if !self.touched[k] && grid.damping != 0.0 {
-                v.copy_from_slice(&self.damped[k * D..(k + 1) * D]);
-            }
-            for i in 0..D {
-                let p = grid.gathered[node * width + NodeRecord::<D>::MOMENTUM + i];
-                acceleration[node * D + i] = (v[i] - p / m) / grid.dt;
+            for f in 0..fields.count {
+                let (at, slot) = (k * fields.count + f, fields.slot(node, f));
+                let r = record(slot);
+                let m = r[NodeRecord::<D>::MASS];
+                if m <= grid.m_min {
+                    continue;
+                }
+                let v = &mut velocity[slot * D..(slot + 1) * D];
+                if !self.touched[at] && grid.damping != 0.0 {
+                    v.copy_from_slice(&self.damped[at * D..(at + 1) * D]);
+                }
+                for i in 0..D {
+                    acceleration[slot * D + i] = (v[i] - r[NodeRecord::<D>::MOMENTUM + i] / m) / grid.dt;
+                }
             }
         }
     }
 
     /// A nodal velocity field without forces (MUSL's re-mapped one) made admissible at
-    /// every node with mass on a plane.
-    pub(crate) fn project(&self, gathered: &[f64], constrained: &[bool], m_min: f64, velocity: &mut [f64]) {
+    /// every node and field with mass on a plane.
+    pub(crate) fn project(
+        &self,
+        gathered: &[f64],
+        fields: Fields,
+        constrained: &[bool],
+        m_min: f64,
+        velocity: &mut [f64],
+    ) {
         for plane in &self.planes {
-            for node in plane.slots.iter().map(|&k| self.nodes[k]) {
-                if gathered[node * NodeRecord::<D>::WIDTH + NodeRecord::<D>::MASS] <= m_min {
+            for (node, f) in plane.slots.iter().flat_map(|&k| std::iter::repeat(self.nodes[k]).zip(0..fields.count)) {
+                let slot = fields.slot(node, f);
+                if gathered[slot * fields.width + NodeRecord::<D>::MASS] <= m_min {
                     continue;
                 }
-                let v = &mut velocity[node * D..(node + 1) * D];
+                let v = &mut velocity[slot * D..(slot + 1) * D];
                 let after = plane.admissible(SVector::from_column_slice(v), &constrained[node * D..(node + 1) * D]);
                 v.copy_from_slice(after.as_slice());
             }

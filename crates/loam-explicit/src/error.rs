@@ -37,6 +37,12 @@ pub enum ExplicitError {
     /// The model uses an option explicit analysis does not accept (`loam_model`'s table).
     #[error(transparent)]
     Unaccepted(#[from] loam_model::Unaccepted),
+    #[error(
+        "the model's bodies are in contact (body_contact), which needs scheme: Usl, not {0:?}: \
+         the stress must come from the contact-corrected grid velocities that move the points \
+         (a re-mapped or start-of-step field velocity does not carry the contact, docs/theory.md §10)"
+    )]
+    ContactScheme(crate::UpdateScheme),
     #[error("the analysis is already finished ({0} steps)")]
     Finished(usize),
 }

@@ -1,6 +1,8 @@
 //! The explicit analysis: one time step as described in the crate docs.
 
+use crate::body_contact;
 use crate::contact::{GridUpdate, PlaneContacts};
+use crate::fields::Fields;
 use crate::{ExplicitError, ExplicitSettings, TimeStep, UpdateScheme};
 use loam_grid::{ActiveNodes, AxisBasis, BasisError, NodeLayout, PointBasisError};
 use loam_kernels::{
@@ -193,6 +195,8 @@ pub struct Explicit<const D: usize> {
     loads: LoadSupports,
     /// The inclined rollers and frictional planes at their grid nodes.
     contacts: PlaneContacts<D>,
+    /// The motion fields at each node (one per body in contact), found at every connect.
+    fields: Fields,
     /// Nodes with mass in the step.
     active_nodes: usize,
     nodes: NodalScratch,
@@ -212,6 +216,9 @@ impl<const D: usize> Explicit<D> {
     pub fn new(model: Model<D>, settings: ExplicitSettings) -> Result<Self, ExplicitError> {
         settings.validate()?;
         model.check_accepted_by(AnalysisKind::Explicit)?;
+        if model.body_contact().is_some() && settings.scheme != UpdateScheme::Usl {
+            return Err(ExplicitError::ContactScheme(settings.scheme));
+        }
         tracing::info!(scheme = ?settings.scheme, flip = settings.flip, time_step = ?settings.time_step,
             damping = settings.damping, duration = settings.duration, "explicit analysis");
         let p_wave = model.constant_p_wave_moduli();
@@ -219,7 +226,7 @@ impl<const D: usize> Explicit<D> {
         let every_node = ActiveNodes::all(model.grid().num_nodes());
         model.constrained_dofs(&NodeLayout::motion(D), &every_node, &mut constrained);
         let on_planes = if model.body_constraints().is_empty() { Vec::new() } else { constrained.clone() };
-        let contacts = PlaneContacts::of(&model);
+        let (contacts, fields) = (PlaneContacts::of(&model), Fields::of(&model));
         Ok(Self {
             basis: AxisBasis::new(model.basis()),
             model,
@@ -233,6 +240,7 @@ impl<const D: usize> Explicit<D> {
             loaded: ActiveNodes::default(),
             loads: LoadSupports::default(),
             contacts,
+            fields,
             active_nodes: 0,
             nodes: NodalScratch::default(),
             points: PointScratch::default(),
@@ -317,10 +325,13 @@ impl<const D: usize> Explicit<D> {
         let model = &self.model;
         let (mut basis, mut bands) = (AxisBasis::new(model.basis()), BandScatter::default());
         locate(model, &mut basis, &mut bands, self.steps + 1)?;
-        let mut gathered = vec![0.0; model.grid().num_nodes() * NodeRecord::<D>::WIDTH];
-        scatter_grid(model, &basis, &bands, false, &mut gathered);
-        let mut velocity = vec![0.0; model.grid().num_nodes() * D];
-        carried_velocity::<D>(&gathered, &self.constrained, empty_node_mass::<D>(&gathered), &mut velocity);
+        let fields = Fields::of(model);
+        let slots = model.grid().num_nodes() * fields.count;
+        let mut gathered = vec![0.0; slots * fields.width];
+        scatter_grid(model, &basis, &bands, fields, false, &mut gathered);
+        let mut velocity = vec![0.0; slots * D];
+        let m_min = empty_node_mass::<D>(&gathered, fields);
+        carried_velocity::<D>(&gathered, fields, &self.constrained, m_min, &mut velocity);
         Ok(critical_step(model, &self.p_wave, &velocity))
     }
 
@@ -329,7 +340,7 @@ impl<const D: usize> Explicit<D> {
     /// [`Self::fastest_point`] reads).
     fn carried_critical_step(&mut self, m_min: f64) -> f64 {
         let nodes = &mut self.nodes;
-        carried_velocity::<D>(&nodes.gathered, &self.constrained, m_min, &mut nodes.strain_velocity);
+        carried_velocity::<D>(&nodes.gathered, self.fields, &self.constrained, m_min, &mut nodes.strain_velocity);
         critical_step(&self.model, &self.p_wave, &nodes.strain_velocity)
     }
 
@@ -372,7 +383,9 @@ impl<const D: usize> Explicit<D> {
             (
                 p,
                 wave_speed(&self.model, p_wave, p),
-                carried(basis, velocity, p).iter().fold(0.0, |a: f64, &b| a.hypot(b)),
+                carried(basis, (self.fields, self.fields.of_point(&self.model, p)), velocity, p)
+                    .iter()
+                    .fold(0.0, |a: f64, &b| a.hypot(b)),
             )
         };
         // A NaN speed counts as the fastest: it is the point to name.
@@ -415,15 +428,9 @@ impl<const D: usize> Explicit<D> {
         self.update_grid(dt, m_min);
         let grid_update = clock.lap();
         let (basis, nodes) = (&self.basis, &self.nodes);
-        let moved = grid_to_points(
-            &self.model,
-            basis,
-            &nodes.velocity,
-            &nodes.acceleration,
-            dt,
-            self.settings.flip,
-            &mut self.points,
-        );
+        let grid_motion = (&nodes.velocity[..], &nodes.acceleration[..]);
+        let step_flip = (dt, self.settings.flip);
+        let moved = grid_to_points(&self.model, basis, self.fields, grid_motion, step_flip, &mut self.points);
         moved.map_err(|e| self.failure(step, e))?;
         self.stop_held_points();
         let to_points = clock.lap();
@@ -451,6 +458,7 @@ impl<const D: usize> Explicit<D> {
     /// Stage 1: the basis of every point at its start-of-step place, and the points grouped
     /// for the scatter.
     fn connect(&mut self, step: usize) -> Result<(), ExplicitError> {
+        self.fields = Fields::of(&self.model);
         locate(&self.model, &mut self.basis, &mut self.bands, step)?;
         match self.hold_bodies() {
             Some(index) => Err(ConnectError::BodyConstraintTouchesNoNode { index }.into()),
@@ -510,9 +518,10 @@ impl<const D: usize> Explicit<D> {
     fn size_buffers(&mut self) {
         let n_nodes = self.model.grid().num_nodes();
         let nodes = &mut self.nodes;
-        nodes.gathered.resize(n_nodes * NodeRecord::<D>::WIDTH, 0.0);
+        let slots = n_nodes * self.fields.count;
+        nodes.gathered.resize(slots * self.fields.width, 0.0);
         for v in [&mut nodes.internal, &mut nodes.velocity, &mut nodes.acceleration, &mut nodes.strain_velocity] {
-            v.resize(n_nodes * D, 0.0);
+            v.resize(slots * D, 0.0);
         }
         self.points.resize(self.model.points().len(), self.model.points().history_stride());
     }
@@ -522,10 +531,11 @@ impl<const D: usize> Explicit<D> {
     /// a node counts as empty.
     fn map_to_grid(&mut self, step: usize) -> Result<f64, ExplicitError> {
         let usf = self.settings.scheme == UpdateScheme::Usf;
-        scatter_grid(&self.model, &self.basis, &self.bands, !usf, &mut self.nodes.gathered);
-        let m_min = empty_node_mass::<D>(&self.nodes.gathered);
-        let width = NodeRecord::<D>::WIDTH;
-        self.active_nodes = self.nodes.gathered.par_chunks(width).filter(|g| g[NodeRecord::<D>::MASS] > m_min).count();
+        let fields = self.fields;
+        scatter_grid(&self.model, &self.basis, &self.bands, fields, !usf, &mut self.nodes.gathered);
+        let m_min = empty_node_mass::<D>(&self.nodes.gathered, fields);
+        let records = self.nodes.gathered.par_chunks(fields.width);
+        self.active_nodes = records.filter(|g| g[NodeRecord::<D>::MASS] > m_min).count();
         self.add_loads(step, m_min)?;
         Ok(m_min)
     }
@@ -538,7 +548,8 @@ impl<const D: usize> Explicit<D> {
         if self.model.loads().is_empty() {
             return Ok(());
         }
-        let stride = NodeRecord::<D>::WIDTH;
+        // Loads are refused with bodies in contact (`Model::with_body_contact`): one field.
+        let stride = self.fields.width;
         self.number_nodes_with_mass(m_min);
         self.loads.connect(&self.model, &self.loaded, step)?;
         let level = LoadLevel::Time(self.time);
@@ -559,9 +570,10 @@ impl<const D: usize> Explicit<D> {
     /// Number the nodes whose scattered mass is above `m_min`, those the grid update moves,
     /// into `loaded`.
     fn number_nodes_with_mass(&mut self, m_min: f64) {
-        let gathered = &self.nodes.gathered;
-        let mass = |g: usize| gathered[g * NodeRecord::<D>::WIDTH + NodeRecord::<D>::MASS];
-        self.loaded.fill_from(self.model.grid().num_nodes(), |g| mass(g) > m_min);
+        let (gathered, fields) = (&self.nodes.gathered, self.fields);
+        let mass = |slot: usize| gathered[slot * fields.width + NodeRecord::<D>::MASS];
+        let any = |g: usize| (0..fields.count).any(|f| mass(fields.slot(g, f)) > m_min);
+        self.loaded.fill_from(self.model.grid().num_nodes(), any);
     }
 
     /// USF: the stress updated from the start-of-step nodal velocity p_I / m_I (the carried
@@ -570,21 +582,24 @@ impl<const D: usize> Explicit<D> {
     fn update_stress_first(&mut self, step: usize, dt: f64, m_min: f64) -> Result<(), ExplicitError> {
         let nodes = &mut self.nodes;
         if !self.contacts.is_empty() {
-            self.contacts.project(&nodes.gathered, &self.constrained, m_min, &mut nodes.strain_velocity);
+            self.contacts.project(&nodes.gathered, self.fields, &self.constrained, m_min, &mut nodes.strain_velocity);
         }
-        let updated = update_stress(&self.model, &self.basis, &nodes.strain_velocity, dt, &mut self.points);
+        let (basis, fields) = (&self.basis, self.fields);
+        let updated = update_stress(&self.model, basis, fields, &nodes.strain_velocity, dt, &mut self.points);
         updated.map_err(|e| self.failure(step, e))?;
         let (basis, bands) = (&self.basis, &self.bands);
-        negative_internal_force(&self.model, basis, bands, &self.points, &mut self.nodes.internal);
+        negative_internal_force(&self.model, basis, bands, fields, &self.points, &mut self.nodes.internal);
         Ok(())
     }
 
-    /// Stages 3–4: local damping, the grid momentum update and the rigid planes.
+    /// Stages 3–4: local damping, the grid momentum update, the contact between bodies and
+    /// the rigid planes.
     fn update_grid(&mut self, dt: f64, m_min: f64) {
         let nodes = &mut self.nodes;
         let internal = (self.settings.scheme == UpdateScheme::Usf).then_some(&nodes.internal[..]);
         nodal_update::<D>(
             &nodes.gathered,
+            self.fields,
             internal,
             &self.constrained,
             m_min,
@@ -593,15 +608,19 @@ impl<const D: usize> Explicit<D> {
             &mut nodes.velocity,
             &mut nodes.acceleration,
         );
+        let grid = GridUpdate {
+            gathered: &nodes.gathered,
+            fields: self.fields,
+            internal,
+            constrained: &self.constrained,
+            m_min,
+            dt,
+            damping: self.settings.damping,
+        };
+        if let (true, Some(friction)) = (self.fields.in_contact(), self.model.body_contact()) {
+            body_contact::apply::<D>(&grid, friction, &mut nodes.velocity, &mut nodes.acceleration);
+        }
         if !self.contacts.is_empty() {
-            let grid = GridUpdate {
-                gathered: &nodes.gathered,
-                internal,
-                constrained: &self.constrained,
-                m_min,
-                dt,
-                damping: self.settings.damping,
-            };
             self.contacts.apply(&grid, &mut nodes.velocity, &mut nodes.acceleration);
         }
     }
@@ -609,18 +628,25 @@ impl<const D: usize> Explicit<D> {
     /// Stage 6 for USL (the new grid velocity) and MUSL (the velocity re-mapped from the
     /// updated points); USF updated the stress first.
     fn update_stress_last(&mut self, step: usize, dt: f64, m_min: f64) -> Result<(), ExplicitError> {
-        let (model, basis, nodes) = (&self.model, &self.basis, &mut self.nodes);
+        let (model, basis, nodes, fields) = (&self.model, &self.basis, &mut self.nodes, self.fields);
         let updated = match self.settings.scheme {
             UpdateScheme::Usf => return Ok(()),
-            UpdateScheme::Usl => update_stress(model, basis, &nodes.velocity, dt, &mut self.points),
+            UpdateScheme::Usl => update_stress(model, basis, fields, &nodes.velocity, dt, &mut self.points),
             UpdateScheme::Musl => {
                 let velocity = &self.points.fields.velocity;
-                remap_momentum(model, basis, &self.bands, velocity, &mut nodes.strain_velocity);
-                momentum_to_velocity::<D>(&nodes.gathered, &self.constrained, m_min, &mut nodes.strain_velocity);
+                remap_momentum(model, basis, &self.bands, fields, velocity, &mut nodes.strain_velocity);
+                let remapped = &mut nodes.strain_velocity;
+                momentum_to_velocity::<D>(&nodes.gathered, fields, &self.constrained, m_min, remapped);
                 if !self.contacts.is_empty() {
-                    self.contacts.project(&nodes.gathered, &self.constrained, m_min, &mut nodes.strain_velocity);
+                    self.contacts.project(
+                        &nodes.gathered,
+                        fields,
+                        &self.constrained,
+                        m_min,
+                        &mut nodes.strain_velocity,
+                    );
                 }
-                update_stress(model, basis, &nodes.strain_velocity, dt, &mut self.points)
+                update_stress(model, basis, fields, &nodes.strain_velocity, dt, &mut self.points)
             }
         };
         updated.map_err(|e| self.failure(step, e))
@@ -687,27 +713,38 @@ fn locate<const D: usize>(
 }
 
 /// The mass at or below which a node of the scattered `gathered` is empty.
-fn empty_node_mass<const D: usize>(gathered: &[f64]) -> f64 {
-    EMPTY_NODE_MASS
-        * gathered.par_chunks(NodeRecord::<D>::WIDTH).map(|g| g[NodeRecord::<D>::MASS]).reduce(|| 0.0, f64::max)
+fn empty_node_mass<const D: usize>(gathered: &[f64], fields: Fields) -> f64 {
+    EMPTY_NODE_MASS * gathered.par_chunks(fields.width).map(|g| g[NodeRecord::<D>::MASS]).reduce(|| 0.0, f64::max)
 }
 
 /// The velocity the grid carries the material at, p_I / m_I, from the scattered
-/// [m, p, f] per node; zero at held dofs and empty nodes.
-fn carried_velocity<const D: usize>(gathered: &[f64], constrained: &[bool], m_min: f64, out: &mut [f64]) {
+/// [m, p, f] per node and field; zero at held dofs and empty nodes.
+fn carried_velocity<const D: usize>(
+    gathered: &[f64],
+    fields: Fields,
+    constrained: &[bool],
+    m_min: f64,
+    out: &mut [f64],
+) {
     out.par_chunks_mut(D)
-        .zip(gathered.par_chunks(NodeRecord::<D>::WIDTH))
+        .zip(gathered.par_chunks(fields.width))
         .for_each(|(v, g)| v.copy_from_slice(&g[NodeRecord::<D>::MOMENTUM..NodeRecord::<D>::MOMENTUM + D]));
-    momentum_to_velocity::<D>(gathered, constrained, m_min, out);
+    momentum_to_velocity::<D>(gathered, fields, constrained, m_min, out);
 }
 
-/// Σ_I N_I v_I at point `p` for the nodal velocities `velocity`.
+/// Σ_I N_I v_I at point `p` of field `field` for the nodal velocities `velocity`.
 #[inline]
-fn carried<const D: usize>(basis: &AxisBasis<D>, velocity: &[f64], p: usize) -> SVector<f64, D> {
+fn carried<const D: usize>(
+    basis: &AxisBasis<D>,
+    (fields, field): (Fields, usize),
+    velocity: &[f64],
+    p: usize,
+) -> SVector<f64, D> {
     let mut v = SVector::<f64, D>::zeros();
     basis.for_each_node(p, |node, n, _| {
+        let slot = fields.slot(node, field);
         for i in 0..D {
-            v[i] += n * velocity[node * D + i];
+            v[i] += n * velocity[slot * D + i];
         }
     });
     v
@@ -755,41 +792,54 @@ fn sign(x: f64) -> f64 {
     }
 }
 
-/// Scatter [m_I, p_I, f_I] per node; f_I is the external force, plus the internal force of
-/// the committed stress when `with_internal`.
+/// Scatter [m_I, p_I, f_I] per node and field (and Σ_p m_p ∇N_I with bodies in contact); f_I is
+/// the external force, plus the internal force of the committed stress when `with_internal`.
 fn scatter_grid<const D: usize>(
     model: &Model<D>,
     basis: &AxisBasis<D>,
     bands: &BandScatter,
+    fields: Fields,
     with_internal: bool,
     out: &mut [f64],
 ) {
-    // Compiled once for each, so that a plane run's scatter has no hoop test per node.
-    if model.axisymmetric() {
-        scatter_grid_in::<D, true>(model, basis, bands, with_internal, out);
-    } else {
-        scatter_grid_in::<D, false>(model, basis, bands, with_internal, out);
+    // Compiled once for each, so that a plane run's scatter has no hoop test per node, and
+    // a run of one field no field lookup.
+    match (model.axisymmetric(), fields.in_contact()) {
+        (true, true) => scatter_grid_in::<D, true, true>(model, basis, bands, fields, with_internal, out),
+        (true, false) => scatter_grid_in::<D, true, false>(model, basis, bands, fields, with_internal, out),
+        (false, true) => scatter_grid_in::<D, false, true>(model, basis, bands, fields, with_internal, out),
+        (false, false) => scatter_grid_in::<D, false, false>(model, basis, bands, fields, with_internal, out),
     }
 }
 
-/// [`scatter_grid`] in axisymmetry (`AXISYMMETRIC`: the hoop force) or not.
-fn scatter_grid_in<const D: usize, const AXISYMMETRIC: bool>(
+/// [`scatter_grid`] in axisymmetry (`AXISYMMETRIC`: the hoop force) or not, with a field
+/// per body (`MANY`) or one.
+fn scatter_grid_in<const D: usize, const AXISYMMETRIC: bool, const MANY: bool>(
     model: &Model<D>,
     basis: &AxisBasis<D>,
     bands: &BandScatter,
+    fields: Fields,
     with_internal: bool,
     out: &mut [f64],
 ) {
     let pts = model.points();
-    bands.scatter(NodeRecord::<D>::WIDTH, out, |p, window| {
+    bands.scatter(fields.count * fields.width, out, |p, window| {
         let (m, v, load) = (pts.mass()[p], &pts.velocity()[p], model.point_load(p));
         let (volume, stress) = (pts.volume()[p], &pts.stress()[p]);
         let inv_r = AXISYMMETRIC.then(|| 1.0 / pts.position()[p][0]);
+        let record = if MANY { fields.of_point(model, p) * fields.width } else { 0 };
         basis.for_each_node(p, |node, n, grad| {
+            let values = window.node(node);
+            let record = if MANY { &mut values[record..] } else { values };
+            if MANY {
+                for i in 0..D {
+                    record[NodeRecord::<D>::WIDTH + i] += m * grad[i];
+                }
+            }
             // Cut to the record's width, which D fixes, and indexed by the record's own
             // constants (not locals the closure would capture): the indexing below then
             // needs one bounds check, not one per entry.
-            let o = &mut window.node(node)[..NodeRecord::<D>::WIDTH];
+            let o = &mut record[..NodeRecord::<D>::WIDTH];
             let nm = n * m;
             o[NodeRecord::<D>::MASS] += nm;
             for i in 0..D {
@@ -814,13 +864,14 @@ fn negative_internal_force<const D: usize>(
     model: &Model<D>,
     basis: &AxisBasis<D>,
     bands: &BandScatter,
+    fields: Fields,
     sc: &PointScratch<D>,
     out: &mut [f64],
 ) {
     if model.axisymmetric() {
-        negative_internal_force_in::<D, true>(model, basis, bands, sc, out);
+        negative_internal_force_in::<D, true>(model, basis, bands, fields, sc, out);
     } else {
-        negative_internal_force_in::<D, false>(model, basis, bands, sc, out);
+        negative_internal_force_in::<D, false>(model, basis, bands, fields, sc, out);
     }
 }
 
@@ -829,19 +880,21 @@ fn negative_internal_force_in<const D: usize, const AXISYMMETRIC: bool>(
     model: &Model<D>,
     basis: &AxisBasis<D>,
     bands: &BandScatter,
+    fields: Fields,
     sc: &PointScratch<D>,
     out: &mut [f64],
 ) {
     let finite = model.kinematics() == Kinematics::FiniteStrain;
     let pts = model.points();
-    bands.scatter(D, out, |p, window| {
+    bands.scatter(fields.count * D, out, |p, window| {
+        let field = fields.of_point(model, p) * D;
         let v = if finite { sc.fields.volume[p] } else { pts.volume()[p] };
         let stress = &sc.fields.stress[p];
         // The hoop force on the start-of-step radius, as the gradients are (USF).
         let inv_r = AXISYMMETRIC.then(|| 1.0 / pts.position()[p][0]);
         basis.for_each_node(p, |node, n, grad| {
             let f = -internal_force(v, stress, &grad, None, inv_r.map(|i| n * i));
-            let o = &mut window.node(node)[..D]; // of the field's width (`scatter_grid`)
+            let o = &mut window.node(node)[field..][..D]; // of the field's width (`scatter_grid`)
             for i in 0..D {
                 o[i] += f[i];
             }
@@ -854,15 +907,34 @@ fn remap_momentum<const D: usize>(
     model: &Model<D>,
     basis: &AxisBasis<D>,
     bands: &BandScatter,
+    fields: Fields,
+    velocity: &[SVector<f64, D>],
+    out: &mut [f64],
+) {
+    if fields.in_contact() {
+        remap_momentum_in::<D, true>(model, basis, bands, fields, velocity, out);
+    } else {
+        remap_momentum_in::<D, false>(model, basis, bands, fields, velocity, out);
+    }
+}
+
+/// [`remap_momentum`] with a field per body (`MANY`) or one.
+fn remap_momentum_in<const D: usize, const MANY: bool>(
+    model: &Model<D>,
+    basis: &AxisBasis<D>,
+    bands: &BandScatter,
+    fields: Fields,
     velocity: &[SVector<f64, D>],
     out: &mut [f64],
 ) {
     let mass = model.points().mass();
-    bands.scatter(D, out, |p, window| {
+    bands.scatter(fields.count * D, out, |p, window| {
         let (m, v) = (mass[p], &velocity[p]);
+        let field = if MANY { fields.of_point(model, p) * D } else { 0 };
         basis.for_each_node(p, |node, n, _| {
             let nm = n * m;
-            let o = &mut window.node(node)[..D]; // of the field's width (`scatter_grid`)
+            let values = window.node(node);
+            let o = &mut (if MANY { &mut values[field..] } else { values })[..D]; // of the field's width
             for i in 0..D {
                 o[i] += nm * v[i];
             }
@@ -870,16 +942,25 @@ fn remap_momentum<const D: usize>(
     });
 }
 
-/// In place: nodal momentum → velocity p_I / m_I; zero at empty nodes and constrained dofs.
-fn momentum_to_velocity<const D: usize>(gathered: &[f64], constrained: &[bool], m_min: f64, v: &mut [f64]) {
-    v.par_chunks_mut(D).zip(gathered.par_chunks(NodeRecord::<D>::WIDTH)).zip(constrained.par_chunks(D)).for_each(
-        |((v, g), fixed)| {
+/// In place: nodal momentum → velocity p_I / m_I of every field; zero at empty nodes and
+/// constrained dofs.
+fn momentum_to_velocity<const D: usize>(
+    gathered: &[f64],
+    fields: Fields,
+    constrained: &[bool],
+    m_min: f64,
+    v: &mut [f64],
+) {
+    let per_node = (v.par_chunks_mut(fields.count * D).zip(gathered.par_chunks(fields.count * fields.width)))
+        .zip(constrained.par_chunks(D));
+    per_node.for_each(|((v, g), fixed)| {
+        for (v, g) in v.chunks_mut(D).zip(g.chunks(fields.width)) {
             let m = g[NodeRecord::<D>::MASS];
             for i in 0..D {
                 v[i] = if m > m_min && !fixed[i] { v[i] / m } else { 0.0 };
             }
-        },
-    );
+        }
+    });
 }
 
 /// Damped grid momentum update: v_I^{n+1} = (p_I + Δt f_I) / m_I, zero at constrained dofs
@@ -893,6 +974,7 @@ fn momentum_to_velocity<const D: usize>(gathered: &[f64], constrained: &[bool], 
 #[allow(clippy::too_many_arguments)]
 fn nodal_update<const D: usize>(
     gathered: &[f64],
+    fields: Fields,
     internal: Option<&[f64]>,
     constrained: &[bool],
     m_min: f64,
@@ -901,13 +983,15 @@ fn nodal_update<const D: usize>(
     velocity: &mut [f64],
     acceleration: &mut [f64],
 ) {
-    let stride = 1 + 2 * D;
+    let stride = fields.width;
     velocity.par_chunks_mut(D).zip(acceleration.par_chunks_mut(D)).enumerate().for_each(|(j, (v, a))| {
         let g = &gathered[j * stride..(j + 1) * stride];
         let m = g[NodeRecord::<D>::MASS];
+        // The node of slot j: the slot itself with one field (no division on that path).
+        let node = if fields.count == 1 { j } else { j / fields.count };
         for i in 0..D {
             let p = g[NodeRecord::<D>::MOMENTUM + i];
-            if m <= m_min || constrained[j * D + i] {
+            if m <= m_min || constrained[node * D + i] {
                 v[i] = 0.0;
                 a[i] = if m > m_min { -p / (m * dt) } else { 0.0 };
                 continue;
@@ -926,6 +1010,24 @@ fn nodal_update<const D: usize>(
 fn grid_to_points<const D: usize>(
     model: &Model<D>,
     basis: &AxisBasis<D>,
+    fields: Fields,
+    (velocity, acceleration): (&[f64], &[f64]),
+    (dt, flip): (f64, f64),
+    sc: &mut PointScratch<D>,
+) -> PointResult {
+    if fields.in_contact() {
+        grid_to_points_in::<D, true>(model, basis, fields, velocity, acceleration, dt, flip, sc)
+    } else {
+        grid_to_points_in::<D, false>(model, basis, fields, velocity, acceleration, dt, flip, sc)
+    }
+}
+
+/// [`grid_to_points`] with a field per body (`MANY`) or one.
+#[allow(clippy::too_many_arguments)]
+fn grid_to_points_in<const D: usize, const MANY: bool>(
+    model: &Model<D>,
+    basis: &AxisBasis<D>,
+    fields: Fields,
     velocity: &[f64],
     acceleration: &[f64],
     dt: f64,
@@ -934,18 +1036,20 @@ fn grid_to_points<const D: usize>(
 ) -> PointResult {
     let pts = model.points();
     let grid = model.grid();
-    let fields = &mut sc.fields;
-    let failure = fields
+    let state = &mut sc.fields;
+    let failure = state
         .position
         .par_iter_mut()
-        .zip(fields.velocity.par_iter_mut())
+        .zip(state.velocity.par_iter_mut())
         .enumerate()
         .filter_map(|(p, (x, v))| {
             let (mut vi, mut ai) = (SVector::<f64, D>::zeros(), SVector::<f64, D>::zeros());
+            let field = if MANY { fields.of_point(model, p) } else { 0 };
             basis.for_each_node(p, |node, n, _| {
+                let slot = if MANY { fields.slot(node, field) } else { node };
                 for i in 0..D {
-                    vi[i] += n * velocity[node * D + i];
-                    ai[i] += n * acceleration[node * D + i];
+                    vi[i] += n * velocity[slot * D + i];
+                    ai[i] += n * acceleration[slot * D + i];
                 }
             });
             *v = (pts.velocity()[p] + ai * dt) * flip + vi * (1.0 - flip);
@@ -975,23 +1079,27 @@ fn grid_to_points<const D: usize>(
 fn update_stress<const D: usize>(
     model: &Model<D>,
     basis: &AxisBasis<D>,
+    fields: Fields,
     velocity: &[f64],
     dt: f64,
     sc: &mut PointScratch<D>,
 ) -> PointResult {
     // Compiled once for each: a plane run's increment keeps its known zero zz entry, which
     // the law's update folds (1.5 % of the 2D step's instructions when tested per point).
-    if model.axisymmetric() {
-        update_stress_in::<D, true>(model, basis, velocity, dt, sc)
-    } else {
-        update_stress_in::<D, false>(model, basis, velocity, dt, sc)
+    match (model.axisymmetric(), fields.in_contact()) {
+        (true, true) => update_stress_in::<D, true, true>(model, basis, fields, velocity, dt, sc),
+        (true, false) => update_stress_in::<D, true, false>(model, basis, fields, velocity, dt, sc),
+        (false, true) => update_stress_in::<D, false, true>(model, basis, fields, velocity, dt, sc),
+        (false, false) => update_stress_in::<D, false, false>(model, basis, fields, velocity, dt, sc),
     }
 }
 
-/// [`update_stress`] in axisymmetry (`AXISYMMETRIC`: the hoop strain) or not.
-fn update_stress_in<const D: usize, const AXISYMMETRIC: bool>(
+/// [`update_stress`] in axisymmetry (`AXISYMMETRIC`: the hoop strain) or not, with a field
+/// per body (`MANY`) or one.
+fn update_stress_in<const D: usize, const AXISYMMETRIC: bool, const MANY: bool>(
     model: &Model<D>,
     basis: &AxisBasis<D>,
+    fields: Fields,
     velocity: &[f64],
     dt: f64,
     sc: &mut PointScratch<D>,
@@ -1021,7 +1129,8 @@ fn update_stress_in<const D: usize, const AXISYMMETRIC: bool>(
                     elastic_strain: &mut elastic[k],
                     history: &mut history[k * hs.max(1)..][..hs],
                 };
-                if let Err(reason) = point_stress::<D, AXISYMMETRIC>(model, basis, velocity, dt, p, out) {
+                let field = (fields, if MANY { fields.of_point(model, p) } else { 0 });
+                if let Err(reason) = point_stress::<D, AXISYMMETRIC, MANY>(model, basis, field, velocity, dt, p, out) {
                     return Some((p, PointFailure::Unstable(reason)));
                 }
             }
@@ -1067,9 +1176,10 @@ struct PointOut<'a> {
 /// kernel, written into `out` (F ← ΔF F, V_p ← det ΔF V_p, σ, b^e or ε^e, history); or
 /// why the point became unstable.
 #[inline]
-fn point_stress<const D: usize, const AXISYMMETRIC: bool>(
+fn point_stress<const D: usize, const AXISYMMETRIC: bool, const MANY: bool>(
     model: &Model<D>,
     basis: &AxisBasis<D>,
+    (fields, field): (Fields, usize),
     velocity: &[f64],
     dt: f64,
     p: usize,
@@ -1077,13 +1187,14 @@ fn point_stress<const D: usize, const AXISYMMETRIC: bool>(
 ) -> Result<(), String> {
     let mut l = SMatrix::<f64, D, D>::zeros();
     basis.for_each_node(p, |node, _, g| {
-        let v = SVector::<f64, D>::from_column_slice(&velocity[node * D..(node + 1) * D]);
+        let slot = if MANY { fields.slot(node, field) } else { node };
+        let v = SVector::<f64, D>::from_column_slice(&velocity[slot * D..(slot + 1) * D]);
         l += v * g.transpose();
     });
     let mut grad_du = embed(&(l * dt));
     if AXISYMMETRIC {
         // The hoop strain increment Δt v_r / r (docs/theory.md §20).
-        grad_du[(2, 2)] = dt * carried(basis, velocity, p)[0] / model.points().position()[p][0];
+        grad_du[(2, 2)] = dt * carried(basis, (fields, field), velocity, p)[0] / model.points().position()[p][0];
     }
     let df = Matrix3::identity() + grad_du;
     if !df.iter().all(|c| c.is_finite()) {

@@ -7,7 +7,8 @@
 //!    tensor product (`loam_grid::AxisBasis`, evaluated once and read by stages 2, 5 and
 //!    6), and the points grouped into bands of grid rows for the scatter.
 //! 2. Point → grid by a deterministic parallel scatter into dense nodal fields
-//!    (`loam_kernels::BandScatter`):
+//!    (`loam_kernels::BandScatter`), one record per node, or one per body and node when the
+//!    bodies are in contact (`fields`; each point to its own body's):
 //!    m_I = Σ_p N_I m_p, p_I = Σ_p N_I m_p v_p, f_I = Σ_p N_I f_ext,p − Σ_p v_p σ_p ∇N_I.
 //!    Nodes with m_I ≤ 1e-12 · max m_I are empty (zero velocity and acceleration);
 //!    constrained dofs get zero velocity, their momentum kept for the FLIP update (5).
@@ -16,7 +17,8 @@
 //! 4. Grid momentum update v_I^{n+1} = (p_I + Δt f_I) / m_I, a_I = f_I / m_I at a free
 //!    dof; at a held one v_I^{n+1} = 0 and a_I = −p_I / (m_I Δt). At the nodes of an
 //!    inclined roller or a frictional plane the velocity is then made admissible (no
-//!    approach, Coulomb slip; `contact`) and a_I = (v_I^{n+1} − p_I / m_I) / Δt.
+//!    approach, Coulomb slip; `contact`) and a_I = (v_I^{n+1} − p_I / m_I) / Δt; so are
+//!    the velocities of bodies in contact where they meet (`body_contact`).
 //! 5. Grid → point: v_p ← flip (v_p + Δt Σ N_I a_I) + (1 − flip) Σ N_I v_I^{n+1}
 //!    (FLIP of Brackbill & Ruppel 1986 blended with PIC), x_p ← x_p + Δt Σ N_I v_I^{n+1},
 //!    with Δt a_I = v_I^{n+1} − p_I / m_I the node's change of velocity: at a held dof
@@ -52,10 +54,12 @@
 //! every point loop is independent, so results are bitwise identical for any number of
 //! threads (docs/theory.md §7).
 
+mod body_contact;
 mod contact;
 mod energy;
 mod error;
 mod explicit;
+mod fields;
 mod settings;
 
 pub use energy::LeapfrogEnergy;

@@ -143,6 +143,8 @@ pub enum ModelError {
     BodyConstraint { index: usize, what: String },
     #[error("inclined roller: {0}")]
     InclinedRoller(String),
+    #[error("body contact: {0}")]
+    BodyContact(String),
     #[error("frictional plane {index}: {what}")]
     FrictionalPlane { index: usize, what: String },
     #[error("removing points: {0}")]
@@ -180,6 +182,9 @@ pub struct Model<const D: usize> {
     inclined: Vec<InclinedRoller<D>>,
     /// Rigid planes with Coulomb friction that the material may leave.
     frictional: Vec<FrictionalPlane<D>>,
+    /// Bodies in frictional contact with each other, each moving with its own nodal
+    /// velocities (the Coulomb coefficient between them), or bonded where they meet.
+    body_contact: Option<f64>,
     /// Constraints on the nodes bodies' points reach.
     body_constraints: Vec<BodyConstraint>,
     /// Body force per unit mass at full load.
@@ -241,6 +246,7 @@ impl<const D: usize> Model<D> {
             constraints,
             inclined: Vec::new(),
             frictional: Vec::new(),
+            body_contact: None,
             body_constraints: Vec::new(),
             gravity,
             point_forces: Vec::new(),
@@ -347,6 +353,9 @@ impl<const D: usize> Model<D> {
                     "the updated Lagrangian FEM reference takes no loads but gravity yet; use the MPM".into(),
                 );
             }
+            if self.body_contact.is_some() {
+                return error("loads on bodies in contact are not supported yet (their nodal forces belong to no body's field); gravity and initial velocities are".into());
+            }
             if load.is_follower() && self.geometrically_linear {
                 return error("a follower pressure turns with the deformed surface, which a geometrically linear model does not have; leave geometrically_linear out or use a dead pressure".into());
             }
@@ -414,6 +423,34 @@ impl<const D: usize> Model<D> {
     /// The rigid planes with Coulomb friction.
     pub fn frictional_planes(&self) -> &[FrictionalPlane<D>] {
         &self.frictional
+    }
+
+    /// Bodies (the points' body ids) in contact with Coulomb friction `friction` between
+    /// every two of them (docs/theory.md §10): each body moves with its own velocity field
+    /// at the grid nodes, and where two meet they may slide and separate instead of moving
+    /// as one. Explicit analyses; refused with loads (the loads' nodal forces belong to no
+    /// body's field yet).
+    pub fn with_body_contact(mut self, friction: f64) -> Result<Self, ModelError> {
+        if !(friction.is_finite() && friction >= 0.0) {
+            return Err(ModelError::BodyContact(format!(
+                "the friction coefficient must be finite and ≥ 0, not {friction}"
+            )));
+        }
+        if !self.loads.is_empty() {
+            return Err(ModelError::BodyContact("loads on bodies in contact are not supported yet".into()));
+        }
+        if !self.body_constraints.is_empty() {
+            return Err(ModelError::BodyContact(
+                "a body constraint would hold every body's field at its nodes; with contact, hold bodies by grid planes (not built yet)".into(),
+            ));
+        }
+        self.body_contact = Some(friction);
+        Ok(self)
+    }
+
+    /// The Coulomb coefficient between bodies in contact, if they are.
+    pub fn body_contact(&self) -> Option<f64> {
+        self.body_contact
     }
 
     /// The background nodes on `plane` or beyond it (those an inclined roller there holds),

@@ -40,6 +40,8 @@ pub enum ModelOption {
     InclinedRoller { index: usize },
     /// A rigid plane with Coulomb friction.
     FrictionalPlane { index: usize },
+    /// Bodies in contact, a velocity field each.
+    BodyContact,
     /// A constraint on a body that holds its nodes.
     BodyConstraint { index: usize },
     /// A constraint on a body that prescribes a non-zero displacement.
@@ -55,7 +57,7 @@ struct Acceptance {
 }
 
 /// Which analyses accept each option (the module docs).
-const ACCEPTED: [Acceptance; 10] = [
+const ACCEPTED: [Acceptance; 11] = [
     Acceptance {
         is: |o| matches!(o, ModelOption::BodyFittedMesh),
         by: [true, true, false],
@@ -95,6 +97,11 @@ const ACCEPTED: [Acceptance; 10] = [
         is: |o| matches!(o, ModelOption::FrictionalPlane { .. }),
         by: [false, false, true],
         why: "is applied to the grid velocities by the explicit analysis only; the implicit analyses have no frictional contact yet (a roller, on a grid plane or inclined, holds without friction)",
+    },
+    Acceptance {
+        is: |o| matches!(o, ModelOption::BodyContact),
+        by: [false, false, true],
+        why: "the model's bodies are in contact, a velocity field each; only the explicit analysis has contact between bodies yet",
     },
     Acceptance {
         is: |o| matches!(o, ModelOption::BodyConstraint { .. }),
@@ -154,6 +161,7 @@ impl<const D: usize> Model<D> {
         options.extend(displaced.map(|(index, _)| ModelOption::DisplacedConstraint { index }));
         options.extend((0..self.inclined.len()).map(|index| ModelOption::InclinedRoller { index }));
         options.extend((0..self.frictional.len()).map(|index| ModelOption::FrictionalPlane { index }));
+        options.extend(self.body_contact.map(|_| ModelOption::BodyContact));
         options.extend((self.body_constraints().iter().enumerate()).map(|(index, c)| match c.is_displaced() {
             true => ModelOption::DisplacedBodyConstraint { index },
             false => ModelOption::BodyConstraint { index },

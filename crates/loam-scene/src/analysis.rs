@@ -223,6 +223,7 @@ impl LoadedScene {
         let at: Vec<Seg> = match refusal.option {
             ModelOption::InclinedRoller { index } => vec![Seg::Key("inclined_rollers"), Seg::Index(index)],
             ModelOption::FrictionalPlane { index } => vec![Seg::Key("frictional_planes"), Seg::Index(index)],
+            ModelOption::BodyContact => vec![Seg::Key("body_contact")],
             ModelOption::BodyConstraint { index } | ModelOption::DisplacedBodyConstraint { index } => {
                 vec![Seg::Key("body_constraints"), Seg::Index(index)]
             }
@@ -248,6 +249,7 @@ impl LoadedScene {
                 Err(self.error(&analysis_key(key), format!("{field} is {value}; valid: {valid}")))
             }
             Err(ExplicitError::Unaccepted(refusal)) => Err(self.unaccepted(&refusal)),
+            Err(e @ ExplicitError::ContactScheme(_)) => Err(self.error(&analysis_key("scheme"), e.to_string())),
             Err(e) => Err(self.error(&[Seg::Key("analysis")], e.to_string())),
         }
     }

@@ -46,7 +46,8 @@ impl LoadedScene {
             .collect()
     }
 
-    /// The model with the frictional planes, each checked at its place in the file.
+    /// The model with the frictional planes, each checked at its place in the file, and
+    /// the contact between bodies.
     pub(super) fn with_frictional_planes<const D: usize>(&self, model: Model<D>) -> Result<Model<D>, SceneError> {
         let key = |k| [Seg::Key("frictional_planes"), Seg::Index(k)];
         let planes = (self.scene.frictional_planes.iter().enumerate())
@@ -59,10 +60,16 @@ impl LoadedScene {
                     .map_err(|e| self.error(&at(field), format!("frictional plane {k}: {e}")))
             })
             .collect::<Result<Vec<_>, _>>()?;
-        model.with_frictional_planes(planes).map_err(|e| match e {
+        let model = model.with_frictional_planes(planes).map_err(|e| match e {
             ModelError::FrictionalPlane { index, .. } => self.error(&key(index), e.to_string()),
             _ => self.error(&[Seg::Key("frictional_planes")], e.to_string()),
-        })
+        })?;
+        match &self.scene.body_contact {
+            Some(contact) => model
+                .with_body_contact(contact.friction)
+                .map_err(|e| self.error(&[Seg::Key("body_contact"), Seg::Key("friction")], e.to_string())),
+            None => Ok(model),
+        }
     }
 
     /// The constraints on bodies, each body found by its name; a prescribed displacement

@@ -57,6 +57,10 @@ pub struct Scene {
     /// none).
     #[serde(default)]
     pub frictional_planes: Vec<FrictionalPlaneSpec>,
+    /// The bodies in frictional contact with each other, a velocity field each (Explicit;
+    /// default `None`: bodies that meet move together).
+    #[serde(default)]
+    pub body_contact: Option<BodyContactSpec>,
     /// Constraints on named bodies: the nodes each body's points (inside a box, if given)
     /// reach, held or displaced; they follow the body through the grid (implicit
     /// analyses; default none).
@@ -170,6 +174,14 @@ pub struct FrictionalPlaneSpec {
     /// The plane's normal, pointing into the material.
     pub normal: Vec<f64>,
     /// The Coulomb coefficient μ (0: smooth).
+    pub friction: f64,
+}
+
+/// Contact between bodies.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct BodyContactSpec {
+    /// The Coulomb coefficient μ between every two bodies (0: smooth).
     pub friction: f64,
 }
 

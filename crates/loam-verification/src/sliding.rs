@@ -10,7 +10,9 @@
 //! Two ways of posing the slope: a level base with gravity turned by θ (the block is a box
 //! of the grid), and a plane inclined at θ with gravity vertical (the block a polygon
 //! across the cells, the plane cutting them); in 3D the level base with gravity turned
-//! along the diagonal of x and z, so that friction has to oppose a slip along no axis.
+//! along the diagonal of x and z, so that friction has to oppose a slip along no axis; and
+//! the block as a body of its own on an elastic slab of the same soil, the contact between
+//! the two bodies' velocity fields (`Model::with_body_contact`) in place of the plane.
 //! Explicit MPM only (the frictional planes' analysis); units m, t, s, kN, kPa.
 
 use crate::Bound;
@@ -35,6 +37,8 @@ pub struct SlidingBlock {
 const LENGTH: f64 = 1.0;
 const HEIGHT: f64 = 0.5;
 const CELL: f64 = 0.1;
+/// The slab under the block in the case of two bodies.
+const SLAB: f64 = 0.3;
 const DENSITY: f64 = 2.0;
 const GRAVITY: f64 = 10.0;
 /// c_p = 83 m/s: the block rings at about 40 Hz, many periods within a run.
@@ -108,6 +112,27 @@ impl SlidingBlock {
             gravity,
             FrictionalPlane::new(Vector3::zeros(), Vector3::new(0.0, 1.0, 0.0), self.friction),
         )
+    }
+
+    /// The 2D block on a slab 0.3 m thick of the same soil (body 0, its base held on the
+    /// grid plane y = 0), gravity turned by θ, friction μ between the two bodies.
+    pub fn model_on_slab(&self, travel: f64) -> Model<2> {
+        let theta = self.slope_deg.to_radians();
+        let cells = [((LENGTH + travel) / CELL) as usize + 4, 11];
+        let grid = Grid::new(Vector2::zeros(), Vector2::repeat(CELL), cells).expect("valid V9 grid");
+        let mut points = PointStore::new();
+        let slab = Shape::Box { min: Vector2::zeros(), max: Vector2::new(cells[0] as f64 * CELL, SLAB) };
+        points.fill(&grid, &slab, 2, DENSITY, 0).expect("the slab fits the grid");
+        let first = points.len();
+        let block = Shape::Box { min: Vector2::new(CELL, SLAB), max: Vector2::new(CELL + LENGTH, SLAB + HEIGHT) };
+        points.fill(&grid, &block, 2, DENSITY, 0).expect("the block fits the grid");
+        points.assign_body(first..points.len(), 1);
+        let law: Arc<dyn ConstitutiveLaw> = Arc::new(Elastic::new(YOUNG, POISSON).expect("valid elasticity"));
+        let base = vec![loam_model::PlaneConstraint::new(1, 0, [true, true, false])];
+        let gravity = Vector2::new(theta.sin(), -theta.cos()) * GRAVITY;
+        let model = Model::new(grid, BasisKind::Gimp, Kinematics::FiniteStrain, points, vec![law], base, gravity)
+            .expect("valid V9 model");
+        model.with_body_contact(self.friction).expect("valid friction")
     }
 
     fn on<const D: usize>(
