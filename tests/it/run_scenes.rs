@@ -424,3 +424,23 @@ fn element_test_reaches_the_critical_state() {
     assert!(message(("kappa: 0.04", "kappa: 0.4")).contains("lambda = 0.2; it must be above kappa"));
     assert!(message(("TriaxialUndrained", "Triaxial")).contains("Unexpected variant named `Triaxial`"));
 }
+
+/// The landslide example, its first 1.2 s: the sand reaches the wall (the wall pushes back
+/// along +x, and never pulls: a frictional plane only resists approach), the slope's force
+/// on the sand points up the slope's normal side, and `plane_forces.svg` is drawn.
+#[test]
+fn the_landslide_reaches_the_wall() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string("examples/landslide_wall_explicit.ron").unwrap();
+    let text = text.replace("duration: 2.5", "duration: 1.2").replace("vtu_every: 500", "vtu_every: 0");
+    let scene = LoadedScene::parse(Path::new("landslide_wall_explicit.ron"), text).unwrap();
+    run_scene(&scene, dir.path(), &mut |_| {}).unwrap();
+    let (header, rows) = read_csv(&dir.path().join("run_log.csv"));
+    let column = |name: &str| header.iter().position(|h| h == name).unwrap();
+    let (wall, slope_y) = (column("frictional_plane1_reaction_x"), column("frictional_plane0_reaction_y"));
+    let largest = rows.iter().map(|r| r[wall]).fold(0.0, f64::max);
+    println!("largest force of the wall {largest} kN/m");
+    assert!(largest > 0.0 && rows.iter().all(|r| r[wall] >= 0.0), "the wall pushes, never pulls");
+    assert!(rows.iter().all(|r| r[slope_y] >= 0.0), "the slope holds the sand up");
+    assert!(dir.path().join("plane_forces.svg").exists());
+}

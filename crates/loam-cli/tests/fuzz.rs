@@ -30,7 +30,7 @@ const MAX_MEMORY: &str = "2G";
 
 /// The examples small enough to run a few steps of in CI (the strength-reduction scenes
 /// search their factor of safety before the first step; `loam check` takes every example).
-const RUNNABLE: [&str; 11] = [
+const RUNNABLE: [&str; 12] = [
     "cavity_sphere.ron",
     "column.ron",
     "column_fem.ron",
@@ -40,6 +40,7 @@ const RUNNABLE: [&str; 11] = [
     "footing_circular.ron",
     "footing_load_control.ron",
     "footing_von_mises.ron",
+    "landslide_wall_explicit.ron",
     "slope_runout_explicit.ron",
     "slope_runout_implicit.ron",
 ];

@@ -7,6 +7,8 @@
 //! - `load_displacement.svg`: each prescribed displacement's reaction against it (the
 //!   footing's load–settlement curve), where the run has one;
 //! - `monitors.svg`: each monitoring point's displacement against the load factor or time;
+//! - `plane_forces.svg`: the force of each inclined roller and frictional plane on the
+//!   material against the load factor or time (a landslide's force on a wall);
 //! - `energies.svg`: kinetic, strain and total energy and the external work against time;
 //! - `strength_reduction.svg`: the factor of each trial, held or failed.
 
@@ -14,8 +16,14 @@ use crate::output::plot::{Plot, Series};
 use std::path::{Path, PathBuf};
 
 /// The names of the plots, for the output folder's bookkeeping.
-pub const PLOT_FILES: [&str; 5] =
-    ["run_log.svg", "load_displacement.svg", "monitors.svg", "energies.svg", "strength_reduction.svg"];
+pub const PLOT_FILES: [&str; 6] = [
+    "run_log.svg",
+    "load_displacement.svg",
+    "monitors.svg",
+    "plane_forces.svg",
+    "energies.svg",
+    "strength_reduction.svg",
+];
 
 /// A CSV file of numbers: its header and its rows (a cell that is not a number reads NaN,
 /// and NaN is not drawn).
@@ -58,6 +66,7 @@ pub fn plot_run(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
         plots.extend(steps_plot(&log).map(|p| ("run_log.svg", p)));
         plots.extend(load_displacement_plot(&log).map(|p| ("load_displacement.svg", p)));
         plots.extend(monitors_plot(&log).map(|p| ("monitors.svg", p)));
+        plots.extend(plane_forces_plot(&log).map(|p| ("plane_forces.svg", p)));
     }
     if let Some(history) = Table::read(&dir.join("history.csv"))? {
         plots.extend(energies_plot(&history).map(|p| ("energies.svg", p)));
@@ -120,6 +129,23 @@ fn monitors_plot(log: &Table) -> Option<Plot> {
             continue;
         }
         plot.series.push(log.series(&format!("{name}, u{axis}"), "time", column)?);
+    }
+    (!plot.series.is_empty() && !log.rows.is_empty()).then_some(plot)
+}
+
+/// Each inclined roller's and frictional plane's force on the material
+/// (`incline<k>_reaction_<axis>`, `frictional_plane<k>_reaction_<axis>`) against the load
+/// factor or time.
+fn plane_forces_plot(log: &Table) -> Option<Plot> {
+    let quasi_static = log.column("time")? == log.column("load_factor")?;
+    let x = if quasi_static { "load factor" } else { "time" };
+    let mut plot = Plot::new("Force of the rigid planes on the material", x, "force");
+    let planes = log.header.iter().filter(|h| h.starts_with("incline") || h.starts_with("frictional_plane"));
+    for column in planes {
+        let Some((plane, axis)) = column.split_once("_reaction_") else { continue };
+        let name = plane.trim_end_matches(|c: char| c.is_ascii_digit());
+        let label = format!("{} {}, {axis}", name.replace('_', " "), &plane[name.len()..]);
+        plot.series.push(log.series(&label, "time", column)?);
     }
     (!plot.series.is_empty() && !log.rows.is_empty()).then_some(plot)
 }
