@@ -6,7 +6,7 @@ use crate::report::{Report, Row};
 use anyhow::Result;
 use loam::explicit::{Explicit, ExplicitSettings, TimeStep, UpdateScheme};
 use loam::model::Model;
-use loam_verification::sliding::{bounds, fitted_slope, SlidingBlock};
+use loam_verification::sliding::{block_displacement, block_speed, bounds, fitted_slope, SlidingBlock};
 use nalgebra::SVector;
 use std::fmt::Write as _;
 use std::time::Instant;
@@ -64,40 +64,20 @@ fn run<const D: usize>(case: &Case, model: Model<D>, downhill: SVector<f64, D>) 
             continue;
         }
         times.push(r.time);
-        speeds.push(block_momentum(ex.model()).dot(&downhill) / block_mass(ex.model()));
+        speeds.push(block_speed(ex.model(), &downhill));
         let Some(force) = r.plane_forces.first() else { continue };
         let f = SVector::<f64, D>::from_fn(|i, _| force[i]);
         let along = f.dot(&downhill) * downhill;
         normal += (f - along).norm() * r.dt;
         tangential += along.norm() * r.dt;
     }
-    let pts = ex.model().points();
-    let block: Vec<usize> = (0..pts.len()).filter(|&p| in_block(ex.model(), p)).collect();
-    let moved = block.iter().map(|&p| (pts.position()[p] - pts.position0()[p]).dot(&downhill)).sum::<f64>();
     Ok(Measured {
         acceleration: fitted_slope(&times, &speeds),
         force_ratio: tangential / normal,
-        displacement: moved / block.len() as f64,
+        displacement: block_displacement(ex.model(), &downhill),
         steps,
         wall: start.elapsed().as_secs_f64(),
     })
-}
-
-/// Whether point `p` is the block's: every point on a plane, body 1's on the slab.
-fn in_block<const D: usize>(model: &Model<D>, p: usize) -> bool {
-    model.body_contact().is_none() || model.points().body()[p] == 1
-}
-
-/// The momentum of the block's points.
-fn block_momentum<const D: usize>(model: &Model<D>) -> SVector<f64, D> {
-    let pts = model.points();
-    (0..pts.len()).filter(|&p| in_block(model, p)).map(|p| pts.velocity()[p] * pts.mass()[p]).sum()
-}
-
-/// The block's mass.
-fn block_mass<const D: usize>(model: &Model<D>) -> f64 {
-    let pts = model.points();
-    (0..pts.len()).filter(|&p| in_block(model, p)).map(|p| pts.mass()[p]).sum()
 }
 
 pub fn verify(_quick: bool, report: &mut Report) -> Result<()> {

@@ -18,7 +18,7 @@
 //! into the others) the normal part of δ is removed and the tangential part δ_t loses
 //! μ δ_n, or all of it (stick: v_b = v_cm); a field that leaves the others is free.
 
-use crate::contact::GridUpdate;
+use crate::contact::{put, GridUpdate};
 use crate::explicit::NodeRecord;
 use crate::fields::Fields;
 use nalgebra::SVector;
@@ -27,21 +27,27 @@ use rayon::prelude::*;
 /// After the grid momentum update: at every node where bodies meet, the fields in contact
 /// take the corrected undamped trial velocity (local damping would change the normal force
 /// friction is taken from, as at a frictional plane), and the FLIP acceleration
-/// (v_b − p_b / m_b) / Δt; the others keep their damped update.
-pub(crate) fn apply<const D: usize>(grid: &GridUpdate, friction: f64, velocity: &mut [f64], acceleration: &mut [f64]) {
+/// (v_b − p_b / m_b) / Δt, and are marked in `settled` (per slot); the others keep their
+/// damped update.
+pub(crate) fn apply<const D: usize>(
+    grid: &GridUpdate,
+    friction: f64,
+    velocity: &mut [f64],
+    acceleration: &mut [f64],
+    settled: &mut [bool],
+) {
     let fields = grid.fields;
     let per_node = (velocity.par_chunks_mut(fields.count * D).zip(acceleration.par_chunks_mut(fields.count * D)))
+        .zip(settled.par_chunks_mut(fields.count))
         .zip(grid.gathered.par_chunks(fields.count * fields.width));
-    per_node.enumerate().for_each(|(node, ((v, a), records))| {
+    per_node.enumerate().for_each(|(node, (((v, a), settled), records))| {
         let fixed = &grid.constrained[node * D..(node + 1) * D];
         let trial = |f: usize| grid.undamped_trial::<D>(node, f);
+        settled.fill(false);
         settle(records, fields, grid.m_min, friction, fixed, trial, |f, corrected| {
-            let p = &records[f * fields.width + NodeRecord::<D>::MOMENTUM..][..D];
-            let m = records[f * fields.width + NodeRecord::<D>::MASS];
-            for i in 0..D {
-                v[f * D + i] = corrected[i];
-                a[f * D + i] = (corrected[i] - p[i] / m) / grid.dt;
-            }
+            let record = &records[f * fields.width..(f + 1) * fields.width];
+            put(record, grid.dt, &corrected, &mut v[f * D..(f + 1) * D], &mut a[f * D..(f + 1) * D]);
+            settled[f] = true;
         });
     });
 }

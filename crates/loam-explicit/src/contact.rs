@@ -17,28 +17,27 @@ use crate::fields::Fields;
 use loam_model::{InclinedRoller, Model};
 use nalgebra::SVector;
 
-/// One plane and the grid nodes it acts on.
+/// One plane.
 #[derive(Debug)]
 struct PlaneContact<const D: usize> {
     normal: SVector<f64, D>,
     friction: f64,
     /// Held along the normal both ways (an inclined roller), not only against approach.
     bilateral: bool,
-    /// The grid nodes on the plane or beyond it, as indices into `PlaneContacts::nodes`.
-    slots: Vec<usize>,
 }
 
-/// The model's inclined rollers, then its frictional planes, with the force each exerted
-/// on the material in the last step.
+/// The model's inclined rollers, then its frictional planes, the grid nodes they act on,
+/// and the force each exerted on the material in the last step.
 #[derive(Debug, Default)]
 pub(crate) struct PlaneContacts<const D: usize> {
     planes: Vec<PlaneContact<D>>,
     /// Every node some plane acts on, in increasing order.
     nodes: Vec<usize>,
+    /// Per node of `nodes`, the range `first[k]..first[k + 1]` of `acting` holding the
+    /// planes on it, in the order of `planes`.
+    first: Vec<usize>,
+    acting: Vec<usize>,
     forces: Vec<[f64; 3]>,
-    /// Per node of `nodes` and field, its damped velocity (D) and whether a plane changed it.
-    damped: Vec<f64>,
-    touched: Vec<bool>,
 }
 
 /// The nodal state `PlaneContacts::apply` reads: the scattered records, the internal force
@@ -55,11 +54,16 @@ pub(crate) struct GridUpdate<'a> {
 }
 
 impl GridUpdate<'_> {
+    /// The record of slot `slot` (`Fields::slot`).
+    pub(crate) fn record(&self, slot: usize) -> &[f64] {
+        &self.gathered[slot * self.fields.width..(slot + 1) * self.fields.width]
+    }
+
     /// The undamped trial velocity (p + Δt f) / m of `field` at grid node `node`, zero in
     /// its held components, for a slot with mass.
     pub(crate) fn undamped_trial<const D: usize>(&self, node: usize, field: usize) -> SVector<f64, D> {
         let slot = self.fields.slot(node, field);
-        let r = &self.gathered[slot * self.fields.width..(slot + 1) * self.fields.width];
+        let r = self.record(slot);
         let m = r[NodeRecord::<D>::MASS];
         SVector::from_fn(|i, _| {
             if self.constrained[node * D + i] {
@@ -71,29 +75,45 @@ impl GridUpdate<'_> {
     }
 }
 
+/// Set a field's velocity (its D values in `velocity`) to `v` and its FLIP acceleration to
+/// (v − p / m) / Δt, for the field's scattered `record`.
+pub(crate) fn put<const D: usize>(
+    record: &[f64],
+    dt: f64,
+    v: &SVector<f64, D>,
+    velocity: &mut [f64],
+    acceleration: &mut [f64],
+) {
+    let m = record[NodeRecord::<D>::MASS];
+    for i in 0..D {
+        velocity[i] = v[i];
+        acceleration[i] = (v[i] - record[NodeRecord::<D>::MOMENTUM + i] / m) / dt;
+    }
+}
+
 impl<const D: usize> PlaneContacts<D> {
     /// The planes of `model`, each with the grid nodes it acts on (the grid does not move).
     pub(crate) fn of(model: &Model<D>) -> Self {
         let rollers = model.inclined_rollers().iter().map(|r| (r, 0.0, true));
         let frictional = model.frictional_planes().iter().map(|f| (f.plane(), f.friction(), false));
-        let held: Vec<(&InclinedRoller<D>, f64, bool, Vec<usize>)> = rollers
-            .chain(frictional)
-            .map(|(plane, mu, bilateral)| (plane, mu, bilateral, model.nodes_beyond(plane)))
+        let held: Vec<(&InclinedRoller<D>, f64, bool)> = rollers.chain(frictional).collect();
+        let mut on: Vec<(usize, usize)> = (held.iter().enumerate())
+            .flat_map(|(j, h)| model.nodes_beyond(h.0).into_iter().map(move |node| (node, j)))
             .collect();
-        let mut nodes: Vec<usize> = held.iter().flat_map(|h| h.3.iter().copied()).collect();
-        nodes.sort_unstable();
-        nodes.dedup();
-        let slot = |node: &usize| nodes.binary_search(node).expect("the union holds every plane's nodes");
-        let planes: Vec<PlaneContact<D>> = (held.iter())
-            .map(|(plane, friction, bilateral, on)| PlaneContact {
-                normal: *plane.normal(),
-                friction: *friction,
-                bilateral: *bilateral,
-                slots: on.iter().map(slot).collect(),
-            })
-            .collect();
+        on.sort_unstable();
+        let (mut nodes, mut first, acting) = (Vec::new(), Vec::new(), on.iter().map(|&(_, j)| j).collect());
+        for (at, &(node, _)) in on.iter().enumerate() {
+            if nodes.last() != Some(&node) {
+                nodes.push(node);
+                first.push(at);
+            }
+        }
+        first.push(on.len());
+        let planes = (held.iter())
+            .map(|&(plane, friction, bilateral)| PlaneContact { normal: *plane.normal(), friction, bilateral })
+            .collect::<Vec<_>>();
         let forces = vec![[f64::NAN; 3]; planes.len()];
-        Self { damped: Vec::new(), touched: Vec::new(), planes, nodes, forces }
+        Self { planes, nodes, first, acting, forces }
     }
 
     /// The force each plane exerted on the material over the last step, inclined rollers
@@ -102,71 +122,44 @@ impl<const D: usize> PlaneContacts<D> {
         &self.forces
     }
 
-    /// After the grid momentum update: at every node with mass on a plane, the planes act
-    /// on each field's undamped trial velocity (p_I + Δt f_I) / m_I, so that local damping
-    /// does not change the normal force that friction is taken from; a field no plane acts
-    /// on keeps its damped velocity, one in contact is not damped (friction dissipates
-    /// there). Then the FLIP acceleration (v_I − p_I / m_I) / Δt and each plane's force
-    /// Σ m_I Δv_I / Δt. Serial over the planes' nodes (a surface of the grid), so forces sum
-    /// in one order.
-    pub(crate) fn apply(&mut self, grid: &GridUpdate, velocity: &mut [f64], acceleration: &mut [f64]) {
-        let fields = grid.fields;
-        let record = |slot: usize| &grid.gathered[slot * fields.width..(slot + 1) * fields.width];
-        let slots = self.nodes.len() * fields.count;
-        self.damped.resize(slots * D, 0.0);
-        self.touched.resize(slots, false);
-        for (k, &node) in self.nodes.iter().enumerate() {
-            for f in 0..fields.count {
-                let (at, slot) = (k * fields.count + f, fields.slot(node, f));
-                self.touched[at] = false;
-                let (r, v) = (record(slot), &mut velocity[slot * D..(slot + 1) * D]);
-                let m = r[NodeRecord::<D>::MASS];
-                if m <= grid.m_min || grid.damping == 0.0 {
-                    continue;
-                }
-                self.damped[at * D..(at + 1) * D].copy_from_slice(v);
-                v.copy_from_slice(grid.undamped_trial::<D>(node, f).as_slice());
+    /// After the grid momentum update and the contact between bodies: at every node with
+    /// mass on a plane, the planes act on each field's undamped trial velocity
+    /// (p_I + Δt f_I) / m_I, so that local damping does not change the normal force
+    /// friction is taken from, or on the velocity contact between bodies `settled` (per
+    /// slot; empty without it). A field the planes change takes their velocity, undamped
+    /// (friction dissipates there), and its FLIP acceleration; the others keep their
+    /// update. Each plane's force is Σ m_I Δv_I / Δt. Serial over the nodes on the planes
+    /// or beyond them (a region of the grid, not of the points), so forces sum in one order.
+    pub(crate) fn apply(
+        &mut self,
+        grid: &GridUpdate,
+        settled: &[bool],
+        velocity: &mut [f64],
+        acceleration: &mut [f64],
+    ) {
+        let mut forces = std::mem::take(&mut self.forces);
+        forces.iter_mut().for_each(|f| *f = [0.0; 3]);
+        for (k, node, f, slot) in self.massive(grid.gathered, grid.fields, grid.m_min) {
+            let m = grid.record(slot)[NodeRecord::<D>::MASS];
+            let carried = grid.damping == 0.0 || settled.get(slot) == Some(&true);
+            let trial = if carried {
+                SVector::from_column_slice(&velocity[slot * D..][..D])
+            } else {
+                grid.undamped_trial::<D>(node, f)
+            };
+            let after = self.admissible_at(k, trial, &grid.constrained[node * D..][..D], |j, change| {
+                (0..D).for_each(|i| forces[j][i] += m * change[i] / grid.dt);
+            });
+            if after != trial {
+                let range = slot * D..(slot + 1) * D;
+                put(grid.record(slot), grid.dt, &after, &mut velocity[range.clone()], &mut acceleration[range]);
             }
         }
-        for (plane, force) in self.planes.iter().zip(&mut self.forces) {
-            *force = [0.0; 3];
-            for (&k, f) in plane.slots.iter().flat_map(|k| std::iter::repeat(k).zip(0..fields.count)) {
-                let node = self.nodes[k];
-                let (slot, m) = (fields.slot(node, f), record(fields.slot(node, f))[NodeRecord::<D>::MASS]);
-                if m <= grid.m_min {
-                    continue;
-                }
-                let v = &mut velocity[slot * D..(slot + 1) * D];
-                let before = SVector::<f64, D>::from_column_slice(v);
-                let after = plane.admissible(before, &grid.constrained[node * D..(node + 1) * D]);
-                if after != before {
-                    self.touched[k * fields.count + f] = true;
-                    v.copy_from_slice(after.as_slice());
-                    (0..D).for_each(|i| force[i] += m * (after[i] - before[i]) / grid.dt);
-                }
-            }
-        }
-        for (k, &node) in self.nodes.iter().enumerate() {
-            for f in 0..fields.count {
-                let (at, slot) = (k * fields.count + f, fields.slot(node, f));
-                let r = record(slot);
-                let m = r[NodeRecord::<D>::MASS];
-                if m <= grid.m_min {
-                    continue;
-                }
-                let v = &mut velocity[slot * D..(slot + 1) * D];
-                if !self.touched[at] && grid.damping != 0.0 {
-                    v.copy_from_slice(&self.damped[at * D..(at + 1) * D]);
-                }
-                for i in 0..D {
-                    acceleration[slot * D + i] = (v[i] - r[NodeRecord::<D>::MOMENTUM + i] / m) / grid.dt;
-                }
-            }
-        }
+        self.forces = forces;
     }
 
-    /// A nodal velocity field without forces (MUSL's re-mapped one) made admissible at
-    /// every node and field with mass on a plane.
+    /// A nodal velocity field without forces (MUSL's re-mapped one, USF's carried one) made
+    /// admissible at every node and field with mass on a plane.
     pub(crate) fn project(
         &self,
         gathered: &[f64],
@@ -175,17 +168,52 @@ impl<const D: usize> PlaneContacts<D> {
         m_min: f64,
         velocity: &mut [f64],
     ) {
-        for plane in &self.planes {
-            for (node, f) in plane.slots.iter().flat_map(|&k| std::iter::repeat(self.nodes[k]).zip(0..fields.count)) {
-                let slot = fields.slot(node, f);
-                if gathered[slot * fields.width + NodeRecord::<D>::MASS] <= m_min {
-                    continue;
-                }
-                let v = &mut velocity[slot * D..(slot + 1) * D];
-                let after = plane.admissible(SVector::from_column_slice(v), &constrained[node * D..(node + 1) * D]);
-                v.copy_from_slice(after.as_slice());
+        for (k, node, _, slot) in self.massive(gathered, fields, m_min) {
+            let v = &mut velocity[slot * D..(slot + 1) * D];
+            let after = self.admissible_at(k, SVector::from_column_slice(v), &constrained[node * D..][..D], |_, _| ());
+            v.copy_from_slice(after.as_slice());
+        }
+    }
+
+    /// (k, node, field, slot) of every field with mass above `m_min` at the k-th node on a
+    /// plane.
+    fn massive<'a>(
+        &'a self,
+        gathered: &'a [f64],
+        fields: Fields,
+        m_min: f64,
+    ) -> impl Iterator<Item = (usize, usize, usize, usize)> + 'a {
+        let with =
+            move |(k, &node): (usize, &usize)| (0..fields.count).map(move |f| (k, node, f, fields.slot(node, f)));
+        (self.nodes.iter().enumerate().flat_map(with))
+            .filter(move |&(.., slot)| gathered[slot * fields.width + NodeRecord::<D>::MASS] > m_min)
+    }
+
+    /// The velocity the planes on the k-th node leave of `v`, each in turn, with each
+    /// plane's change of it passed to `change`. Where what is left still crosses one of
+    /// them (a corner: the slope and the wall a landslide runs into), the node is stopped,
+    /// the last change put to the first plane it crosses, as a node two constraints hold
+    /// is held in every direction in the implicit analyses.
+    fn admissible_at(
+        &self,
+        k: usize,
+        mut v: SVector<f64, D>,
+        constrained: &[bool],
+        mut change: impl FnMut(usize, SVector<f64, D>),
+    ) -> SVector<f64, D> {
+        let on = &self.acting[self.first[k]..self.first[k + 1]];
+        for &j in on {
+            let after = self.planes[j].admissible(v, constrained);
+            if after != v {
+                change(j, after - v);
+                v = after;
             }
         }
+        if let Some(&j) = on.iter().find(|&&j| on.len() > 1 && self.planes[j].crosses(&v)) {
+            change(j, -v);
+            v = SVector::zeros();
+        }
+        v
     }
 
     pub(crate) fn is_empty(&self) -> bool {
@@ -214,6 +242,12 @@ impl<const D: usize> PlaneContact<D> {
         }
         after
     }
+
+    /// Whether `v` moves into the plane (or off an inclined roller) by more than round-off.
+    fn crosses(&self, v: &SVector<f64, D>) -> bool {
+        let (vn, tolerance) = (v.dot(&self.normal), 1e-12 * v.norm());
+        vn < -tolerance || (self.bilateral && vn > tolerance)
+    }
 }
 
 #[cfg(test)]
@@ -222,7 +256,7 @@ mod tests {
     use nalgebra::Vector2;
 
     fn plane(normal: Vector2<f64>, friction: f64, bilateral: bool) -> PlaneContact<2> {
-        PlaneContact { normal: normal.normalize(), friction, bilateral, slots: Vec::new() }
+        PlaneContact { normal: normal.normalize(), friction, bilateral }
     }
 
     /// Coulomb's law at a node: an approaching velocity loses its normal part and μ times
@@ -244,5 +278,30 @@ mod tests {
         assert_eq!(roller.admissible(Vector2::new(3.0, 1.0), &[true, false]), Vector2::zeros());
         // Held in x on a level base: the slip along x is the constraint's, not friction's.
         assert_eq!(base.admissible(Vector2::new(0.0, -1.0), &[true, false]), Vector2::zeros());
+    }
+
+    /// At a node on a rough 30° slope (normal (sin 30°, cos 30°)) and a smooth wall
+    /// (normal −x) ahead of it, soil sliding down the slope into the wall: the slope leaves
+    /// it moving down the slope, the wall takes its x part, and what is left, straight
+    /// down, would cross the slope, so the node stops, the rest put to the slope; soil
+    /// leaving the wall upwards along the slope is left alone by both.
+    #[test]
+    fn a_node_in_a_corner_is_stopped_when_the_planes_disagree() {
+        let (s, c) = (30f64.to_radians().sin(), 30f64.to_radians().cos());
+        let contacts = PlaneContacts {
+            planes: vec![plane(Vector2::new(s, c), 0.2, false), plane(Vector2::new(-1.0, 0.0), 0.0, false)],
+            nodes: vec![7],
+            first: vec![0, 2],
+            acting: vec![0, 1],
+            forces: Vec::new(),
+        };
+        let v = Vector2::new(1.0, -1.0);
+        let mut changes = [Vector2::zeros(); 2];
+        let after = contacts.admissible_at(0, v, &[false; 2], |j, dv| changes[j] += dv);
+        assert_eq!(after, Vector2::zeros());
+        assert!((changes[0] + changes[1] + v).norm() < 1e-15, "{changes:?}");
+        assert!(changes[1].x < 0.0 && changes[1].y == 0.0, "the smooth wall pushes along −x: {:?}", changes[1]);
+        let up = Vector2::new(-c, s) * 2.0;
+        assert_eq!(contacts.admissible_at(0, up, &[false; 2], |_, _| panic!("no plane acts")), up);
     }
 }

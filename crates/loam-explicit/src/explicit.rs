@@ -37,6 +37,7 @@ pub struct ExplicitStepReport {
     pub dt: f64,
     /// The critical time step of the state the step started from.
     pub critical_dt: f64,
+    /// The grid nodes with mass (a node with several bodies' fields counts once).
     pub active_nodes: usize,
     pub wall_time: Duration,
     /// Where the wall time went, stage by stage.
@@ -121,6 +122,8 @@ struct NodalScratch {
     loads: Vec<f64>,
     /// Per node, 1 where a held body's point reaches it (empty without body constraints).
     held: Vec<f64>,
+    /// Per slot, whether contact between bodies changed its velocity (empty without it).
+    settled: Vec<bool>,
 }
 
 /// Per-point trial state of one step, committed only when the whole step succeeded.
@@ -534,8 +537,10 @@ impl<const D: usize> Explicit<D> {
         let fields = self.fields;
         scatter_grid(&self.model, &self.basis, &self.bands, fields, !usf, &mut self.nodes.gathered);
         let m_min = empty_node_mass::<D>(&self.nodes.gathered, fields);
-        let records = self.nodes.gathered.par_chunks(fields.width);
-        self.active_nodes = records.filter(|g| g[NodeRecord::<D>::MASS] > m_min).count();
+        // Nodes, not slots: a node counts once whichever bodies have mass there.
+        let nodes = self.nodes.gathered.par_chunks(fields.count * fields.width);
+        let massive = |node: &[f64]| node.chunks(fields.width).any(|g| g[NodeRecord::<D>::MASS] > m_min);
+        self.active_nodes = nodes.filter(|node| massive(node)).count();
         self.add_loads(step, m_min)?;
         Ok(m_min)
     }
@@ -549,6 +554,7 @@ impl<const D: usize> Explicit<D> {
             return Ok(());
         }
         // Loads are refused with bodies in contact (`Model::with_body_contact`): one field.
+        debug_assert_eq!(self.fields.count, 1, "loads with several fields per node");
         let stride = self.fields.width;
         self.number_nodes_with_mass(m_min);
         self.loads.connect(&self.model, &self.loaded, step)?;
@@ -618,10 +624,11 @@ impl<const D: usize> Explicit<D> {
             damping: self.settings.damping,
         };
         if let (true, Some(friction)) = (self.fields.in_contact(), self.model.body_contact()) {
-            body_contact::apply::<D>(&grid, friction, &mut nodes.velocity, &mut nodes.acceleration);
+            nodes.settled.resize(nodes.velocity.len() / D, false);
+            body_contact::apply::<D>(&grid, friction, &mut nodes.velocity, &mut nodes.acceleration, &mut nodes.settled);
         }
         if !self.contacts.is_empty() {
-            self.contacts.apply(&grid, &mut nodes.velocity, &mut nodes.acceleration);
+            self.contacts.apply(&grid, &nodes.settled, &mut nodes.velocity, &mut nodes.acceleration);
         }
     }
 

@@ -441,7 +441,7 @@ impl<const D: usize> Model<D> {
         }
         if !self.body_constraints.is_empty() {
             return Err(ModelError::BodyContact(
-                "a body constraint would hold every body's field at its nodes; with contact, hold bodies by grid planes (not built yet)".into(),
+                "a body constraint would hold every body's field at its nodes, which contact does not support yet; hold the material with grid-plane constraints or frictional planes".into(),
             ));
         }
         self.body_contact = Some(friction);

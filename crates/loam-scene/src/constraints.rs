@@ -65,9 +65,14 @@ impl LoadedScene {
             _ => self.error(&[Seg::Key("frictional_planes")], e.to_string()),
         })?;
         match &self.scene.body_contact {
-            Some(contact) => model
-                .with_body_contact(contact.friction)
-                .map_err(|e| self.error(&[Seg::Key("body_contact"), Seg::Key("friction")], e.to_string())),
+            Some(contact) => {
+                // A bad coefficient is the friction's fault; loads or body constraints beside
+                // contact are the key's.
+                let valid = contact.friction.is_finite() && contact.friction >= 0.0;
+                let at: &[Seg] =
+                    if valid { &[Seg::Key("body_contact")] } else { &[Seg::Key("body_contact"), Seg::Key("friction")] };
+                model.with_body_contact(contact.friction).map_err(|e| self.error(at, e.to_string()))
+            }
             None => Ok(model),
         }
     }

@@ -518,6 +518,7 @@ fn cases() -> Vec<(&'static str, usize, String)> {
         ("runout body contact", 2, edit(RUNOUT, &[("analysis:", "body_contact: Some((friction: 0.3)),\n    analysis:"), ("Cfl(0.5)", "Cfl(0.5), scheme: Usl")])),
         ("runout body contact, MUSL", 2, edit(RUNOUT, &[("analysis:", "body_contact: Some((friction: 0.3)),\n    analysis:")])),
         ("runout body contact friction NaN", 2, edit(RUNOUT, &[("analysis:", "body_contact: Some((friction: NaN)),\n    analysis:"), ("Cfl(0.5)", "Cfl(0.5), scheme: Usl")])),
+        ("bar load body contact", 2, edit(BAR, &[("analysis:", "loads: [PointLoad(at: [1.0, 0.5], force: [1.0, 0.0], time: Ramp(duration: 1.0))],\n    body_contact: Some((friction: 0.3)),\n    analysis:")])),
         ("column body contact, quasi-static", 2, edit(COLUMN, &[("analysis:", "body_contact: Some((friction: 0.3)),\n    analysis:")])),
         ("column frictional base, quasi-static", 2, edit(COLUMN, &[("analysis:", "frictional_planes: [(point: [0.0, 0.0], normal: [0.0, 1.0], friction: 0.4)],\n    analysis:")])),
         ("runout polygon of two", 2, edit(RUNOUT, &[("(50.0, 0.0), (50.0, 20.0), (30.0, 20.0), (20.0, 10.0), ", "")])),

@@ -53,11 +53,6 @@ impl SlidingBlock {
         (GRAVITY * (theta.sin() - self.friction * theta.cos())).max(0.0)
     }
 
-    /// The block's weight component normal to the slope, m g cos θ, and its mass.
-    pub fn normal_weight(&self) -> f64 {
-        DENSITY * LENGTH * HEIGHT * GRAVITY * self.slope_deg.to_radians().cos()
-    }
-
     /// The unit vector down the slope.
     pub fn downhill(&self) -> Vector2<f64> {
         let theta = self.slope_deg.to_radians();
@@ -149,6 +144,29 @@ impl SlidingBlock {
             .expect("valid V9 model");
         model.with_frictional_planes(vec![plane.expect("valid plane")]).expect("the plane holds nodes")
     }
+}
+
+/// Whether point `p` of a V9 model is the block's: every point on a plane, body 1's on the
+/// slab.
+pub fn in_block<const D: usize>(model: &Model<D>, p: usize) -> bool {
+    model.body_contact().is_none() || model.points().body()[p] == 1
+}
+
+/// The velocity of the block's centre of mass along `downhill`.
+pub fn block_speed<const D: usize>(model: &Model<D>, downhill: &SVector<f64, D>) -> f64 {
+    let pts = model.points();
+    let block = (0..pts.len()).filter(|&p| in_block(model, p));
+    let (momentum, mass) =
+        block.fold((0.0, 0.0), |(q, m), p| (q + pts.velocity()[p].dot(downhill) * pts.mass()[p], m + pts.mass()[p]));
+    momentum / mass
+}
+
+/// The mean displacement of the block's points along `downhill`.
+pub fn block_displacement<const D: usize>(model: &Model<D>, downhill: &SVector<f64, D>) -> f64 {
+    let pts = model.points();
+    let block: Vec<usize> = (0..pts.len()).filter(|&p| in_block(model, p)).collect();
+    let moved: f64 = block.iter().map(|&p| (pts.position()[p] - pts.position0()[p]).dot(downhill)).sum();
+    moved / block.len() as f64
 }
 
 /// The least-squares slope of `values` against `times`: the mean acceleration of a sampled
