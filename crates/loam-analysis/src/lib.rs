@@ -91,8 +91,9 @@ pub struct Progress {
     pub active_nodes: usize,
     pub dofs: usize,
     /// The force of each support on the material, in the order: grid-plane constraints,
-    /// inclined rollers, body constraints, frictional planes. Implicit analyses give the
-    /// first three; explicit ones the rollers' and frictional planes' (NaN for the rest).
+    /// inclined rollers, body constraints, frictional planes, rigid bodies. Implicit
+    /// analyses give the first three; explicit ones the rollers', frictional planes' and
+    /// rigid bodies' (NaN for the rest).
     pub reactions: Vec<[f64; 3]>,
     pub wall_time: Duration,
 }
@@ -327,7 +328,7 @@ impl<const D: usize> Analysis<D> {
                     final_residual: f64::NAN,
                     active_nodes: r.active_nodes,
                     dofs: r.active_nodes * D,
-                    reactions: explicit_reactions(a.model(), &r.plane_forces),
+                    reactions: explicit_reactions(a.model(), &r.plane_forces, &r.rigid_forces),
                     wall_time: r.wall_time,
                 }
             }
@@ -336,13 +337,19 @@ impl<const D: usize> Analysis<D> {
 }
 
 /// An explicit step's supports' forces in the order of [`Progress::reactions`]: the
-/// rollers' and frictional planes' from `plane_forces` (rollers first), NaN for the rest.
-fn explicit_reactions<const D: usize>(model: &Model<D>, plane_forces: &[[f64; 3]]) -> Vec<[f64; 3]> {
+/// rollers' and frictional planes' from `plane_forces` (rollers first), the rigid bodies'
+/// from `rigid_forces`, NaN for the rest.
+fn explicit_reactions<const D: usize>(
+    model: &Model<D>,
+    plane_forces: &[[f64; 3]],
+    rigid_forces: &[[f64; 3]],
+) -> Vec<[f64; 3]> {
     let unknown = |n: usize| std::iter::repeat_n([f64::NAN; 3], n);
     let rollers = model.inclined_rollers().len();
     (unknown(model.constraints().len()).chain(plane_forces[..rollers].iter().copied()))
         .chain(unknown(model.body_constraints().len()))
         .chain(plane_forces[rollers..].iter().copied())
+        .chain(rigid_forces.iter().copied())
         .collect()
 }
 

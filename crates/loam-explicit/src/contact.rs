@@ -176,7 +176,7 @@ impl<const D: usize> PlaneContacts<D> {
     }
 
     /// (k, node, field, slot) of every field with mass above `m_min` at the k-th node on a
-    /// plane.
+    /// plane, but a rigid body's (its velocity is prescribed).
     fn massive<'a>(
         &'a self,
         gathered: &'a [f64],
@@ -185,8 +185,9 @@ impl<const D: usize> PlaneContacts<D> {
     ) -> impl Iterator<Item = (usize, usize, usize, usize)> + 'a {
         let with =
             move |(k, &node): (usize, &usize)| (0..fields.count).map(move |f| (k, node, f, fields.slot(node, f)));
-        (self.nodes.iter().enumerate().flat_map(with))
-            .filter(move |&(.., slot)| gathered[slot * fields.width + NodeRecord::<D>::MASS] > m_min)
+        (self.nodes.iter().enumerate().flat_map(with)).filter(move |&(_, _, f, slot)| {
+            gathered[slot * fields.width + NodeRecord::<D>::MASS] > m_min && !fields.is_rigid(f)
+        })
     }
 
     /// The velocity the planes on the k-th node leave of `v`, each in turn, with each

@@ -38,7 +38,7 @@ pub enum ExplicitError {
     #[error(transparent)]
     Unaccepted(#[from] loam_model::Unaccepted),
     #[error(
-        "the model's bodies are in contact (body_contact), which needs scheme: Usl, not {0:?}: \
+        "the model's bodies are in contact (body_contact or rigid_bodies), which needs scheme: Usl, not {0:?}: \
          the stress must come from the contact-corrected grid velocities that move the points \
          (a re-mapped or start-of-step field velocity does not carry the contact, docs/theory.md §10)"
     )]

@@ -1,8 +1,8 @@
 //! The explicit analysis: one time step as described in the crate docs.
 
-use crate::body_contact;
+use crate::body_contact::{self, BodyContact, Settled};
 use crate::contact::{GridUpdate, PlaneContacts};
-use crate::fields::Fields;
+use crate::fields::{rigid_motions, Fields, RigidMotion};
 use crate::{ExplicitError, ExplicitSettings, TimeStep, UpdateScheme};
 use loam_grid::{ActiveNodes, AxisBasis, BasisError, NodeLayout, PointBasisError};
 use loam_kernels::{
@@ -45,6 +45,8 @@ pub struct ExplicitStepReport {
     /// The force each inclined roller, then each frictional plane, exerted on the
     /// material over the step (D components used).
     pub plane_forces: Vec<[f64; 3]>,
+    /// The force each rigid body exerted on the material over the step (D components used).
+    pub rigid_forces: Vec<[f64; 3]>,
 }
 
 /// The wall time of a step's stages (the crate docs' numbering): where to look first when
@@ -122,8 +124,11 @@ struct NodalScratch {
     loads: Vec<f64>,
     /// Per node, 1 where a held body's point reaches it (empty without body constraints).
     held: Vec<f64>,
-    /// Per slot, whether contact between bodies changed its velocity (empty without it).
+    /// Per slot, whether contact between bodies set its velocity (empty without it).
     settled: Vec<bool>,
+    /// Per slot of a rigid body's field, the force it exerted on the material at the node
+    /// (D; empty without contact).
+    reaction: Vec<f64>,
 }
 
 /// Per-point trial state of one step, committed only when the whole step succeeded.
@@ -200,6 +205,9 @@ pub struct Explicit<const D: usize> {
     contacts: PlaneContacts<D>,
     /// The motion fields at each node (one per body in contact), found at every connect.
     fields: Fields,
+    /// Per field, the velocity over the step and the friction of the rigid body it is, if
+    /// any (`fields::rigid_motions`, at every grid update).
+    rigid_motions: Vec<RigidMotion<D>>,
     /// Nodes with mass in the step.
     active_nodes: usize,
     nodes: NodalScratch,
@@ -219,7 +227,8 @@ impl<const D: usize> Explicit<D> {
     pub fn new(model: Model<D>, settings: ExplicitSettings) -> Result<Self, ExplicitError> {
         settings.validate()?;
         model.check_accepted_by(AnalysisKind::Explicit)?;
-        if model.body_contact().is_some() && settings.scheme != UpdateScheme::Usl {
+        let in_contact = model.body_contact().is_some() || !model.rigid_bodies().is_empty();
+        if in_contact && settings.scheme != UpdateScheme::Usl {
             return Err(ExplicitError::ContactScheme(settings.scheme));
         }
         tracing::info!(scheme = ?settings.scheme, flip = settings.flip, time_step = ?settings.time_step,
@@ -242,6 +251,7 @@ impl<const D: usize> Explicit<D> {
             on_planes,
             loaded: ActiveNodes::default(),
             loads: LoadSupports::default(),
+            rigid_motions: Vec::new(),
             contacts,
             fields,
             active_nodes: 0,
@@ -433,7 +443,8 @@ impl<const D: usize> Explicit<D> {
         let (basis, nodes) = (&self.basis, &self.nodes);
         let grid_motion = (&nodes.velocity[..], &nodes.acceleration[..]);
         let step_flip = (dt, self.settings.flip);
-        let moved = grid_to_points(&self.model, basis, self.fields, grid_motion, step_flip, &mut self.points);
+        let fields = (self.fields, &self.rigid_motions[..]);
+        let moved = grid_to_points(&self.model, basis, fields, grid_motion, step_flip, &mut self.points);
         moved.map_err(|e| self.failure(step, e))?;
         self.stop_held_points();
         let to_points = clock.lap();
@@ -455,6 +466,7 @@ impl<const D: usize> Explicit<D> {
             wall_time: start.elapsed(),
             phases,
             plane_forces: self.contacts.forces().to_vec(),
+            rigid_forces: self.rigid_forces(),
         })
     }
 
@@ -623,9 +635,14 @@ impl<const D: usize> Explicit<D> {
             dt,
             damping: self.settings.damping,
         };
-        if let (true, Some(friction)) = (self.fields.in_contact(), self.model.body_contact()) {
+        if self.fields.in_contact() {
+            rigid_motions(&self.model, self.fields, (self.time, dt), &mut self.rigid_motions);
             nodes.settled.resize(nodes.velocity.len() / D, false);
-            body_contact::apply::<D>(&grid, friction, &mut nodes.velocity, &mut nodes.acceleration, &mut nodes.settled);
+            nodes.reaction.resize(nodes.velocity.len(), 0.0);
+            let contact =
+                BodyContact { friction: self.model.body_contact().unwrap_or(0.0), rigid: &self.rigid_motions };
+            let out = Settled { settled: &mut nodes.settled, reaction: &mut nodes.reaction };
+            body_contact::apply::<D>(&grid, &contact, &mut nodes.velocity, &mut nodes.acceleration, out);
         }
         if !self.contacts.is_empty() {
             self.contacts.apply(&grid, &nodes.settled, &mut nodes.velocity, &mut nodes.acceleration);
@@ -657,6 +674,15 @@ impl<const D: usize> Explicit<D> {
             }
         };
         updated.map_err(|e| self.failure(step, e))
+    }
+
+    /// The force each rigid body exerted on the material over the last step.
+    fn rigid_forces(&self) -> Vec<[f64; 3]> {
+        let bodies: Vec<usize> = self.model.rigid_bodies().iter().map(|r| self.fields.of_body(r.body())).collect();
+        if bodies.is_empty() {
+            return Vec::new();
+        }
+        body_contact::rigid_forces::<D>(self.fields, &bodies, &self.nodes.reaction)
     }
 
     /// The error of step `step` for a point that failed it.
@@ -770,7 +796,13 @@ fn critical_step<const D: usize>(model: &Model<D>, p_wave: &[Option<f64>], veloc
     let (pts, h) = (model.points(), model.grid().cell_size().min());
     // max √x = √(max x) exactly (the root is correctly rounded and monotonic): one root for
     // the body instead of one per point and one per node.
-    let c2_max = (0..pts.len()).into_par_iter().map(|p| squared_wave_speed(model, p_wave, p)).reduce(|| 0.0, f64::max);
+    // A rigid body's points carry no waves.
+    let rigid = !model.rigid_bodies().is_empty();
+    let c2 = |p: usize| match rigid && model.rigid_body_of(pts.body()[p]).is_some() {
+        true => 0.0,
+        false => squared_wave_speed(model, p_wave, p),
+    };
+    let c2_max = (0..pts.len()).into_par_iter().map(c2).reduce(|| 0.0, f64::max);
     let v2_max = velocity.par_chunks(D).map(|v| v.iter().map(|c| c * c).sum::<f64>()).reduce(|| 0.0, f64::max);
     h / (c2_max.sqrt() + v2_max.sqrt())
 }
@@ -1012,17 +1044,18 @@ fn nodal_update<const D: usize>(
     });
 }
 
-/// Grid → points into the scratch: FLIP/PIC velocity and the new position. Fails for a
+/// Grid → points into the scratch: FLIP/PIC velocity and the new position; a rigid body's
+/// points move at its velocity over the step (`fields.1`, per field). Fails for a
 /// non-finite result or a point leaving the grid (lowest point index first).
 fn grid_to_points<const D: usize>(
     model: &Model<D>,
     basis: &AxisBasis<D>,
-    fields: Fields,
+    fields: (Fields, &[RigidMotion<D>]),
     (velocity, acceleration): (&[f64], &[f64]),
     (dt, flip): (f64, f64),
     sc: &mut PointScratch<D>,
 ) -> PointResult {
-    if fields.in_contact() {
+    if fields.0.in_contact() {
         grid_to_points_in::<D, true>(model, basis, fields, velocity, acceleration, dt, flip, sc)
     } else {
         grid_to_points_in::<D, false>(model, basis, fields, velocity, acceleration, dt, flip, sc)
@@ -1034,7 +1067,7 @@ fn grid_to_points<const D: usize>(
 fn grid_to_points_in<const D: usize, const MANY: bool>(
     model: &Model<D>,
     basis: &AxisBasis<D>,
-    fields: Fields,
+    (fields, rigid): (Fields, &[RigidMotion<D>]),
     velocity: &[f64],
     acceleration: &[f64],
     dt: f64,
@@ -1052,6 +1085,12 @@ fn grid_to_points_in<const D: usize, const MANY: bool>(
         .filter_map(|(p, (x, v))| {
             let (mut vi, mut ai) = (SVector::<f64, D>::zeros(), SVector::<f64, D>::zeros());
             let field = if MANY { fields.of_point(model, p) } else { 0 };
+            if MANY && fields.is_rigid(field) {
+                // A rigid body's point keeps its prescribed velocity, whatever the grid's.
+                *v = rigid[field].expect("a rigid field has its motion").0;
+                *x = pts.position()[p] + *v * dt;
+                return (!grid.contains(x)).then_some((p, PointFailure::Outside));
+            }
             basis.for_each_node(p, |node, n, _| {
                 let slot = if MANY { fields.slot(node, field) } else { node };
                 for i in 0..D {
@@ -1192,6 +1231,16 @@ fn point_stress<const D: usize, const AXISYMMETRIC: bool, const MANY: bool>(
     p: usize,
     out: PointOut<'_>,
 ) -> Result<(), String> {
+    let pts = model.points();
+    if MANY && fields.is_rigid(field) {
+        // A rigid body is not strained: its points keep their state.
+        *out.deformation_gradient = pts.deformation_gradient()[p];
+        *out.volume = pts.volume()[p];
+        *out.stress = pts.stress()[p];
+        *out.elastic_strain = pts.elastic_strain()[p];
+        out.history.copy_from_slice(pts.history(p));
+        return Ok(());
+    }
     let mut l = SMatrix::<f64, D, D>::zeros();
     basis.for_each_node(p, |node, _, g| {
         let slot = if MANY { fields.slot(node, field) } else { node };
@@ -1211,7 +1260,6 @@ fn point_stress<const D: usize, const AXISYMMETRIC: bool, const MANY: bool>(
     if !det.is_finite() || det <= 0.0 {
         return Err(format!("det ΔF = {det:e}: the point was inverted or torn apart within one step"));
     }
-    let pts = model.points();
     let committed = Committed::of(pts, p);
     // Borrowed, not moved out of the Result: each move (or `map_err`) copies the update's
     // three tensors (such copies were 3.7 % of the 2D block's step: CHANGELOG.md,

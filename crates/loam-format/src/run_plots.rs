@@ -133,14 +133,15 @@ fn monitors_plot(log: &Table) -> Option<Plot> {
     (!plot.series.is_empty() && !log.rows.is_empty()).then_some(plot)
 }
 
-/// Each inclined roller's and frictional plane's force on the material
-/// (`incline<k>_reaction_<axis>`, `frictional_plane<k>_reaction_<axis>`) against the load
-/// factor or time.
+/// Each inclined roller's, frictional plane's and rigid body's force on the material
+/// (`incline<k>_reaction_<axis>`, `frictional_plane<k>_reaction_<axis>`,
+/// `rigid<k>_reaction_<axis>`) against the load factor or time.
 fn plane_forces_plot(log: &Table) -> Option<Plot> {
     let quasi_static = log.column("time")? == log.column("load_factor")?;
     let x = if quasi_static { "load factor" } else { "time" };
-    let mut plot = Plot::new("Force of the rigid planes on the material", x, "force");
-    let planes = log.header.iter().filter(|h| h.starts_with("incline") || h.starts_with("frictional_plane"));
+    let mut plot = Plot::new("Force of the rigid planes and bodies on the material", x, "force");
+    let rigid = |h: &str| h.starts_with("incline") || h.starts_with("frictional_plane") || h.starts_with("rigid");
+    let planes = log.header.iter().filter(|h| rigid(h) && h.contains("_reaction_"));
     for column in planes {
         let Some((plane, axis)) = column.split_once("_reaction_") else { continue };
         let name = plane.trim_end_matches(|c: char| c.is_ascii_digit());

@@ -13,7 +13,9 @@ impl<const D: usize> Model<D> {
     /// numbers (the box may be unbounded).
     pub fn with_body_constraints(mut self, constraints: Vec<BodyConstraint>) -> Result<Self, ModelError> {
         for (index, c) in constraints.iter().enumerate() {
-            let what = if self.body_contact.is_some() {
+            let what = if !self.rigid_bodies().is_empty() {
+                Some("rigid bodies move with a velocity field of their own, and a body constraint holds every field at its nodes (not built yet)".into())
+            } else if self.body_contact.is_some() {
                 Some("bodies in contact have a velocity field each, and a body constraint holds every field at its nodes (not built yet)".into())
             } else if !self.points.body().contains(&c.body) {
                 Some(format!("body {} has no points", c.body))

@@ -18,6 +18,7 @@ mod loads;
 mod options;
 mod population;
 mod rigid;
+mod rigid_bodies;
 mod water;
 
 pub use constraint::{BodyConstraint, FrictionalPlane, InclinedRoller, PlaneConstraint};
@@ -26,6 +27,7 @@ pub use loads::{Load, LoadKind, LoadLevel, TimeFunction};
 pub use options::{AnalysisKind, ModelOption, Unaccepted};
 pub use population::PointChange;
 pub use rigid::{FreeBody, RigidMode};
+pub use rigid_bodies::{RigidBody, MAX_RIGID_BODY_ID};
 pub use water::{PhreaticLevel, Water};
 
 use loam_constitutive::{ConstitutiveLaw, MaterialState};
@@ -145,6 +147,8 @@ pub enum ModelError {
     InclinedRoller(String),
     #[error("body contact: {0}")]
     BodyContact(String),
+    #[error("rigid body {index}: {what}")]
+    RigidBody { index: usize, what: String },
     #[error("frictional plane {index}: {what}")]
     FrictionalPlane { index: usize, what: String },
     #[error("removing points: {0}")]
@@ -185,6 +189,8 @@ pub struct Model<const D: usize> {
     /// Bodies in frictional contact with each other, each moving with its own nodal
     /// velocities (the Coulomb coefficient between them), or bonded where they meet.
     body_contact: Option<f64>,
+    /// Bodies moved as rigid wholes at a prescribed velocity.
+    rigid_bodies: Vec<RigidBody<D>>,
     /// Constraints on the nodes bodies' points reach.
     body_constraints: Vec<BodyConstraint>,
     /// Body force per unit mass at full load.
@@ -247,6 +253,7 @@ impl<const D: usize> Model<D> {
             inclined: Vec::new(),
             frictional: Vec::new(),
             body_contact: None,
+            rigid_bodies: Vec::new(),
             body_constraints: Vec::new(),
             gravity,
             point_forces: Vec::new(),
@@ -352,6 +359,9 @@ impl<const D: usize> Model<D> {
                 return error(
                     "the updated Lagrangian FEM reference takes no loads but gravity yet; use the MPM".into(),
                 );
+            }
+            if !self.rigid_bodies.is_empty() {
+                return error("loads beside rigid bodies are not supported yet (their nodal forces belong to no body's field); gravity and initial velocities are".into());
             }
             if self.body_contact.is_some() {
                 return error("loads on bodies in contact are not supported yet (their nodal forces belong to no body's field); gravity and initial velocities are".into());

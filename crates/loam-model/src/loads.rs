@@ -63,6 +63,22 @@ impl TimeFunction {
             TimeFunction::Table(rows) => piecewise_linear(rows, t).0,
         }
     }
+
+    /// ∫₀ᵗ f(s) ds for t ≥ 0: what a velocity scaled by the function has moved by t.
+    pub fn integral(&self, t: f64) -> f64 {
+        match self {
+            TimeFunction::Constant => t,
+            TimeFunction::Ramp { duration } if t <= *duration => 0.5 * t * t / duration,
+            TimeFunction::Ramp { duration } => t - 0.5 * duration,
+            TimeFunction::Table(rows) => {
+                // The trapezoids of the pieces up to t, with f held before the first time.
+                let mut knots = vec![(0.0, piecewise_linear(rows, 0.0).0)];
+                knots.extend(rows.iter().copied().filter(|&(s, _)| s > 0.0 && s < t));
+                knots.push((t, piecewise_linear(rows, t).0));
+                knots.windows(2).map(|w| 0.5 * (w[0].1 + w[1].1) * (w[1].0 - w[0].0)).sum()
+            }
+        }
+    }
 }
 
 /// The piecewise-linear function through `rows` (abscissae increasing) at `x`, held level
@@ -428,6 +444,15 @@ mod tests {
         assert!(TimeFunction::Ramp { duration: 0.0 }.check().is_err());
         assert_eq!(LoadLevel::Factor(0.3).factor(&TimeFunction::Ramp { duration: 1.0 }), 0.3);
         assert_eq!(LoadLevel::Time(0.5).body_factor(), 1.0);
+        // Integrals: the areas under each, by hand.
+        assert_eq!(TimeFunction::Constant.integral(2.5), 2.5);
+        assert_eq!(TimeFunction::Ramp { duration: 2.0 }.integral(1.0), 0.25);
+        assert_eq!(TimeFunction::Ramp { duration: 2.0 }.integral(3.0), 2.0);
+        assert_eq!(table.integral(0.5), 0.25);
+        assert_eq!(table.integral(2.0), 2.5);
+        assert_eq!(table.integral(4.0), 3.0);
+        let late = TimeFunction::Table(vec![(1.0, 2.0), (2.0, 0.0)]);
+        assert_eq!(late.integral(1.5), 2.0 + 0.75);
     }
 
     /// A uniform pressure p on the top of a box: resultant −p × width, shared equally

@@ -42,6 +42,8 @@ pub enum ModelOption {
     FrictionalPlane { index: usize },
     /// Bodies in contact, a velocity field each.
     BodyContact,
+    /// A body moved as a rigid whole at a prescribed velocity.
+    RigidBody { index: usize },
     /// A constraint on a body that holds its nodes.
     BodyConstraint { index: usize },
     /// A constraint on a body that prescribes a non-zero displacement.
@@ -57,7 +59,7 @@ struct Acceptance {
 }
 
 /// Which analyses accept each option (the module docs).
-const ACCEPTED: [Acceptance; 11] = [
+const ACCEPTED: [Acceptance; 12] = [
     Acceptance {
         is: |o| matches!(o, ModelOption::BodyFittedMesh),
         by: [true, true, false],
@@ -104,6 +106,11 @@ const ACCEPTED: [Acceptance; 11] = [
         why: "the model's bodies are in contact, a velocity field each; only the explicit analysis has contact between bodies yet",
     },
     Acceptance {
+        is: |o| matches!(o, ModelOption::RigidBody { .. }),
+        by: [false, false, true],
+        why: "meets the material by contact at the grid nodes; only the explicit analysis has contact yet",
+    },
+    Acceptance {
         is: |o| matches!(o, ModelOption::BodyConstraint { .. }),
         by: [true, true, true],
         why: "",
@@ -130,6 +137,7 @@ impl Unaccepted {
             ModelOption::DisplacedConstraint { index } => format!("constraint {index} {}", self.why),
             ModelOption::InclinedRoller { index } => format!("inclined roller {index} {}", self.why),
             ModelOption::FrictionalPlane { index } => format!("frictional plane {index} {}", self.why),
+            ModelOption::RigidBody { index } => format!("rigid body {index} {}", self.why),
             ModelOption::BodyConstraint { index } | ModelOption::DisplacedBodyConstraint { index } => {
                 format!("body constraint {index} {}", self.why)
             }
@@ -162,6 +170,7 @@ impl<const D: usize> Model<D> {
         options.extend((0..self.inclined.len()).map(|index| ModelOption::InclinedRoller { index }));
         options.extend((0..self.frictional.len()).map(|index| ModelOption::FrictionalPlane { index }));
         options.extend(self.body_contact.map(|_| ModelOption::BodyContact));
+        options.extend((0..self.rigid_bodies().len()).map(|index| ModelOption::RigidBody { index }));
         options.extend((self.body_constraints().iter().enumerate()).map(|(index, c)| match c.is_displaced() {
             true => ModelOption::DisplacedBodyConstraint { index },
             false => ModelOption::BodyConstraint { index },

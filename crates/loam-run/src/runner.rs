@@ -592,6 +592,10 @@ impl RunLog {
         for k in 0..model.frictional_planes().len() {
             header.extend(AXES[..D].iter().map(|a| format!("frictional_plane{k}_reaction_{a}")));
         }
+        for k in 0..model.rigid_bodies().len() {
+            header.extend(AXES[..D].iter().map(|a| format!("rigid{k}_displacement_{a}")));
+            header.extend(AXES[..D].iter().map(|a| format!("rigid{k}_reaction_{a}")));
+        }
         for k in 0..model.loads().len() {
             header.extend(AXES[..D].iter().map(|a| format!("load{k}_{a}")));
         }
@@ -635,6 +639,11 @@ impl RunLog {
         Self::held_cells(&mut cells, &self.bodies, r);
         let frictional = planes + rollers + model.body_constraints().len();
         (frictional..frictional + model.frictional_planes().len()).for_each(|k| cells.extend(reaction(k)));
+        let first_rigid = frictional + model.frictional_planes().len();
+        for (k, rigid) in model.rigid_bodies().iter().enumerate() {
+            cells.extend(rigid.displacement(r.time).iter().map(|&u| CsvCell::Float(u)));
+            cells.extend(reaction(first_rigid + k));
+        }
         for (k, load) in model.loads().iter().enumerate() {
             cells.extend(load.resultant(model.load_scale(k, r.level)).iter().map(|&f| CsvCell::Float(f)));
         }

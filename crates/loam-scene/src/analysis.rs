@@ -224,6 +224,7 @@ impl LoadedScene {
             ModelOption::InclinedRoller { index } => vec![Seg::Key("inclined_rollers"), Seg::Index(index)],
             ModelOption::FrictionalPlane { index } => vec![Seg::Key("frictional_planes"), Seg::Index(index)],
             ModelOption::BodyContact => vec![Seg::Key("body_contact")],
+            ModelOption::RigidBody { index } => vec![Seg::Key("rigid_bodies"), Seg::Index(index)],
             ModelOption::BodyConstraint { index } | ModelOption::DisplacedBodyConstraint { index } => {
                 vec![Seg::Key("body_constraints"), Seg::Index(index)]
             }

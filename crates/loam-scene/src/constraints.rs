@@ -5,7 +5,7 @@
 use super::locate::Seg;
 use super::{AnalysisSpec, Axis, BodyConstraintSpec, ConstraintSpec, LoadedScene, RegionSpec, SceneError};
 use loam_grid::Grid;
-use loam_model::{BodyConstraint, FrictionalPlane, InclinedRoller, Model, ModelError, PlaneConstraint};
+use loam_model::{BodyConstraint, FrictionalPlane, InclinedRoller, Model, ModelError, PlaneConstraint, RigidBody};
 use nalgebra::SVector;
 
 impl LoadedScene {
@@ -46,8 +46,8 @@ impl LoadedScene {
             .collect()
     }
 
-    /// The model with the frictional planes, each checked at its place in the file, and
-    /// the contact between bodies.
+    /// The model with the frictional planes, each checked at its place in the file, the
+    /// contact between bodies and the rigid bodies.
     pub(super) fn with_frictional_planes<const D: usize>(&self, model: Model<D>) -> Result<Model<D>, SceneError> {
         let key = |k| [Seg::Key("frictional_planes"), Seg::Index(k)];
         let planes = (self.scene.frictional_planes.iter().enumerate())
@@ -71,9 +71,10 @@ impl LoadedScene {
                 let valid = contact.friction.is_finite() && contact.friction >= 0.0;
                 let at: &[Seg] =
                     if valid { &[Seg::Key("body_contact")] } else { &[Seg::Key("body_contact"), Seg::Key("friction")] };
-                model.with_body_contact(contact.friction).map_err(|e| self.error(at, e.to_string()))
+                let model = model.with_body_contact(contact.friction).map_err(|e| self.error(at, e.to_string()))?;
+                self.with_rigid_bodies(model)
             }
-            None => Ok(model),
+            None => self.with_rigid_bodies(model),
         }
     }
 
@@ -90,13 +91,8 @@ impl LoadedScene {
                 (body, within)
             }
         };
-        let bodies = &self.scene.bodies;
-        let Some(body) = bodies.iter().position(|b| !name.is_empty() && b.name == *name) else {
-            let names: Vec<&str> = bodies.iter().map(|b| b.name.as_str()).filter(|n| !n.is_empty()).collect();
-            return Err(self.error(&[Seg::Key("body_constraints"), Seg::Index(k), Seg::Key("body")], format!(
-                "body constraint {k} names body \"{name}\", but no body is called that; named bodies: {names:?} (name one with name: \"{name}\")"
-            )));
-        };
+        let at = [Seg::Key("body_constraints"), Seg::Index(k), Seg::Key("body")];
+        let body = self.body_named(name, &at, &format!("body constraint {k}"))?;
         let constraint = match c {
             BodyConstraintSpec::Fixed { .. } => BodyConstraint::new(body as u32, [true; 3]),
             BodyConstraintSpec::Displacement { displacement, .. } => {
@@ -111,6 +107,39 @@ impl LoadedScene {
                 Ok(constraint.within(min, max))
             }
         }
+    }
+
+    /// The index of the body called `name`, or an error at `at` saying what `who` named.
+    fn body_named(&self, name: &str, at: &[Seg], who: &str) -> Result<usize, SceneError> {
+        let bodies = &self.scene.bodies;
+        bodies.iter().position(|b| !name.is_empty() && b.name == name).ok_or_else(|| {
+            let names: Vec<&str> = bodies.iter().map(|b| b.name.as_str()).filter(|n| !n.is_empty()).collect();
+            self.error(at, format!(
+                "{who} names body \"{name}\", but no body is called that; named bodies: {names:?} (name one with name: \"{name}\")"
+            ))
+        })
+    }
+
+    /// The model with the rigid bodies, each checked at its place in the file.
+    fn with_rigid_bodies<const D: usize>(&self, model: Model<D>) -> Result<Model<D>, SceneError> {
+        let rigid = (self.scene.rigid_bodies.iter().enumerate())
+            .map(|(k, r)| {
+                let at = |field| [Seg::Key("rigid_bodies"), Seg::Index(k), Seg::Key(field)];
+                let body = self.body_named(&r.body, &at("body"), &format!("rigid body {k}"))?;
+                let velocity = self.vector(&r.velocity, &at("velocity"), "a rigid body's velocity")?;
+                let field = if r.friction.is_finite() && r.friction >= 0.0 { "velocity" } else { "friction" };
+                let time = self.time_function_at(&at("time"), &format!("rigid body {k}"), &r.time)?;
+                let rigid = RigidBody::new(body as u32, velocity, r.friction)
+                    .map_err(|e| self.error(&at(field), format!("rigid body {k}: {e}")))?;
+                Ok(rigid.in_time(time).expect("a checked time function"))
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        model.with_rigid_bodies(rigid).map_err(|e| match e {
+            ModelError::RigidBody { index, .. } => {
+                self.error(&[Seg::Key("rigid_bodies"), Seg::Index(index)], e.to_string())
+            }
+            _ => self.error(&[Seg::Key("rigid_bodies")], e.to_string()),
+        })
     }
 
     /// Constraint `i`, on a plane of grid nodes.

@@ -139,17 +139,29 @@ impl LoadedScene {
     /// quasi-static one applies every load with its load factor.
     fn time_function(&self, k: usize, spec: &TimeFunctionSpec) -> Result<TimeFunction, SceneError> {
         let here = [Seg::Key("loads"), Seg::Index(k), Seg::Key("time")];
+        if !matches!(spec, TimeFunctionSpec::Constant)
+            && matches!(self.scene.analysis, AnalysisSpec::QuasiStatic { .. })
+        {
+            return Err(self.error(&here, format!(
+                "load {k} has a time function, but a QuasiStatic analysis applies every load with its load factor (0 to 1 over the load steps); remove `time`"
+            )));
+        }
+        self.time_function_at(&here, &format!("load {k}"), spec)
+    }
+
+    /// The time function `spec` of `who`, checked, an error at `here`.
+    pub(super) fn time_function_at(
+        &self,
+        here: &[Seg],
+        who: &str,
+        spec: &TimeFunctionSpec,
+    ) -> Result<TimeFunction, SceneError> {
         let f = match spec {
             TimeFunctionSpec::Constant => return Ok(TimeFunction::Constant),
             TimeFunctionSpec::Ramp { duration } => TimeFunction::Ramp { duration: *duration },
             TimeFunctionSpec::Table(rows) => TimeFunction::Table(rows.clone()),
         };
-        if matches!(self.scene.analysis, AnalysisSpec::QuasiStatic { .. }) {
-            return Err(self.error(&here, format!(
-                "load {k} has a time function, but a QuasiStatic analysis applies every load with its load factor (0 to 1 over the load steps); remove `time`"
-            )));
-        }
-        f.check().map_err(|e| self.error(&here, format!("load {k}: time function: {e}")))?;
+        f.check().map_err(|e| self.error(here, format!("{who}: time function: {e}")))?;
         Ok(f)
     }
 }

@@ -61,6 +61,10 @@ pub struct Scene {
     /// default `None`: bodies that meet move together).
     #[serde(default)]
     pub body_contact: Option<BodyContactSpec>,
+    /// Named bodies moved as rigid wholes at a prescribed velocity, in frictional contact
+    /// with the material (Explicit; default none).
+    #[serde(default)]
+    pub rigid_bodies: Vec<RigidBodySpec>,
     /// Constraints on named bodies: the nodes each body's points (inside a box, if given)
     /// reach, held or displaced; they follow the body through the grid (implicit
     /// analyses; default none).
@@ -183,6 +187,23 @@ pub struct FrictionalPlaneSpec {
 pub struct BodyContactSpec {
     /// The Coulomb coefficient μ between every two bodies (0: smooth).
     pub friction: f64,
+}
+
+/// A rigid body.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RigidBodySpec {
+    /// The name of the body (in `bodies`) that moves as a rigid whole.
+    pub body: String,
+    /// Its velocity from the start; D components.
+    pub velocity: Vec<f64>,
+    /// The Coulomb coefficient μ against the material (default 0: smooth).
+    #[serde(default)]
+    pub friction: f64,
+    /// The factor of the velocity against time (default `Constant`: moved from the start);
+    /// e.g. `Table([(0.0, 0.0), (1.0, 0.0), (1.1, 1.0)])` holds it for 1 s, then moves it.
+    #[serde(default)]
+    pub time: TimeFunctionSpec,
 }
 
 /// A monitoring point.

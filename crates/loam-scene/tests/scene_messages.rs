@@ -12,6 +12,7 @@ const COLUMN_FEM: &str = include_str!("../../../examples/column_fem.ron");
 const BAR: &str = include_str!("../../../examples/vibrating_bar.ron");
 const RUNOUT: &str = include_str!("../../../examples/slope_runout_explicit.ron");
 const FOOTING: &str = include_str!("../../../examples/footing_von_mises.ron");
+const RIGID: &str = include_str!("../../../examples/footing_rigid_explicit.ron");
 
 /// A small 3D scene: a box of soil on a fixed base.
 const CUBE: &str = r#"Scene(
@@ -520,6 +521,17 @@ fn cases() -> Vec<(&'static str, usize, String)> {
         ("runout body contact friction NaN", 2, edit(RUNOUT, &[("analysis:", "body_contact: Some((friction: NaN)),\n    analysis:"), ("Cfl(0.5)", "Cfl(0.5), scheme: Usl")])),
         ("bar load body contact", 2, edit(BAR, &[("analysis:", "loads: [PointLoad(at: [1.0, 0.5], force: [1.0, 0.0], time: Ramp(duration: 1.0))],\n    body_contact: Some((friction: 0.3)),\n    analysis:")])),
         ("column body contact, quasi-static", 2, edit(COLUMN, &[("analysis:", "body_contact: Some((friction: 0.3)),\n    analysis:")])),
+        ("rigid footing", 2, edit(RIGID, &[])),
+        ("rigid footing unknown body", 2, edit(RIGID, &[("(body: \"footing\",", "(body: \"pile\",")])),
+        ("rigid footing velocity of one", 2, edit(RIGID, &[("velocity: [0.0, -0.1]", "velocity: [-0.1]")])),
+        ("rigid footing velocity NaN", 2, edit(RIGID, &[("velocity: [0.0, -0.1]", "velocity: [0.0, NaN]")])),
+        ("rigid footing friction negative", 2, edit(RIGID, &[("friction: 0.5", "friction: -0.5")])),
+        ("rigid footing, MUSL", 2, edit(RIGID, &[("scheme: Usl, ", "")])),
+        ("rigid footing, quasi-static", 2, edit(RIGID, &[("Explicit(duration: 10.0, time_step: Cfl(0.5), scheme: Usl, damping: 0.1)", "QuasiStatic(load_steps: 10)")])),
+        ("rigid footing time table decreasing", 2, edit(RIGID, &[("friction: 0.5)", "friction: 0.5, time: Table([(0.0, 0.0), (0.0, 1.0)]))")])),
+        ("rigid footing twice", 2, edit(RIGID, &[("friction: 0.5),", "friction: 0.5), (body: \"footing\", velocity: [0.0, 0.0]),")])),
+        ("rigid footing and clay", 2, edit(RIGID, &[("friction: 0.5),", "friction: 0.5), (body: \"clay\", velocity: [0.0, 0.0]),")])),
+        ("rigid footing with a load", 2, edit(RIGID, &[("rigid_bodies:", "loads: [PointLoad(at: [1.0, 3.0], force: [0.0, -1.0], time: Ramp(duration: 1.0))],\n    rigid_bodies:")])),
         ("column frictional base, quasi-static", 2, edit(COLUMN, &[("analysis:", "frictional_planes: [(point: [0.0, 0.0], normal: [0.0, 1.0], friction: 0.4)],\n    analysis:")])),
         ("runout polygon of two", 2, edit(RUNOUT, &[("(50.0, 0.0), (50.0, 20.0), (30.0, 20.0), (20.0, 10.0), ", "")])),
         ("footing", 2, edit(FOOTING, &[])),

@@ -41,6 +41,7 @@ pub mod hard_cases;
 pub mod sliding;
 pub mod slope;
 pub mod sphere;
+pub mod wall;
 pub mod water;
 
 pub use bar::{BarErrors, VibratingBar};

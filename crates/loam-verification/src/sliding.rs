@@ -18,7 +18,7 @@
 use crate::Bound;
 use loam_constitutive::{ConstitutiveLaw, Elastic};
 use loam_grid::{BasisKind, Grid};
-use loam_model::{FrictionalPlane, Kinematics, Model};
+use loam_model::{FrictionalPlane, Kinematics, Model, RigidBody};
 use loam_points::{PointStore, Shape};
 use nalgebra::{SVector, Vector2, Vector3};
 use std::sync::Arc;
@@ -51,6 +51,13 @@ impl SlidingBlock {
     pub fn acceleration(&self) -> f64 {
         let theta = self.slope_deg.to_radians();
         (GRAVITY * (theta.sin() - self.friction * theta.cos())).max(0.0)
+    }
+
+    /// The block's acceleration down the slope while a faster belt under it drags it,
+    /// g (sin θ + μ cos θ).
+    pub fn dragged_acceleration(&self) -> f64 {
+        let theta = self.slope_deg.to_radians();
+        GRAVITY * (theta.sin() + self.friction * theta.cos())
     }
 
     /// The unit vector down the slope.
@@ -130,6 +137,31 @@ impl SlidingBlock {
         model.with_body_contact(self.friction).expect("valid friction")
     }
 
+    /// The 2D block on a rigid slab 0.3 m thick (body 0, `Model::with_rigid_bodies`) moved
+    /// at `belt` m/s along x, friction μ against it, gravity turned by θ, for a run of
+    /// `duration` seconds: the slab is long enough for the block to slide ½ g t² along it
+    /// and the grid reaches beyond it as far as the slab travels.
+    pub fn model_on_belt(&self, belt: f64, duration: f64) -> Model<2> {
+        let theta = self.slope_deg.to_radians();
+        let slab_length = LENGTH + 2.0 * CELL + 0.5 * GRAVITY * duration * duration;
+        let cells = [((slab_length + belt.abs() * duration) / CELL).ceil() as usize + 2, 11];
+        let grid = Grid::new(Vector2::zeros(), Vector2::repeat(CELL), cells).expect("valid V9 grid");
+        let mut points = PointStore::new();
+        let slab = Shape::Box { min: Vector2::zeros(), max: Vector2::new(slab_length, SLAB) };
+        points.fill(&grid, &slab, 2, DENSITY, 0).expect("the slab fits the grid");
+        let first = points.len();
+        let block = Shape::Box { min: Vector2::new(CELL, SLAB), max: Vector2::new(CELL + LENGTH, SLAB + HEIGHT) };
+        points.fill(&grid, &block, 2, DENSITY, 0).expect("the block fits the grid");
+        points.assign_body(first..points.len(), 1);
+        points.velocity_mut()[..first].iter_mut().for_each(|v| *v = Vector2::new(belt, 0.0));
+        let law: Arc<dyn ConstitutiveLaw> = Arc::new(Elastic::new(YOUNG, POISSON).expect("valid elasticity"));
+        let gravity = Vector2::new(theta.sin(), -theta.cos()) * GRAVITY;
+        let model = Model::new(grid, BasisKind::Gimp, Kinematics::FiniteStrain, points, vec![law], vec![], gravity)
+            .expect("valid V9 model");
+        let rigid = RigidBody::new(0, Vector2::new(belt, 0.0), self.friction).expect("valid rigid body");
+        model.with_rigid_bodies(vec![rigid]).expect("the slab is a body")
+    }
+
     fn on<const D: usize>(
         &self,
         grid: Grid<D>,
@@ -146,10 +178,11 @@ impl SlidingBlock {
     }
 }
 
-/// Whether point `p` of a V9 model is the block's: every point on a plane, body 1's on the
-/// slab.
+/// Whether point `p` of a V9 model is the block's: every point on a plane, body 1's on a
+/// slab or a belt.
 pub fn in_block<const D: usize>(model: &Model<D>, p: usize) -> bool {
-    model.body_contact().is_none() || model.points().body()[p] == 1
+    let alone = model.body_contact().is_none() && model.rigid_bodies().is_empty();
+    alone || model.points().body()[p] == 1
 }
 
 /// The velocity of the block's centre of mass along `downhill`.
