@@ -425,9 +425,6 @@ fn element_test_reaches_the_critical_state() {
     assert!(message(("TriaxialUndrained", "Triaxial")).contains("Unexpected variant named `Triaxial`"));
 }
 
-/// The landslide example, its first 1.2 s: the sand reaches the wall (the wall pushes back
-/// along +x, and never pulls: a frictional plane only resists approach), the slope's force
-/// on the sand points up the slope's normal side, and `plane_forces.svg` is drawn.
 /// The rigid footing example's first second (0.1 m = 0.1 B of penetration): the footing
 /// moves exactly as prescribed, no clay point's centre is more than half a cell (0.05 m)
 /// inside it, and the load on the half footing is above 0.9 of Prandtl's collapse load
@@ -461,6 +458,9 @@ fn the_rigid_footing_is_pushed_into_the_clay() {
     assert!(inside < 0.05, "a clay point {inside} m inside the footing");
 }
 
+/// The landslide example, its first 1.2 s: the sand reaches the wall (the wall pushes back
+/// along +x, and never pulls: a frictional plane only resists approach), the slope's force
+/// on the sand points up the slope's normal side, and `plane_forces.svg` is drawn.
 #[test]
 fn the_landslide_reaches_the_wall() {
     let dir = tempfile::tempdir().unwrap();

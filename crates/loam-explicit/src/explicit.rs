@@ -645,7 +645,9 @@ impl<const D: usize> Explicit<D> {
             body_contact::apply::<D>(&grid, &contact, &mut nodes.velocity, &mut nodes.acceleration, out);
         }
         if !self.contacts.is_empty() {
-            self.contacts.apply(&grid, &nodes.settled, &mut nodes.velocity, &mut nodes.acceleration);
+            // Flags of the step's own layout only: with one field left there are none.
+            let settled = if self.fields.in_contact() { &nodes.settled[..] } else { &[] };
+            self.contacts.apply(&grid, settled, &mut nodes.velocity, &mut nodes.acceleration);
         }
     }
 

@@ -35,7 +35,11 @@ impl Fields {
             (None, 0) => Self { count: 1, width: NodeRecord::<D>::WIDTH, per_body: false, rigid },
             (None, _) => Self { count: 1 + rigid.count_ones() as usize, width, per_body: false, rigid },
             (Some(_), _) => {
+                // A rigid body whose points are all gone keeps its field, so that every
+                // rigid body's field index stays in range.
+                let rigid_ids = model.rigid_bodies().iter().map(|r| r.body() as usize + 1).max().unwrap_or(1);
                 let bodies = model.points().body().par_iter().copied().max().map_or(1, |b| b as usize + 1);
+                let bodies = bodies.max(rigid_ids);
                 Self { count: bodies, width, per_body: true, rigid }
             }
         }

@@ -5,8 +5,7 @@
 use crate::{Model, ModelError, TimeFunction};
 use nalgebra::SVector;
 
-/// The most bodies a model with rigid bodies may number: each body's field is found from a
-/// 64-bit mask of the rigid ones.
+/// The largest body id a rigid body may have: the rigid bodies are a 64-bit mask.
 pub const MAX_RIGID_BODY_ID: u32 = 63;
 
 /// A body moved as a rigid whole at a prescribed velocity v f(t), with Coulomb friction μ
