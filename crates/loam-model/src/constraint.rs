@@ -170,9 +170,7 @@ impl<const D: usize> FrictionalPlane<D> {
     /// `friction` (0: smooth); refused unless the plane is finite with a non-zero normal and
     /// the coefficient finite and not negative.
     pub fn new(point: SVector<f64, D>, normal: SVector<f64, D>, friction: f64) -> Result<Self, String> {
-        if !(friction.is_finite() && friction >= 0.0) {
-            return Err(format!("a friction coefficient must be finite and ≥ 0, not {friction}"));
-        }
+        check_friction(friction)?;
         Ok(Self { plane: InclinedRoller::new(point, normal)?, friction })
     }
 
@@ -184,6 +182,14 @@ impl<const D: usize> FrictionalPlane<D> {
     /// The Coulomb coefficient μ.
     pub fn friction(&self) -> f64 {
         self.friction
+    }
+}
+
+/// A Coulomb coefficient is finite and not negative (a plane's, a rigid body's).
+pub(crate) fn check_friction(friction: f64) -> Result<(), String> {
+    match friction.is_finite() && friction >= 0.0 {
+        true => Ok(()),
+        false => Err(format!("a friction coefficient must be finite and ≥ 0, not {friction}")),
     }
 }
 

@@ -2,6 +2,7 @@
 //! like the soil but moved at a prescribed velocity, stress-free, meeting the other bodies
 //! by frictional contact at the grid nodes (`Model::with_rigid_bodies`).
 
+use crate::constraint::check_friction;
 use crate::{Model, ModelError, TimeFunction};
 use nalgebra::SVector;
 
@@ -26,9 +27,7 @@ impl<const D: usize> RigidBody<D> {
         if !velocity.iter().all(|v| v.is_finite()) {
             return Err(format!("the velocity {:?} must be finite", velocity.as_slice()));
         }
-        if !(friction.is_finite() && friction >= 0.0) {
-            return Err(format!("a friction coefficient must be finite and ≥ 0, not {friction}"));
-        }
+        check_friction(friction)?;
         Ok(Self { body, velocity, time: TimeFunction::Constant, friction })
     }
 
