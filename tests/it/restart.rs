@@ -3,7 +3,8 @@
 //! `points_final.csv` bit for bit, and the same Newton iterations. The cases are the
 //! state the SIGKILL tests of the `loam` program (crates/loam-cli/tests/restart.rs) do not
 //! reach: a body-fitted mesh whose nodes move, loads whose vertices follow the surface, a
-//! dead load, two bodies in explicit FLIP, Cam clay from a geostatic start, and 3D.
+//! dead load, two bodies in explicit FLIP, a rigid body on a time table, Cam clay from a
+//! geostatic start, and 3D.
 
 use loam::format::checkpoint::Checkpoint;
 use loam::run::{resume_scene, run_scene_with, CheckpointEvery, RunOptions, CHECKPOINT_FILE};
@@ -21,7 +22,8 @@ pub(crate) fn scene(name: &str, edits: &[(&str, &str)]) -> LoadedScene {
     LoadedScene::parse(&path, text).unwrap()
 }
 
-/// Run `scene` whole, and stopped after `stop` steps and resumed: the same final points.
+/// Run `scene` whole, and stopped after `stop` steps and resumed: the same final points,
+/// and the same monitors and rigid bodies' displacements and forces in `run_log.csv`.
 fn resumed_run_matches(scene: &LoadedScene, stop: usize) -> tempfile::TempDir {
     let (whole, cut) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
     let a = run_scene_with(scene, whole.path(), &RunOptions::default(), &mut |_| {}).unwrap();
@@ -39,13 +41,15 @@ fn resumed_run_matches(scene: &LoadedScene, stop: usize) -> tempfile::TempDir {
     let monitors = |dir: &Path| {
         let log = std::fs::read_to_string(dir.join("run_log.csv")).unwrap();
         let header: Vec<&str> = log.lines().next().unwrap().split(',').collect();
-        let keep: Vec<usize> = (0..header.len()).filter(|&k| header[k].starts_with("monitor_")).collect();
+        let kept = |name: &str| name.starts_with("monitor_") || name.starts_with("rigid");
+        let keep: Vec<usize> = (0..header.len()).filter(|&k| kept(header[k])).collect();
         let rows: Vec<Vec<String>> = (log.lines())
             .map(|l| l.split(',').enumerate().filter(|(k, _)| keep.contains(k)).map(|(_, c)| c.to_string()).collect())
             .collect();
         rows
     };
-    assert_eq!(monitors(whole.path()), monitors(cut.path()), "{}: the monitors differ", scene.path.display());
+    let differ = "the monitors or rigid bodies' columns differ";
+    assert_eq!(monitors(whole.path()), monitors(cut.path()), "{}: {differ}", scene.path.display());
     whole
 }
 
@@ -87,6 +91,19 @@ fn cam_clay_resumes() {
 #[test]
 fn explicit_flip_resumes() {
     resumed_run_matches(&scene("disks.ron", &[("duration: 3.0", "duration: 1.0")]), 17);
+}
+
+/// A rigid wall held by a time table, then moved: stopped inside the table's ramp (step
+/// 1890 ends at t = 0.8063 s, the ramp is 0.8–0.81 s), its displacement is the table's
+/// integral from the saved time, and the fields, the rigid body's among them, are rebuilt
+/// on resume.
+#[test]
+fn a_rigid_body_resumes() {
+    let edits = [("duration: 1.55", "duration: 0.9"), ("vtu_every: 500", "vtu_every: 0")];
+    let whole = resumed_run_matches(&scene("retaining_wall_explicit.ron", &edits), 1890);
+    let log = std::fs::read_to_string(whole.path().join("run_log.csv")).unwrap();
+    let header: Vec<&str> = log.lines().next().unwrap().split(',').collect();
+    assert!(header.contains(&"rigid0_reaction_x"), "{header:?}");
 }
 
 /// 3D: the slope between rough walls at full strength (Mohr–Coulomb history, B-bar), on

@@ -425,9 +425,9 @@ fn element_test_reaches_the_critical_state() {
     assert!(message(("TriaxialUndrained", "Triaxial")).contains("Unexpected variant named `Triaxial`"));
 }
 
-/// The rigid footing example's first second (0.1 m = 0.1 B of penetration): the footing
-/// moves exactly as prescribed, no clay point's centre is more than half a cell (0.05 m)
-/// inside it, and the load on the half footing is above 0.9 of Prandtl's collapse load
+/// The rigid footing example's first second (0.1 m = 0.1 B of penetration): the footing's
+/// points move exactly as prescribed, no clay point's centre is more than half a cell
+/// (0.05 m) inside it, and the load on the half footing is between 0.9 and 1.5 of Prandtl's collapse load
 /// (2 + π) c_u B / 2 = 25.7 kN/m (the exact load for the surface footing; measured 31.6
 /// kN/m at 0.1 m, the coarse mesh, the contact a cell ahead of the points and the locking
 /// of von Mises flow in explicit MPM put it above).
@@ -441,17 +441,32 @@ fn the_rigid_footing_is_pushed_into_the_clay() {
     let (header, rows) = read_csv(&dir.path().join("run_log.csv"));
     let column = |name: &str| header.iter().position(|h| h == name).unwrap();
     let (time, settled, load) = (column("time"), column("rigid0_displacement_y"), column("rigid0_reaction_y"));
-    assert!(rows.iter().all(|r| (r[settled] + 0.1 * r[time]).abs() < 1e-12), "the footing moves at 0.1 m/s");
     let last = rows.last().unwrap();
-    println!("load on the half footing at {} m: {} kN/m", -last[settled], -last[load]);
-    assert!(-last[load] > 0.9 * (2.0 + std::f64::consts::PI) * 10.0 / 2.0, "load {}", -last[load]);
-    let (header, points) = read_csv(&dir.path().join("points_final.csv"));
-    let (x, y, material) = (
-        header.iter().position(|h| h == "x").unwrap(),
-        header.iter().position(|h| h == "y").unwrap(),
-        header.iter().position(|h| h == "material").unwrap(),
+    let prandtl = (2.0 + std::f64::consts::PI) * 10.0 / 2.0;
+    println!(
+        "load on the half footing at {} m: {} kN/m ({} Prandtl)",
+        -last[settled],
+        -last[load],
+        -last[load] / prandtl
     );
-    let base = 3.0 - 0.1 * last[time];
+    // Below: the rigid-plastic collapse load is reached by 0.1 B of settlement, less 10 %
+    // for the discretisation. Above: 1.5 × is no accuracy bound (the example's header
+    // explains why the explicit load exceeds Prandtl's, measured 1.23 ×) but catches a
+    // force counted twice or a footing that drags the whole grid.
+    assert!(-last[load] > 0.9 * prandtl && -last[load] < 1.5 * prandtl, "load {}", -last[load]);
+    let (header, points) = read_csv(&dir.path().join("points_final.csv"));
+    let at = |name: &str| header.iter().position(|h| h == name).unwrap();
+    let (x, y, y0, material) = (at("x"), at("y"), at("y0"), at("material"));
+    // The footing's points moved with it, all by the prescribed 0.1 m/s × t (to the
+    // round-off of a position summed over the steps).
+    let moved = 0.1 * last[time];
+    let footing: Vec<_> = points.iter().filter(|p| p[material] == 1.0).collect();
+    assert!(!footing.is_empty());
+    for p in &footing {
+        assert!((p[y0] - p[y] - moved).abs() < 1e-9, "a footing point moved {} m, not {moved}", p[y0] - p[y]);
+        assert!((p[at("x0")] - p[x]).abs() < 1e-12, "a footing point moved sideways");
+    }
+    let base = 3.0 - moved;
     let inside =
         (points.iter().filter(|p| p[material] == 0.0 && p[x] < 0.45)).map(|p| p[y] - base).fold(f64::MIN, f64::max);
     println!("deepest clay point under the footing: {inside} m above its base");

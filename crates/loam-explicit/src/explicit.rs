@@ -345,7 +345,7 @@ impl<const D: usize> Explicit<D> {
         let mut velocity = vec![0.0; slots * D];
         let m_min = empty_node_mass::<D>(&gathered, fields);
         carried_velocity::<D>(&gathered, fields, &self.constrained, m_min, &mut velocity);
-        Ok(critical_step(model, &self.p_wave, &velocity))
+        Ok(critical_step(model, &self.p_wave, &velocity, self.time))
     }
 
     /// The critical time step of the step being taken, from its scattered momentum: the
@@ -354,7 +354,7 @@ impl<const D: usize> Explicit<D> {
     fn carried_critical_step(&mut self, m_min: f64) -> f64 {
         let nodes = &mut self.nodes;
         carried_velocity::<D>(&nodes.gathered, self.fields, &self.constrained, m_min, &mut nodes.strain_velocity);
-        critical_step(&self.model, &self.p_wave, &nodes.strain_velocity)
+        critical_step(&self.model, &self.p_wave, &nodes.strain_velocity, self.time)
     }
 
     /// The time step of step `step` given the critical one, shortened to land on the end.
@@ -794,19 +794,18 @@ fn carried<const D: usize>(
 /// momentum (more points than nodes), and a held node stops its own part without moving
 /// the point, so a body at rest can carry point velocities that shorten the step and move
 /// nothing.
-fn critical_step<const D: usize>(model: &Model<D>, p_wave: &[Option<f64>], velocity: &[f64]) -> f64 {
+///
+/// A rigid body's speed at time `t` counts too: the grid carries its velocity of the last
+/// step, which a time function may have raised since.
+fn critical_step<const D: usize>(model: &Model<D>, p_wave: &[Option<f64>], velocity: &[f64], t: f64) -> f64 {
     let (pts, h) = (model.points(), model.grid().cell_size().min());
     // max √x = √(max x) exactly (the root is correctly rounded and monotonic): one root for
     // the body instead of one per point and one per node.
-    // A rigid body's points carry no waves.
-    let rigid = !model.rigid_bodies().is_empty();
-    let c2 = |p: usize| match rigid && model.rigid_body_of(pts.body()[p]).is_some() {
-        true => 0.0,
-        false => squared_wave_speed(model, p_wave, p),
-    };
+    let c2 = |p: usize| squared_wave_speed(model, p_wave, p);
     let c2_max = (0..pts.len()).into_par_iter().map(c2).reduce(|| 0.0, f64::max);
     let v2_max = velocity.par_chunks(D).map(|v| v.iter().map(|c| c * c).sum::<f64>()).reduce(|| 0.0, f64::max);
-    h / (c2_max.sqrt() + v2_max.sqrt())
+    let rigid2_max = (model.rigid_bodies().iter()).map(|r| r.velocity_at(t).norm_squared()).fold(0.0, f64::max);
+    h / (c2_max.sqrt() + v2_max.max(rigid2_max).sqrt())
 }
 
 /// The P-wave speed c_p = √(M / ρ_p) of point `p`, ρ_p = m_p / v_p (docs/theory.md §10).
@@ -814,10 +813,14 @@ fn wave_speed<const D: usize>(model: &Model<D>, p_wave: &[Option<f64>], p: usize
     squared_wave_speed(model, p_wave, p).sqrt()
 }
 
-/// c_p² = M / ρ_p of point `p`, M its material's where constant (`p_wave`).
+/// c_p² = M / ρ_p of point `p`, M its material's where constant (`p_wave`); zero for a
+/// rigid body's point, which carries no waves.
 #[inline]
 fn squared_wave_speed<const D: usize>(model: &Model<D>, p_wave: &[Option<f64>], p: usize) -> f64 {
     let pts = model.points();
+    if !model.rigid_bodies().is_empty() && model.rigid_body_of(pts.body()[p]).is_some() {
+        return 0.0;
+    }
     model.p_wave_modulus(p_wave, p) / (pts.mass()[p] / pts.volume()[p])
 }
 

@@ -11,8 +11,10 @@ impl<const D: usize> Model<D> {
     /// with the elastic strain that carries it (small strain ε^e = C⁻¹σ, finite strain
     /// b^e = exp(2 C⁻¹σ)). Gravity then acts in full from the start
     /// (`gravity_preloaded`). K0 applies to level or layered ground; a slope is brought to
-    /// equilibrium by gravity loading instead. Fails if gravity is not along one axis, a
-    /// law has no elasticity that carries it, or the state lies outside a yield surface.
+    /// equilibrium by gravity loading instead. The points of rigid bodies are left out: they
+    /// carry no stress and weigh on no column (their motion is prescribed). Fails if gravity
+    /// is not along one axis, a law has no elasticity that carries it, or the state lies
+    /// outside a yield surface.
     pub fn geostatic_stress(&mut self, k0: f64) -> Result<(), ModelError> {
         if !(k0.is_finite() && k0 > 0.0) {
             return Err(ModelError::Geostatic(format!("K0 is {k0}; it must be a positive number")));
@@ -33,17 +35,18 @@ impl<const D: usize> Model<D> {
         // Every law's history from the point's initial stress (at F = I the Kirchhoff stress
         // is the Cauchy stress), kept aside until every point's state is admissible.
         let hs = self.points.history_stride();
-        let mut history = vec![0.0; self.points.history_values().len()];
+        let mut history = self.points.history_values().to_vec();
         if hs > 0 {
-            for (p, h) in history.chunks_mut(hs).enumerate() {
+            for (p, h) in history.chunks_mut(hs).enumerate().filter(|&(p, _)| !self.is_rigid_point(p)) {
+                h.iter_mut().for_each(|v| *v = 0.0);
                 self.law(p).init_history(h, &stresses[p]);
             }
         }
         let mut h_out = vec![0.0; hs];
-        let mut strains = Vec::with_capacity(sigma_v.len());
-        for (p, (sigma, &sv)) in stresses.iter().zip(&sigma_v).enumerate() {
+        let mut strains = self.points.elastic_strain().to_vec();
+        for (p, (sigma, &sv)) in stresses.iter().zip(&sigma_v).enumerate().filter(|&(p, _)| !self.is_rigid_point(p)) {
             let h = self.law(p).own_history(&history[p * hs..][..hs]);
-            strains.push(self.carrying_strain(p, sigma, h, (k0, sv), &mut h_out[..h.len()])?);
+            strains[p] = self.carrying_strain(p, sigma, h, (k0, sv), &mut h_out[..h.len()])?;
         }
         let view = self.points.view_mut();
         view.elastic_strain.copy_from_slice(&strains);
@@ -68,7 +71,8 @@ impl<const D: usize> Model<D> {
             ijk[vertical] = 0;
             ijk
         };
-        let mut order: Vec<([usize; D], usize)> = (0..pts.len()).map(|p| (column(p), p)).collect();
+        let mut order: Vec<([usize; D], usize)> =
+            (0..pts.len()).filter(|&p| !self.is_rigid_point(p)).map(|p| (column(p), p)).collect();
         order.sort_by(|(ca, a), (cb, b)| {
             ca.cmp(cb).then((up * pts.position()[*b][vertical]).total_cmp(&(up * pts.position()[*a][vertical])))
         });
@@ -96,6 +100,11 @@ impl<const D: usize> Model<D> {
             }
         }
         sigma_v
+    }
+
+    /// Whether point `p` belongs to a rigid body.
+    fn is_rigid_point(&self, p: usize) -> bool {
+        self.rigid_body_of(self.points.body()[p]).is_some()
     }
 
     /// The weight of point `q` that its column's effective stress carries: m |g|, less the

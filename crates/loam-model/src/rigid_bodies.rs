@@ -48,6 +48,11 @@ impl<const D: usize> RigidBody<D> {
         &self.velocity
     }
 
+    /// Its velocity at time `t`, v f(t).
+    pub fn velocity_at(&self, t: f64) -> SVector<f64, D> {
+        self.velocity * self.time.at(t)
+    }
+
     /// Its mean velocity over [t, t + Δt]: what it moves by over the step, over Δt.
     pub fn step_velocity(&self, t: f64, dt: f64) -> SVector<f64, D> {
         self.velocity * ((self.time.integral(t + dt) - self.time.integral(t)) / dt)
@@ -69,8 +74,9 @@ impl<const D: usize> Model<D> {
     /// prescribed velocity and no stress, and meet the other bodies, each of which moves
     /// with its own velocity field at the nodes where they meet, by frictional contact.
     /// Refused: a body without points, a body named twice or with an id above
-    /// [`MAX_RIGID_BODY_ID`], every body rigid, and loads or body constraints beside them
-    /// (their nodal forces and holds belong to no one body's field yet).
+    /// [`MAX_RIGID_BODY_ID`], every body rigid, loads or body constraints beside them
+    /// (their nodal forces and holds belong to no one body's field yet), and a model
+    /// already in its geostatic stress (which must leave the rigid points out).
     pub fn with_rigid_bodies(mut self, bodies: Vec<RigidBody<D>>) -> Result<Self, ModelError> {
         for (index, b) in bodies.iter().enumerate() {
             let what = if b.body > MAX_RIGID_BODY_ID {
@@ -81,6 +87,8 @@ impl<const D: usize> Model<D> {
                 format!("body {} is rigid twice", b.body)
             } else if !self.loads().is_empty() {
                 "loads beside rigid bodies are not supported yet (their nodal forces belong to no body's field)".into()
+            } else if self.gravity_preloaded() {
+                "the points are already in their initial stress; make the bodies rigid before the geostatic stress, which leaves their points out".into()
             } else if !self.body_constraints().is_empty() {
                 "body constraints beside rigid bodies are not supported yet (they would hold every body's field)".into()
             } else {

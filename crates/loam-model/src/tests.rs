@@ -364,3 +364,40 @@ fn a_body_constraint_holds_the_nodes_its_points_reach() {
         .collect();
     assert_eq!(held_dofs, expected);
 }
+
+/// A rigid footing on level ground is left out of the geostatic stress: its points carry
+/// none and keep their elastic strain, and the ground's stresses are bitwise those of the
+/// ground alone (the footing weighs on no column; its motion is prescribed). Making a
+/// body rigid after the stress is set is refused, as the stress would have counted it.
+#[test]
+fn the_geostatic_stress_leaves_rigid_bodies_out() {
+    let ground = || {
+        let mut m = model_of(points(0), vec![]).unwrap();
+        m.gravity = Vector2::new(0.0, -10.0);
+        m
+    };
+    let mut alone = ground();
+    alone.geostatic_stress(0.5).unwrap();
+    let mut pts = points(0);
+    let mut footing = PointStore::new();
+    let shape = Shape::Box { min: Vector2::new(0.0, 2.0), max: Vector2::new(1.0, 3.0) };
+    footing.fill(&grid(), &shape, 2, 7000.0, 0).unwrap();
+    let first = pts.append(&footing).unwrap();
+    pts.assign_body(first..pts.len(), 1);
+    let mut with_footing = model_of(pts, vec![]).unwrap();
+    with_footing.gravity = Vector2::new(0.0, -10.0);
+    let rigid = || vec![RigidBody::new(1, Vector2::new(0.0, -0.1), 0.0).unwrap()];
+    let mut with_footing = with_footing.with_rigid_bodies(rigid()).unwrap();
+    let before = with_footing.points().elastic_strain().to_vec();
+    with_footing.geostatic_stress(0.5).unwrap();
+    let n = alone.points().len();
+    assert_eq!(&with_footing.points().stress()[..n], alone.points().stress());
+    assert!(with_footing.points().stress()[n..].iter().all(|s| *s == Matrix3::zeros()));
+    assert_eq!(&with_footing.points().elastic_strain()[n..], &before[n..]);
+    let mut stressed = ground();
+    stressed.geostatic_stress(0.5).unwrap();
+    match stressed.with_rigid_bodies(vec![RigidBody::new(0, Vector2::zeros(), 0.0).unwrap()]) {
+        Err(ModelError::RigidBody { index: 0, what }) => assert!(what.contains("initial stress"), "{what}"),
+        other => panic!("{other:?}"),
+    }
+}

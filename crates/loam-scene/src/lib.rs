@@ -233,7 +233,7 @@ impl LoadedScene {
                 }
                 _ => self.error(&[Seg::Key("body_constraints")], e.to_string()),
             })?;
-        let model = self.with_loads(self.with_frictional_planes(model)?, loads)?;
+        let model = self.with_initial_stress(self.with_loads(self.with_frictional_planes(model)?, loads)?)?;
         let mut analysis = self.analysis(model, solver)?;
         self.check_before_the_first_step(&mut analysis)?;
         self.excavations::<D>()?;

@@ -107,8 +107,7 @@ impl LoadedScene {
     }
 
     /// Axisymmetry, anti-locking, geometric linearity (implicit only), the ghost penalty
-    /// (implicit only), the groundwater (implicit only) and the initial stress, in that
-    /// order.
+    /// (implicit only) and the groundwater (implicit only), in that order.
     fn model_options<const D: usize>(&self, mut model: Model<D>) -> Result<Model<D>, SceneError> {
         let s = &self.scene;
         let explicit = matches!(s.analysis, AnalysisSpec::Explicit { .. });
@@ -142,8 +141,14 @@ impl LoadedScene {
             model = model.with_water(water).map_err(refused("water"))?;
         }
         self.check_cam_clay_starts_stressed()?;
-        if let InitialStressSpec::Geostatic { k0 } = s.initial_stress {
-            model.geostatic_stress(k0).map_err(refused("initial_stress"))?;
+        Ok(model)
+    }
+
+    /// The model in its initial stress: the geostatic one where the scene asks for it, set
+    /// once the rigid bodies are known (their points carry none).
+    pub(super) fn with_initial_stress<const D: usize>(&self, mut model: Model<D>) -> Result<Model<D>, SceneError> {
+        if let InitialStressSpec::Geostatic { k0 } = self.scene.initial_stress {
+            model.geostatic_stress(k0).map_err(|e| self.error(&[Seg::Key("initial_stress")], e.to_string()))?;
         }
         Ok(model)
     }
