@@ -141,7 +141,7 @@ fn defines(source: &str, name: &str) -> bool {
 fn code_the_docs_name_exists() {
     let sources = sources();
     let mut missing = Vec::new();
-    for doc in ["theory.md", "verification.md", "scene-format.md"] {
+    for doc in ["theory.md", "verification.md", "robustness.md", "scene-format.md"] {
         let text = fs::read_to_string(root().join("docs").join(doc)).unwrap();
         for token in text.split('`').skip(1).step_by(2) {
             if token.contains("::") && !token.contains(' ') {
