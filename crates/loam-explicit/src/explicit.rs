@@ -331,7 +331,8 @@ impl<const D: usize> Explicit<D> {
     }
 
     /// Critical time step of the committed state (docs/theory.md §10):
-    /// h_min / (max_p c_p + max_I |v_I|), c_p = √(M / ρ_p), ρ_p = m_p / v_p, with
+    /// h_min / (max_p c_p + max_I |v_I|), c_p = √(M / ρ_p) (ρ_p the point's density in small
+    /// strain, the one it started with in finite strain, `squared_wave_speed`), with
     /// v_I = p_I / m_I the velocity the grid carries the material at (zero at held dofs
     /// and empty nodes). An error if a point's basis leaves the grid.
     pub fn critical_time_step(&self) -> Result<f64, ExplicitError> {
@@ -346,6 +347,13 @@ impl<const D: usize> Explicit<D> {
         let m_min = empty_node_mass::<D>(&gathered, fields);
         carried_velocity::<D>(&gathered, fields, &self.constrained, m_min, &mut velocity);
         Ok(critical_step(model, &self.p_wave, &velocity, self.time))
+    }
+
+    /// The critical time step of the wave speeds alone, h_min / max_p c_p (c_p as
+    /// [`Self::critical_time_step`] takes it): what the CFL step comes back to as the
+    /// material comes to rest.
+    pub fn wave_step(&self) -> f64 {
+        self.model.grid().cell_size().min() / max_squared_wave_speed(&self.model, &self.p_wave).sqrt()
     }
 
     /// The critical time step of the step being taken, from its scattered momentum: the
@@ -798,30 +806,43 @@ fn carried<const D: usize>(
 /// A rigid body's speed at time `t` counts too: the grid carries its velocity of the last
 /// step, which a time function may have raised since.
 fn critical_step<const D: usize>(model: &Model<D>, p_wave: &[Option<f64>], velocity: &[f64], t: f64) -> f64 {
-    let (pts, h) = (model.points(), model.grid().cell_size().min());
+    let h = model.grid().cell_size().min();
     // max √x = √(max x) exactly (the root is correctly rounded and monotonic): one root for
     // the body instead of one per point and one per node.
-    let c2 = |p: usize| squared_wave_speed(model, p_wave, p);
-    let c2_max = (0..pts.len()).into_par_iter().map(c2).reduce(|| 0.0, f64::max);
+    let c2_max = max_squared_wave_speed(model, p_wave);
     let v2_max = velocity.par_chunks(D).map(|v| v.iter().map(|c| c * c).sum::<f64>()).reduce(|| 0.0, f64::max);
     let rigid2_max = (model.rigid_bodies().iter()).map(|r| r.velocity_at(t).norm_squared()).fold(0.0, f64::max);
     h / (c2_max.sqrt() + v2_max.max(rigid2_max).sqrt())
 }
 
-/// The P-wave speed c_p = √(M / ρ_p) of point `p`, ρ_p = m_p / v_p (docs/theory.md §10).
+/// max_p c_p² over the points ([`squared_wave_speed`]).
+fn max_squared_wave_speed<const D: usize>(model: &Model<D>, p_wave: &[Option<f64>]) -> f64 {
+    let c2 = |p: usize| squared_wave_speed(model, p_wave, p);
+    (0..model.points().len()).into_par_iter().map(c2).reduce(|| 0.0, f64::max)
+}
+
+/// The P-wave speed c_p of point `p` ([`squared_wave_speed`]).
 fn wave_speed<const D: usize>(model: &Model<D>, p_wave: &[Option<f64>], p: usize) -> f64 {
     squared_wave_speed(model, p_wave, p).sqrt()
 }
 
-/// c_p² = M / ρ_p of point `p`, M its material's where constant (`p_wave`); zero for a
-/// rigid body's point, which carries no waves.
+/// c_p² = M / ρ_p of point `p` (docs/theory.md §10), M its material's where constant
+/// (`p_wave`); zero for a rigid body's point, which carries no waves. In small strain
+/// ρ_p = m_p / v_p. In finite strain the laws' M relates the Kirchhoff stress τ = J σ to
+/// the logarithmic strain, so the Cauchy stiffness is M / J and c_p² = (M / J) / (ρ₀ / J)
+/// = M / ρ₀: the density the point started with, however far it has swollen or been
+/// compressed (its force V σ ∇N = V₀ τ ∇N grows with V₀, not with V).
 #[inline]
 fn squared_wave_speed<const D: usize>(model: &Model<D>, p_wave: &[Option<f64>], p: usize) -> f64 {
     let pts = model.points();
     if !model.rigid_bodies().is_empty() && model.rigid_body_of(pts.body()[p]).is_some() {
         return 0.0;
     }
-    model.p_wave_modulus(p_wave, p) / (pts.mass()[p] / pts.volume()[p])
+    let volume = match model.kinematics() {
+        Kinematics::FiniteStrain => pts.volume0()[p],
+        Kinematics::SmallStrain => pts.volume()[p],
+    };
+    model.p_wave_modulus(p_wave, p) / (pts.mass()[p] / volume)
 }
 
 /// Sign with sign(0) = 0 (`f64::signum` gives ±1 at zero).

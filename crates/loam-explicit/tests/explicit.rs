@@ -4,11 +4,15 @@
 mod common;
 
 use common::*;
+use loam_constitutive::Elastic;
+use loam_explicit::Model;
 use loam_explicit::{
     ConnectError, Explicit, ExplicitError, ExplicitSettings, Kinematics, RunError, TimeStep, UpdateScheme,
 };
-use loam_grid::BasisKind;
+use loam_grid::{BasisKind, Grid};
+use loam_points::{PointStore, Shape};
 use nalgebra::Vector2;
+use std::sync::Arc;
 
 const SCHEMES: [UpdateScheme; 3] = [UpdateScheme::Usf, UpdateScheme::Usl, UpdateScheme::Musl];
 
@@ -72,7 +76,8 @@ fn vibrating_bar_figures(basis: BasisKind, scheme: UpdateScheme, safety: f64) ->
     let e0 = total_energy(&model);
     let scale = 2.0 * BAR.amplitude / std::f64::consts::PI;
     let duration = 3.0 * BAR.period();
-    let settings = ExplicitSettings { scheme, time_step: TimeStep::Cfl { safety }, ..settings(duration) };
+    // Pure FLIP, whose energy V2 measures (the default's 1 % PIC damps).
+    let settings = ExplicitSettings { scheme, time_step: TimeStep::Cfl { safety }, flip: 1.0, ..settings(duration) };
     let mut ex = Explicit::new(model, settings).unwrap();
     ex.check().unwrap();
     let half = if scheme == UpdateScheme::Usf { 0.5 } else { -0.5 };
@@ -463,6 +468,33 @@ fn the_critical_step_ignores_velocity_the_grid_does_not_carry() {
     assert_eq!(at_rest.0, at_rest.1, "critical_time_step and the step's critical_dt");
     assert!((pushed.1 / at_rest.1 - 1.0).abs() < 1e-12, "{pushed:?} vs {at_rest:?}");
     assert!((pushed.0 / at_rest.0 - 1.0).abs() < 1e-12, "{pushed:?} vs {at_rest:?}");
+}
+
+/// The wave speed of a swollen point (docs/theory.md §10): the block's points at 4 times
+/// their volume (a loose granular front) leave the finite-strain critical step where it
+/// was, since the laws' M is a Kirchhoff modulus and c_p² = (M / J) / (ρ₀ / J) = M / ρ₀;
+/// in small strain c_p² = M / ρ_p at the current density, so the step halves (√4). The
+/// block is at rest, so h / c_p is the whole step: E = 1e5, ν = 0.3, ρ₀ = 1000, h = 0.5.
+#[test]
+fn a_swollen_point_keeps_its_wave_speed_in_finite_strain() {
+    let step = |kinematics, swell: f64| {
+        let grid = Grid::new(Vector2::zeros(), Vector2::repeat(0.5), [24, 12]).unwrap();
+        let mut points = PointStore::new();
+        let block = Shape::Box { min: Vector2::new(1.0, 2.5), max: Vector2::new(3.0, 4.0) };
+        points.fill(&grid, &block, 2, 1000.0, 0).unwrap();
+        let law = Arc::new(Elastic::new(1e5, 0.3).unwrap());
+        let mut model =
+            Model::new(grid, BasisKind::Gimp, kinematics, points, vec![law], vec![], Vector2::zeros()).unwrap();
+        model.points_mut().volume.iter_mut().for_each(|v| *v *= swell);
+        Explicit::new(model, settings(1.0)).unwrap().critical_time_step().unwrap()
+    };
+    let m = 1e5 * 0.7 / (1.3 * 0.4);
+    let h_over_c0 = 0.5 / (m / 1000.0f64).sqrt();
+    let finite = (step(Kinematics::FiniteStrain, 1.0), step(Kinematics::FiniteStrain, 4.0));
+    let small = (step(Kinematics::SmallStrain, 1.0), step(Kinematics::SmallStrain, 4.0));
+    println!("finite strain {finite:?}, small strain {small:?}, h / c0 {h_over_c0}");
+    assert!((finite.0 / h_over_c0 - 1.0).abs() < 1e-12 && finite.1 == finite.0, "{finite:?}");
+    assert!((small.0 / h_over_c0 - 1.0).abs() < 1e-12 && (small.1 / small.0 - 0.5).abs() < 1e-12, "{small:?}");
 }
 
 /// (9) A body at rest on a fixed base: the V1a column (rollers, GIMP, 10 cells) loaded by

@@ -697,7 +697,7 @@ fn default_gamma() -> f64 {
 }
 
 fn default_flip() -> f64 {
-    1.0
+    loam_explicit::ExplicitSettings::DEFAULT_FLIP
 }
 
 fn default_explicit_step() -> TimeStepSpec {

@@ -96,4 +96,12 @@ pub mod bounds {
     pub const FLANK_SLOPE: Bound = Bound::upper(1.0, "docs/verification.md §V8: infinite slope, tan β ≤ tan φ at rest");
     /// |Δt_c(end) / (min_p h / c_p) − 1|: at rest the CFL step is the wave speeds' (issue 19).
     pub const CFL_AT_REST: Bound = Bound::upper(0.05, "issue 19: the CFL step within 5 % of its elastic value");
+    /// The farthest point beyond the toe, in cells: the default settings leave no spray of
+    /// points thrown clear of the deposit.
+    pub const SPRAY: Bound = Bound::upper(2.0, "issue 34: no point beyond the deposit's toe by more than two cells");
+    /// Steps to 1 s at 40 cells across H₀ (12 800 points) with the default settings: the
+    /// step stays near the column's elastic one (h / c_p = 9.1e-5 s at CFL 0.5, 11 000
+    /// steps) rather than falling with the loose front's density.
+    pub const STEPS_AT_40_CELLS: Bound =
+        Bound::upper(25_000.0, "issue 34: at most 25 000 steps to 1 s at 12 800 points, default settings");
 }
