@@ -30,7 +30,7 @@ const MAX_MEMORY: &str = "2G";
 
 /// The examples small enough to run a few steps of in CI (the strength-reduction scenes
 /// search their factor of safety before the first step; `loam check` takes every example).
-const RUNNABLE: [&str; 14] = [
+const RUNNABLE: [&str; 15] = [
     "cavity_sphere.ron",
     "column.ron",
     "column_fem.ron",
@@ -41,6 +41,7 @@ const RUNNABLE: [&str; 14] = [
     "footing_load_control.ron",
     "footing_rigid_explicit.ron",
     "footing_von_mises.ron",
+    "granular_collapse_explicit.ron",
     "landslide_wall_explicit.ron",
     "retaining_wall_explicit.ron",
     "slope_runout_explicit.ron",
