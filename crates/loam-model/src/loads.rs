@@ -81,6 +81,25 @@ impl TimeFunction {
     }
 }
 
+impl TimeFunction {
+    /// The least and greatest of ∫₀ᵗ f over 0 ≤ t ≤ `end`: the integral is extreme at the
+    /// ends, at a table's times and where f changes sign between them (f is linear there).
+    pub fn integral_range(&self, end: f64) -> (f64, f64) {
+        let mut times = vec![0.0, end.max(0.0)];
+        if let TimeFunction::Table(rows) = self {
+            times.extend(rows.iter().map(|&(t, _)| t).filter(|&t| t > 0.0 && t < end));
+            for w in rows.windows(2) {
+                let ((t0, f0), (t1, f1)) = (w[0], w[1]);
+                if f0 * f1 < 0.0 {
+                    times.push(t0 + (t1 - t0) * f0 / (f0 - f1));
+                }
+            }
+        }
+        let values = times.iter().filter(|&&t| t <= end.max(0.0)).map(|&t| self.integral(t));
+        values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)))
+    }
+}
+
 /// The piecewise-linear function through `rows` (abscissae increasing) at `x`, held level
 /// before the first and after the last: its value and slope.
 pub(crate) fn piecewise_linear(rows: &[(f64, f64)], x: f64) -> (f64, f64) {
@@ -453,6 +472,14 @@ mod tests {
         assert_eq!(table.integral(4.0), 3.0);
         let late = TimeFunction::Table(vec![(1.0, 2.0), (2.0, 0.0)]);
         assert_eq!(late.integral(1.5), 2.0 + 0.75);
+        // Range of the integral of a motion out (f = 1) and back (f = −1), by hand: it peaks
+        // where f changes sign, at t = 1.5 (1 + ½ · 0.5 · 1 = 1.25), and is back at 0 at t = 3;
+        // to t = 1.2 it only rises (1 + 0.2 (1 + 0.6)/2 = 1.16).
+        let there_and_back = TimeFunction::Table(vec![(0.0, 1.0), (1.0, 1.0), (2.0, -1.0), (3.0, -1.0)]);
+        assert_eq!(there_and_back.integral_range(3.0), (0.0, 1.25));
+        let (lo, hi) = there_and_back.integral_range(1.2);
+        assert!(lo == 0.0 && (hi - 1.16).abs() < 1e-15, "{lo} {hi}");
+        assert_eq!(TimeFunction::Constant.integral_range(2.0), (0.0, 2.0));
     }
 
     /// A uniform pressure p on the top of a box: resultant −p × width, shared equally

@@ -63,6 +63,12 @@ impl<const D: usize> RigidBody<D> {
         self.friction
     }
 
+    /// The least and greatest displacement per component over 0 ≤ t ≤ `end`.
+    pub fn displacement_range(&self, end: f64) -> (SVector<f64, D>, SVector<f64, D>) {
+        let (lo, hi) = self.time.integral_range(end);
+        (self.velocity.map(|v| (v * lo).min(v * hi)), self.velocity.map(|v| (v * lo).max(v * hi)))
+    }
+
     /// Its displacement at time `t`, v ∫₀ᵗ f.
     pub fn displacement(&self, t: f64) -> SVector<f64, D> {
         self.velocity * self.time.integral(t)

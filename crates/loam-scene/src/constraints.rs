@@ -134,12 +134,59 @@ impl LoadedScene {
                 Ok(rigid.in_time(time).expect("a checked time function"))
             })
             .collect::<Result<Vec<_>, _>>()?;
-        model.with_rigid_bodies(rigid).map_err(|e| match e {
+        let model = model.with_rigid_bodies(rigid).map_err(|e| match e {
             ModelError::RigidBody { index, .. } => {
                 self.error(&[Seg::Key("rigid_bodies"), Seg::Index(index)], e.to_string())
             }
             _ => self.error(&[Seg::Key("rigid_bodies")], e.to_string()),
-        })
+        })?;
+        for (k, r) in model.rigid_bodies().iter().enumerate() {
+            self.check_rigid_body_clear(&model, k, r)?;
+        }
+        Ok(model)
+    }
+
+    /// Rigid body `k` must start clear of the other bodies (no point of theirs inside its
+    /// shape: contact needs them apart, and `may_overlap` would let them through), and its
+    /// points, with their domains, must stay inside the grid over the run.
+    fn check_rigid_body_clear<const D: usize>(
+        &self,
+        model: &Model<D>,
+        k: usize,
+        rigid: &RigidBody<D>,
+    ) -> Result<(), SceneError> {
+        let at = [Seg::Key("rigid_bodies"), Seg::Index(k), Seg::Key("body")];
+        let b = rigid.body() as usize;
+        let shape = self.shape::<D>(b, &self.scene.bodies[b])?;
+        let pts = model.points();
+        let inside = (0..pts.len()).find(|&p| pts.body()[p] != rigid.body() && shape.contains(&pts.position()[p]));
+        if let Some(p) = inside {
+            let other = &self.scene.bodies[pts.body()[p] as usize];
+            return Err(self.error(&at, format!(
+                "rigid body {k} (body \"{}\") overlaps body \"{}\": its shape holds that body's point at {:?}; a rigid body must start clear of the material it meets (move one of them)",
+                self.scene.bodies[b].name, other.name, pts.position()[p].map(|c| (c * 1e6).round() / 1e6).as_slice()
+            )));
+        }
+        let AnalysisSpec::Explicit { duration, .. } = self.scene.analysis else { return Ok(()) };
+        let (lo, hi) = rigid.displacement_range(duration);
+        let grid = model.grid();
+        let (min, max) = (grid.origin(), grid.extent_max());
+        // A domain that ends on the grid's edge is inside it (to round-off).
+        let tol = 1e-9 * grid.cell_size().max();
+        let leaves = (0..pts.len()).filter(|&p| pts.body()[p] == rigid.body()).find_map(|p| {
+            let (x, l) = (pts.position()[p], pts.half_length()[p]);
+            let out = |a: usize| x[a] - l[a] + lo[a] < min[a] - tol || x[a] + l[a] + hi[a] > max[a] + tol;
+            (0..D).find(|&a| out(a)).map(|a| (p, a))
+        });
+        let show =
+            |v: &SVector<f64, D>| format!("{:?}", v.iter().map(|c| (c * 1e6).round() / 1e6 + 0.0).collect::<Vec<_>>());
+        match leaves {
+            Some((p, a)) => Err(self.error(&at, format!(
+                "rigid body {k} (body \"{}\") leaves the grid during the run: its displacement over the {duration} s ranges from {} to {}, which takes its point at {} beyond the grid's {} to {} along axis {a}; enlarge the grid, or shorten the run or the motion",
+                self.scene.bodies[b].name, show(&lo), show(&hi), show(&pts.position()[p]), min[a], max[a]
+            ))),
+            None => Ok(()),
+        }
     }
 
     /// Constraint `i`, on a plane of grid nodes.
