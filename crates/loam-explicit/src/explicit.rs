@@ -835,7 +835,7 @@ fn wave_speed<const D: usize>(model: &Model<D>, p_wave: &[Option<f64>], p: usize
 #[inline]
 fn squared_wave_speed<const D: usize>(model: &Model<D>, p_wave: &[Option<f64>], p: usize) -> f64 {
     let pts = model.points();
-    if !model.rigid_bodies().is_empty() && model.rigid_body_of(pts.body()[p]).is_some() {
+    if model.is_rigid_point(p) {
         return 0.0;
     }
     let volume = match model.kinematics() {

@@ -102,11 +102,6 @@ impl<const D: usize> Model<D> {
         sigma_v
     }
 
-    /// Whether point `p` belongs to a rigid body.
-    fn is_rigid_point(&self, p: usize) -> bool {
-        self.rigid_body_of(self.points.body()[p]).is_some()
-    }
-
     /// The weight of point `q` that its column's effective stress carries: m |g|, less the
     /// buoyancy on the submerged part of its domain (the water's force of the balance,
     /// [`Model::water_force`] in full, so the state starts in equilibrium).

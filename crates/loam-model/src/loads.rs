@@ -79,9 +79,7 @@ impl TimeFunction {
             }
         }
     }
-}
 
-impl TimeFunction {
     /// The least and greatest of ∫₀ᵗ f over 0 ≤ t ≤ `end`: the integral is extreme at the
     /// ends, at a table's times and where f changes sign between them (f is linear there).
     pub fn integral_range(&self, end: f64) -> (f64, f64) {

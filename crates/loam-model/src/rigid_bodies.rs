@@ -115,6 +115,11 @@ impl<const D: usize> Model<D> {
         &self.rigid_bodies
     }
 
+    /// Whether point `p` belongs to a rigid body.
+    pub fn is_rigid_point(&self, p: usize) -> bool {
+        !self.rigid_bodies.is_empty() && self.rigid_body_of(self.points.body()[p]).is_some()
+    }
+
     /// The rigid body whose points carry body id `body`, if one does.
     pub fn rigid_body_of(&self, body: u32) -> Option<&RigidBody<D>> {
         self.rigid_bodies.iter().find(|r| r.body == body)

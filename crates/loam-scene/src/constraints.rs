@@ -159,12 +159,14 @@ impl LoadedScene {
         let b = rigid.body() as usize;
         let shape = self.shape::<D>(b, &self.scene.bodies[b])?;
         let pts = model.points();
+        let show =
+            |v: &SVector<f64, D>| format!("{:?}", v.iter().map(|c| (c * 1e6).round() / 1e6 + 0.0).collect::<Vec<_>>());
         let inside = (0..pts.len()).find(|&p| pts.body()[p] != rigid.body() && shape.contains(&pts.position()[p]));
         if let Some(p) = inside {
             let other = &self.scene.bodies[pts.body()[p] as usize];
             return Err(self.error(&at, format!(
-                "rigid body {k} (body \"{}\") overlaps body \"{}\": its shape holds that body's point at {:?}; a rigid body must start clear of the material it meets (move one of them)",
-                self.scene.bodies[b].name, other.name, pts.position()[p].map(|c| (c * 1e6).round() / 1e6).as_slice()
+                "rigid body {k} (body \"{}\") overlaps body \"{}\": its shape holds that body's point at {}; a rigid body must start clear of the material it meets (move one of them)",
+                self.scene.bodies[b].name, other.name, show(&pts.position()[p])
             )));
         }
         let AnalysisSpec::Explicit { duration, .. } = self.scene.analysis else { return Ok(()) };
@@ -178,8 +180,6 @@ impl LoadedScene {
             let out = |a: usize| x[a] - l[a] + lo[a] < min[a] - tol || x[a] + l[a] + hi[a] > max[a] + tol;
             (0..D).find(|&a| out(a)).map(|a| (p, a))
         });
-        let show =
-            |v: &SVector<f64, D>| format!("{:?}", v.iter().map(|c| (c * 1e6).round() / 1e6 + 0.0).collect::<Vec<_>>());
         match leaves {
             Some((p, a)) => Err(self.error(&at, format!(
                 "rigid body {k} (body \"{}\") leaves the grid during the run: its displacement over the {duration} s ranges from {} to {}, which takes its point at {} beyond the grid's {} to {} along axis {a}; enlarge the grid, or shorten the run or the motion",
