@@ -4,10 +4,10 @@ use crate::body_contact::{self, BodyContact, Settled};
 use crate::contact::{GridUpdate, PlaneContacts};
 use crate::fields::{rigid_motions, Fields, RigidMotion};
 use crate::{ExplicitError, ExplicitSettings, TimeStep, UpdateScheme};
-use loam_grid::{ActiveNodes, AxisBasis, BasisError, NodeLayout, PointBasisError};
+use loam_grid::{ActiveNodes, AxisBasis, BandScatter, BasisError, NodeLayout, PointBasisError};
 use loam_kernels::{
-    check_constraints, embed, internal_force, on_pool, update_point_stress, BandScatter, Committed, ConnectError,
-    LoadSupports, RunError,
+    check_constraints, embed, internal_force, on_pool, update_point_stress, Committed, ConnectError, LoadSupports,
+    RunError,
 };
 use loam_model::{AnalysisKind, Kinematics, LoadLevel, Model, ModelError, ModelState, PointChange, StateFields};
 use loam_points::{stretched_half_length, stretched_half_lengths};

@@ -7,7 +7,7 @@
 //!    tensor product (`loam_grid::AxisBasis`, evaluated once and read by stages 2, 5 and
 //!    6), and the points grouped into bands of grid rows for the scatter.
 //! 2. Point → grid by a deterministic parallel scatter into dense nodal fields
-//!    (`loam_kernels::BandScatter`), one record per node, or one per body and node when the
+//!    (`loam_grid::BandScatter`), one record per node, or one per body and node when the
 //!    bodies are in contact (`fields`; each point to its own body's):
 //!    m_I = Σ_p N_I m_p, p_I = Σ_p N_I m_p v_p, f_I = Σ_p N_I f_ext,p − Σ_p v_p σ_p ∇N_I.
 //!    Nodes with m_I ≤ 1e-12 · max m_I are empty (zero velocity and acceleration);

@@ -3,7 +3,7 @@
 //! (linear "standard MPM", GIMP, quadratic B-splines), the body-fitted mesh of the updated
 //! Lagrangian FEM reference, both behind [`Background`], and the per-step connectivity:
 //! which nodes each point's basis touches, which nodes are active, and which points touch
-//! each node. Also the ghost-penalty faces of cut cells, the one lexicographic numbering
+//! each node; and the deterministic band scatter that maps points to nodes. Also the ghost-penalty faces of cut cells, the one lexicographic numbering
 //! and the one Gauss–Legendre rule of the workspace.
 //!
 //! The grid is reset every step (updated Lagrangian MPM): it carries no state of its own.
@@ -12,6 +12,7 @@
 
 mod axis_basis;
 mod background;
+mod bands;
 mod basis;
 mod connectivity;
 mod gauss;
@@ -22,6 +23,7 @@ mod mesh;
 
 pub use axis_basis::AxisBasis;
 pub use background::{Background, LocateError};
+pub use bands::{BandScatter, NodeWindow, ROWS_PER_BAND};
 pub use basis::{bspline_greville, BasisError, BasisKind};
 pub use connectivity::{ActiveNodes, Connectivity, NodePointAdjacency, PointBasisError, INACTIVE};
 pub use gauss::GaussLegendre;

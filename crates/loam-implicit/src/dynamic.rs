@@ -24,7 +24,7 @@ use crate::inertia::Inertia;
 use crate::points::PointUpdateError;
 use crate::{StepError, StepReport};
 use loam_kernels::{
-    gather_internal_force, gather_nodal, internal_force, interpolate, interpolate_pair, on_pool, InvalidSetting,
+    internal_force, interpolate, interpolate_pair, on_pool, scatter_internal_force, scatter_nodal, InvalidSetting,
 };
 use loam_model::{AnalysisKind, LoadLevel, Model, ModelError, ModelState, PointChange};
 use loam_solve::{LinearSolverChoice, LinearSolverKind, NewtonError, NewtonReport, NewtonSettings};
@@ -111,7 +111,7 @@ impl DynamicSettings {
 
 /// What an implicit dynamic analysis carries from step to step beside its model: all a
 /// checkpoint needs to resume it. The nodal fields matter where the nodes persist (the
-/// FEM reference); on a grid they are gathered again every step.
+/// FEM reference); on a grid they are scattered again every step.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DynamicState {
     pub step: usize,
@@ -291,31 +291,31 @@ impl<const D: usize> Dynamic<D> {
         Ok(report)
     }
 
-    /// The nodal mass, velocity and acceleration of the committed points, gathered
+    /// The nodal mass, velocity and acceleration of the committed points, scattered
     /// mass-weighted (zero on constrained dofs). Nodes that persist from step to step keep
     /// their own velocity and acceleration, mapped once at the start.
     fn map_to_nodes(&mut self) {
         if self.engine.model.background().moves_with_body() {
             return;
         }
-        self.gather_nodal_motion();
+        self.scatter_nodal_motion();
     }
 
-    /// The mass-weighted gather of the committed points' mass, velocity and acceleration.
-    fn gather_nodal_motion(&mut self) {
+    /// The mass-weighted scatter of the committed points' mass, velocity and acceleration.
+    fn scatter_nodal_motion(&mut self) {
         let e = &self.engine;
         let (conn, pts) = (&e.conn, e.model.points());
         let n_nodes = conn.active_nodes().len();
         let nodal_mass = &mut self.inertia.nodal_mass;
         nodal_mass.resize(n_nodes, 0.0);
-        gather_nodal(conn, 1, nodal_mass, |p, a, out| {
+        scatter_nodal(conn, 1, nodal_mass, |p, a, out| {
             out[0] += conn.support_values(p)[a] * pts.mass()[p];
         });
         for (field, point_field) in
             [(&mut self.inertia.velocity, pts.velocity()), (&mut self.acceleration, pts.acceleration())]
         {
             field.resize(n_nodes * D, 0.0);
-            gather_nodal(conn, D, field, |p, a, out| {
+            scatter_nodal(conn, D, field, |p, a, out| {
                 let w = conn.support_values(p)[a] * pts.mass()[p];
                 for i in 0..D {
                     out[i] += w * point_field[p][i];
@@ -330,9 +330,9 @@ impl<const D: usize> Dynamic<D> {
 
     /// Before the first step: the equilibrium acceleration of the committed state,
     /// a = M_L⁻¹ (f_ext − f_int), onto the points (a_p = Σ N_I a_I); nodes that persist keep
-    /// the nodal mass, velocity and acceleration gathered here.
+    /// the nodal mass, velocity and acceleration scattered here.
     fn initial_acceleration(&mut self) {
-        self.gather_nodal_motion();
+        self.scatter_nodal_motion();
         self.engine.external_forces(LoadLevel::Time(self.time));
         let f_ext = self.engine.external_forces_at_rest();
         let e = &mut self.engine;
@@ -340,7 +340,7 @@ impl<const D: usize> Dynamic<D> {
         let average = CellAverage::of(&e.model, e.cell_gradients());
         let (stride, axisymmetric, x) = (conn.stride(), e.model.axisymmetric(), e.model.configuration());
         let mut f_int = vec![0.0; e.f_ext.len()];
-        gather_internal_force(conn, &mut f_int, |p, a| {
+        scatter_internal_force(conn, &mut f_int, |p, a| {
             let k = p * stride + a;
             let g = &conn.support_gradients(p)[a];
             let c = average.map_or(*g, |avg| avg.strain_gradient(k, g));

@@ -15,7 +15,7 @@ use crate::tangent::{assemble, PointCouplings, TangentInputs};
 use crate::StepError;
 use loam_grid::{Connectivity, GhostFace, NodeLayout};
 use loam_kernels::{
-    advance_deformation, check_constraints_connected, connect, gather_nodal, interpolate_add, trial_vertices,
+    advance_deformation, check_constraints_connected, connect, interpolate_add, scatter_nodal, trial_vertices,
     LoadSupports,
 };
 use loam_model::{AntiLocking, FreeBody, Kinematics, LoadLevel, Model, ModelError, PointChange};
@@ -310,7 +310,7 @@ impl<const D: usize> Engine<D> {
     }
 
     /// Stage 3, external forces at `level` (a load factor, or the time of a dynamic step):
-    /// the model's dead loads on the points gathered to the nodes, then the dead loads on
+    /// the model's dead loads on the points scattered to the nodes, then the dead loads on
     /// its surfaces spread to them, and the water's force on the points at that level. Follower
     /// loads are added with the trial increment in each residual.
     pub fn external_forces(&mut self, level: LoadLevel) {
@@ -322,7 +322,7 @@ impl<const D: usize> Engine<D> {
         self.f_ext.resize(self.layout.num_dofs(conn.active_nodes().len()), 0.0);
         // The water's force on the committed volumes joins the point loads (a finite-strain
         // residual adds its change with the volume).
-        gather_nodal(conn, D, &mut self.f_ext, |p, a, out| {
+        scatter_nodal(conn, D, &mut self.f_ext, |p, a, out| {
             let n = conn.support_values(p)[a];
             let f = model.point_load_at(p, lambda) * n + water_body_force(water, p, volume[p], n);
             for i in 0..D {

@@ -5,7 +5,7 @@
 //! tangent c M.
 
 use loam_grid::Connectivity;
-use loam_kernels::{gather_nodal, interpolate};
+use loam_kernels::{interpolate, scatter_nodal};
 use rayon::prelude::*;
 
 /// The nodal state and scratch of the inertial terms, owned by the dynamic analysis and
@@ -51,14 +51,14 @@ impl Inertia {
             }
             return;
         }
-        // (M x)_I = Σ_p m_p N_I x_p with x_p = Σ_J N_J x_J: interpolate, then gather.
+        // (M x)_I = Σ_p m_p N_I x_p with x_p = Σ_J N_J x_J: interpolate, then scatter.
         let x = &*self.x;
         self.point_x.resize(conn.num_points() * D, 0.0);
         self.point_x.par_chunks_mut(D).enumerate().for_each(|(p, xp)| {
             xp.copy_from_slice(interpolate(conn, p, x).as_slice());
         });
         let point_x = &*self.point_x;
-        gather_nodal(conn, D, &mut self.force, |p, a, out| {
+        scatter_nodal(conn, D, &mut self.force, |p, a, out| {
             let w = mass[p] * conn.support_values(p)[a];
             for i in 0..D {
                 out[i] += w * point_x[p * D + i];

@@ -94,7 +94,7 @@ pub struct IterationProfile {
     pub solver_bytes: usize,
     /// Basis evaluation, active nodes, adjacency, sparsity pattern.
     pub connectivity: Duration,
-    /// Point kinematics, stress update and tangent, internal force gather.
+    /// Point kinematics, stress update and tangent, internal force scatter.
     pub points_and_residual: Duration,
     /// Global tangent assembly.
     pub assembly: Duration,

@@ -7,7 +7,7 @@ use crate::ghost::add_ghost_force;
 use crate::inertia::Inertia;
 use crate::points::TrialState;
 use loam_grid::{Connectivity, GhostFace};
-use loam_kernels::{gather_internal_force, internal_force};
+use loam_kernels::{internal_force, scatter_internal_force};
 use nalgebra::SVector;
 
 /// What the residual reads besides the trial state.
@@ -80,7 +80,7 @@ fn internal_forces<const D: usize, const AXISYMMETRIC: bool>(
     let stride = inputs.conn.stride();
     let average = inputs.average;
     let (conn, water) = (inputs.conn, inputs.water_force);
-    gather_internal_force(conn, r, |p, a| {
+    scatter_internal_force(conn, r, |p, a| {
         let k = p * stride + a;
         let hoop = AXISYMMETRIC.then(|| conn.support_values(p)[a] * trial.inv_radius[p]);
         let bbar = average.map(|c| c.average(k));

@@ -2,7 +2,7 @@
 //! stress's radial share v_p σ_θθ N_I / r_p in axisymmetry (§20): one kernel for the
 //! implicit residual, the dynamic start and the explicit grid update.
 
-use crate::gather_nodal;
+use crate::scatter_nodal;
 use loam_grid::Connectivity;
 use nalgebra::{Matrix3, SVector};
 
@@ -34,14 +34,14 @@ pub fn internal_force<const D: usize>(
     f
 }
 
-/// Gather f_int,I into `out` (D values per active node), where `force(point, slot)` is the
-/// point's internal force at the node in its support slot (see [`internal_force`]).
-pub fn gather_internal_force<const D: usize>(
+/// Scatter f_int,I into `out` (D values per active node), where `force(point, slot)` is
+/// the point's internal force at the node in its support slot (see [`internal_force`]).
+pub fn scatter_internal_force<const D: usize>(
     conn: &Connectivity<D>,
     out: &mut [f64],
     force: impl Fn(usize, usize) -> SVector<f64, D> + Sync,
 ) {
-    gather_nodal(conn, D, out, |p, slot, node| {
+    scatter_nodal(conn, D, out, |p, slot, node| {
         let f = force(p, slot);
         for i in 0..D {
             node[i] += f[i];

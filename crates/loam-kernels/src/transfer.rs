@@ -1,27 +1,25 @@
 //! Transfers between points and nodes over one step's connectivity.
 //!
-//! Point → node is a *gather*: every active node (in parallel) sums the contributions of
-//! the points touching it in ascending point order, so no two tasks write one value and
-//! the summation order is fixed — bitwise identical results on any number of threads
-//! (docs/theory.md §7). Node → point is an interpolation Σ_I N_I(x_p) u_I, independent
-//! per point.
+//! Point → node is a *scatter* through the points' bands (`loam_grid::BandScatter`): the
+//! points of bands two apart write disjoint nodes, so the even bands run in parallel, then
+//! the odd ones, each band's points in ascending index. No two tasks write one value and
+//! every node sums in one fixed order — bitwise identical results on any number of threads
+//! (docs/theory.md §7). Node → point is an interpolation Σ_I N_I(x_p) u_I, independent per
+//! point.
 
 use loam_grid::Connectivity;
 use nalgebra::SVector;
-use rayon::prelude::*;
 
-/// Gather a nodal field of `width` values per active node into `out`: for every node,
-/// `contrib(point, slot, node_values)` adds the contribution of each point touching it
-/// (`slot` the node's place in the point's support), points ascending.
-pub fn gather_nodal<const D: usize, F>(conn: &Connectivity<D>, width: usize, out: &mut [f64], contrib: F)
+/// Fill a nodal field of `width` values per active node, `out`: zero it, then
+/// `contrib(point, slot, node_values)` adds each point's contribution to each node of its
+/// support (`slot` the node's place in the point's support), in the bands' fixed order.
+pub fn scatter_nodal<const D: usize, F>(conn: &Connectivity<D>, width: usize, out: &mut [f64], contrib: F)
 where
     F: Fn(usize, usize, &mut [f64]) + Sync,
 {
-    let adjacency = conn.node_points();
-    out.par_chunks_mut(width).enumerate().for_each(|(node, values)| {
-        values.iter_mut().for_each(|v| *v = 0.0);
-        for &(p, slot) in adjacency.of(node) {
-            contrib(p as usize, slot as usize, values);
+    conn.bands().scatter(width, out, |p, window| {
+        for (slot, &node) in conn.support_nodes(p).iter().enumerate() {
+            contrib(p, slot, window.node(node as usize));
         }
     });
 }
@@ -91,7 +89,7 @@ mod tests {
             assert!((interpolate(&conn, p, &field) - u(*x)).norm() < 1e-14);
         }
         let mut shares = vec![0.0; conn.active_nodes().len()];
-        gather_nodal(&conn, 1, &mut shares, |p, slot, out| out[0] += conn.support_values(p)[slot]);
+        scatter_nodal(&conn, 1, &mut shares, |p, slot, out| out[0] += conn.support_values(p)[slot]);
         assert!((shares.iter().sum::<f64>() - 3.0).abs() < 1e-14);
     }
 }

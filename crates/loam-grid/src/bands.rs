@@ -1,35 +1,43 @@
-//! Points to grid as a deterministic parallel *scatter* into a dense nodal field: each
-//! point adds its contributions to the nodes of its support, as the explicit step's
-//! transfers want (one pass over the points, in their order, no node → point adjacency).
+//! Points to nodes as a deterministic parallel *scatter*: each point adds its
+//! contributions to the nodes of its support, in one pass over the points and with no
+//! node → point adjacency. Every analysis maps its points to the nodes this way: the
+//! explicit step into a field over the whole grid, the implicit analyses (through
+//! [`Connectivity::bands`](crate::Connectivity::bands)) into one over the active nodes.
 //!
 //! Two points of one thread's work may share a node, two of different threads' must not.
-//! The grid's node rows along the last (slowest) axis are cut into bands of
-//! [`ROWS_PER_BAND`] rows, and each point belongs to the band of its first support row.
-//! A point's support spans at most 4 rows (`BasisKind::max_support_1d`), so the points of
-//! band b write only rows [3b, 3b + 6): bands two apart never share a node. The even bands
-//! scatter in parallel, then the odd ones, each band's points in ascending index. Every
-//! node therefore sums its contributions in one fixed order, whatever the number of
-//! threads: bitwise identical results on 1 or N threads (docs/theory.md §7), with no
-//! atomics and no per-thread copies of the grid.
+//! The nodes, in their numbering, are cut into *bands* of `W` consecutive node indices,
+//! `W` at least the span of any point's support (its last node less its first, plus one);
+//! each point belongs to the band of its first node, so the points of band b write only
+//! nodes [bW, (b + 2)W) and bands two apart never share a node. On a grid numbered with
+//! the last axis slowest, bands of [`ROWS_PER_BAND`] node rows hold every support (at most
+//! 4 rows, `BasisKind::max_support_1d`). The even bands scatter in parallel, then the odd
+//! ones, each band's points in ascending index. Every node therefore sums its
+//! contributions in one fixed order, whatever the number of threads: bitwise identical
+//! results on 1 or N threads (docs/theory.md §7), with no atomics and no per-thread copies
+//! of the field.
+//!
+//! The output may be numbered more sparsely than the bands (the active nodes of a step,
+//! ascending in grid index): band b's window is then the output nodes whose band index
+//! lies in [bW, (b + 2)W), still one contiguous range.
 
-use loam_grid::{AxisBasis, Grid};
+use crate::{AxisBasis, Grid};
 use rayon::prelude::*;
 
-/// Node rows per band: at least the widest 1D support (4 nodes) less one, so that bands of
-/// one colour are disjoint.
+/// Node rows per band of a grid: at least the widest 1D support (4 nodes) less one, so that
+/// bands of one colour are disjoint.
 pub const ROWS_PER_BAND: usize = 3;
 
 /// The points grouped by band for [`BandScatter::scatter`] (module docs). Buffers are
 /// reused from step to step.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, PartialEq)]
 pub struct BandScatter {
-    /// Nodes per row: the product of the nodes along every axis but the last.
-    row_len: usize,
-    rows: usize,
     /// `band << 32 | point`, ascending: the points of each band, ascending.
     keys: Vec<u64>,
     /// Per band, its first key; one more entry at the end.
     starts: Vec<usize>,
+    /// Per band, the first output node of its window; one more entry at the end, the number
+    /// of output nodes.
+    bounds: Vec<usize>,
 }
 
 /// The nodes a band's points may write: `width` values per node from node `first_node`.
@@ -40,7 +48,7 @@ pub struct NodeWindow<'a> {
 }
 
 impl NodeWindow<'_> {
-    /// The values of grid node `node`, to add to.
+    /// The values of output node `node`, to add to.
     #[inline]
     pub fn node(&mut self, node: usize) -> &mut [f64] {
         let s = (node - self.first_node) * self.width;
@@ -49,46 +57,84 @@ impl NodeWindow<'_> {
 }
 
 impl BandScatter {
-    /// Group the points of `basis` (computed on `grid`) by band; points are at most 2³²
-    /// (a key holds the band above the point index's 32 bits).
+    /// Group the points of `basis` (computed on `grid`) by bands of [`ROWS_PER_BAND`] node
+    /// rows, to scatter into a field over every node of `grid`. Points are at most 2³² (a
+    /// key holds the band above the point index's 32 bits).
     pub fn group<const D: usize>(&mut self, grid: &Grid<D>, basis: &AxisBasis<D>) {
         let nodes = grid.nodes_per_axis();
-        self.rows = nodes[D - 1];
-        self.row_len = nodes[..D - 1].iter().product();
-        let n = basis.num_points();
+        let row_len: usize = nodes[..D - 1].iter().product();
+        let num_nodes = nodes[D - 1] * row_len;
+        let band_nodes = ROWS_PER_BAND * row_len;
+        self.group_by(basis.num_points(), num_nodes.div_ceil(band_nodes), |p| {
+            basis.first(p)[D - 1] as usize / ROWS_PER_BAND
+        });
+        self.set_bounds(|b| (b * band_nodes).min(num_nodes));
+    }
+
+    /// Group `n` points into `bands` bands, point `p` into band `band_of(p)`.
+    pub(crate) fn group_by(&mut self, n: usize, bands: usize, band_of: impl Fn(usize) -> usize + Sync) {
         assert!(n as u64 <= 1 << 32, "a point index fits the key's low 32 bits");
         self.keys.resize(n, 0);
-        self.keys.par_iter_mut().enumerate().for_each(|(p, key)| {
-            let band = basis.first(p)[D - 1] as usize / ROWS_PER_BAND;
-            *key = (band as u64) << 32 | p as u64;
-        });
+        self.keys.par_iter_mut().enumerate().for_each(|(p, key)| *key = (band_of(p) as u64) << 32 | p as u64);
         // The keys are distinct, so the order is unique. Points numbered in band order that
         // keep their bands keep the keys sorted, which the sort detects in one pass.
         self.keys.par_sort_unstable();
-        let bands = self.rows.div_ceil(ROWS_PER_BAND);
         self.starts.clear();
         self.starts.extend((0..=bands).map(|b| self.keys.partition_point(|&k| ((k >> 32) as usize) < b)));
+        assert_eq!(self.starts[bands], n, "every point's band is below {bands}");
     }
 
-    /// Zero `out` (`width` values per grid node) and add every point's contributions:
+    /// Place every band's window: `first_output_node(b)` for b in 0..=bands, non-decreasing,
+    /// the last the number of output nodes.
+    pub(crate) fn set_bounds(&mut self, first_output_node: impl Fn(usize) -> usize) {
+        let bands = self.starts.len() - 1;
+        self.bounds.clear();
+        self.bounds.extend((0..=bands).map(first_output_node));
+    }
+
+    /// The number of output nodes the scatter fills.
+    pub fn num_nodes(&self) -> usize {
+        self.bounds.last().copied().unwrap_or(0)
+    }
+
+    /// Zero `out` (`width` values per output node) and add every point's contributions:
     /// `contrib(p, window)` adds point `p`'s to the nodes of its support through `window`.
     pub fn scatter(&self, width: usize, out: &mut [f64], contrib: impl Fn(usize, &mut NodeWindow) + Sync) {
-        assert_eq!(out.len(), self.rows * self.row_len * width, "a field of the grouped grid");
+        assert_eq!(out.len(), self.num_nodes() * width, "a field over the grouped nodes");
         out.par_iter_mut().for_each(|v| *v = 0.0);
-        let band_len = ROWS_PER_BAND * self.row_len * width;
-        let bands = self.starts.len() - 1;
-        for colour in 0..2 {
-            let skip = (colour * band_len).min(out.len());
-            out[skip..].par_chunks_mut(2 * band_len).enumerate().for_each(|(k, values)| {
-                let band = 2 * k + colour;
-                if band >= bands {
-                    return;
-                }
-                let mut window = NodeWindow { values, first_node: band * ROWS_PER_BAND * self.row_len, width };
-                for &key in &self.keys[self.starts[band]..self.starts[band + 1]] {
-                    contrib(key as u32 as usize, &mut window);
-                }
-            });
+        let bands = self.starts.len().saturating_sub(1);
+        for colour in 0..2.min(bands) {
+            let of_colour = (bands - colour).div_ceil(2);
+            let first = self.bounds[colour];
+            self.scatter_bands(colour, 0..of_colour, width, &mut out[first * width..], first, &contrib);
+        }
+    }
+
+    /// The bands `2k + colour` for k in `range`, whose windows tile `values` (output nodes
+    /// from `first_node` on), split in halves across rayon's threads.
+    fn scatter_bands(
+        &self,
+        colour: usize,
+        range: std::ops::Range<usize>,
+        width: usize,
+        values: &mut [f64],
+        first_node: usize,
+        contrib: &(impl Fn(usize, &mut NodeWindow) + Sync),
+    ) {
+        if range.len() > 1 {
+            let mid = range.start + range.len() / 2;
+            let split = self.bounds[2 * mid + colour];
+            let (lo, hi) = values.split_at_mut((split - first_node) * width);
+            rayon::join(
+                || self.scatter_bands(colour, range.start..mid, width, lo, first_node, contrib),
+                || self.scatter_bands(colour, mid..range.end, width, hi, split, contrib),
+            );
+            return;
+        }
+        let band = 2 * range.start + colour;
+        let mut window = NodeWindow { values, first_node, width };
+        for &key in &self.keys[self.starts[band]..self.starts[band + 1]] {
+            contrib(key as u32 as usize, &mut window);
         }
     }
 }
@@ -96,7 +142,7 @@ impl BandScatter {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use loam_grid::BasisKind;
+    use crate::BasisKind;
     use nalgebra::{SVector, Vector2};
     use proptest::prelude::*;
 
