@@ -1,10 +1,8 @@
 //! V4 slopes: strength reduction against gravity increase and Taylor's chart.
 
+use loam::analysis::{SearchSoFar, StrengthReduction, StrengthReductionError, StrengthTrial, TrialStart};
 use loam::constitutive::{ConstitutiveLaw, Elastic, VonMises};
-use loam::implicit::{
-    AntiLocking, QuasiStatic, QuasiStaticSettings, SearchSoFar, StrengthReduction, StrengthReductionError,
-    StrengthTrial, TrialStart,
-};
+use loam::implicit::{AntiLocking, QuasiStatic, QuasiStaticSettings};
 use loam::model::ModelState;
 use loam_verification::{slope_model, SlopeGeometry};
 use std::sync::Arc;

@@ -6,13 +6,11 @@ use crate::report::{Report, Row};
 use crate::soil::{self, COHESION, POISSON, YOUNG};
 use anyhow::Result;
 use loam::analysis::Analysis;
+use loam::analysis::{FactorOfSafety, StrengthReduction, TrialStart};
 use loam::constitutive::{ConeFit, ConstitutiveLaw, DruckerPrager, Elastic, MohrCoulomb};
 use loam::explicit::{Explicit, ExplicitSettings, TimeStep};
 use loam::grid::BasisKind;
-use loam::implicit::{
-    AntiLocking, Dynamic, DynamicSettings, FactorOfSafety, Kinematics, QuasiStatic, QuasiStaticSettings,
-    StrengthReduction, TrialStart,
-};
+use loam::implicit::{AntiLocking, Dynamic, DynamicSettings, Kinematics, QuasiStatic, QuasiStaticSettings};
 use loam::model::Model;
 use loam_verification::slope::bounds::{
     DRUCKER_PRAGER_FOS, GRIFFITHS_LANE, RUNOUT_PROFILES, SEARCH_PATHS, TAYLOR as TAYLOR_BOUND,

@@ -1,12 +1,18 @@
 //! One stepping interface over the three analyses — quasi-static load stepping, implicit
 //! Newmark dynamics and explicit MPM — for a program that runs whichever a problem asks
-//! for (the scene runner, the CLI) without knowing a file format.
+//! for (the scene runner, the CLI) without knowing a file format; and the procedures built
+//! on a quasi-static analysis: the strength-reduction search for a factor of safety
+//! ([`StrengthReduction`]).
+
+mod strength_reduction;
+
+pub use strength_reduction::{
+    has_strength, reduced_strength, FactorOfSafety, SearchSoFar, StrengthReduction, StrengthReductionError,
+    StrengthTrial, TrialStart,
+};
 
 use loam_explicit::{Explicit, ExplicitError, ExplicitState};
-use loam_implicit::{
-    reduced_strength, Dynamic, DynamicState, Peak, QuasiStatic, QuasiStaticState, StepError, StepReport,
-    StrengthReductionError,
-};
+use loam_implicit::{Dynamic, DynamicState, Peak, QuasiStatic, QuasiStaticState, StepError, StepReport};
 use loam_kernels::ConnectError;
 use loam_model::{LoadLevel, Model, ModelError, ModelState, PointChange};
 use std::time::Duration;
@@ -241,7 +247,7 @@ impl<const D: usize> Analysis<D> {
     }
 
     /// The same analysis from its start with every material's strength divided by `factor`
-    /// (strength reduction's trial law, `loam_implicit::reduced_strength`): after a search
+    /// (strength reduction's trial law, [`reduced_strength`]): after a search
     /// has bracketed the factor of safety, the run carries on at the largest factor that
     /// held, so its outputs show the state just before failure. Quasi-static analyses.
     pub fn with_strength_reduced(&self, factor: f64) -> Result<Self, StrengthReductionError> {

@@ -3,8 +3,8 @@
 use anyhow::Context;
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
+use loam_analysis::StrengthTrial;
 use loam_format::checkpoint::Checkpoint;
-use loam_implicit::StrengthTrial;
 use loam_run::{
     checkpoint_interval, checkpoint_scene, resume_scene, run_scene_with, CheckpointEvery, CheckpointWritten, Progress,
     RunEvent, RunOptions, RunSummary, CHECKPOINT_FILE,

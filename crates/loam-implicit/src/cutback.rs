@@ -19,7 +19,7 @@ const TINY_INCREMENT: f64 = 1e-7;
 /// its target. The caller asks [`next`](Self::next) for the size of its next attempt and
 /// reports each attempt's outcome.
 #[derive(Debug)]
-pub(crate) struct CutBack {
+pub struct CutBack {
     /// The step's whole increment.
     full: f64,
     target: f64,
@@ -53,7 +53,7 @@ struct Tally {
 
 /// What a step advances: the load factor (scale 1), or the time by steps of Δt.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) enum StepScale {
+pub enum StepScale {
     LoadFactor,
     Time(f64),
 }

@@ -1,8 +1,8 @@
 //! Implicit MPM analyses over the grid, points, constitutive and solver crates, after the
 //! seed paper (Wang et al. 2016) with the finite-strain extension of docs/theory.md §2:
 //!
-//! - [`QuasiStatic`]: loads applied in steps, Newton per step, automatic cut-back;
-//!   [`StrengthReduction`] brackets a factor of safety on top of it;
+//! - [`QuasiStatic`]: loads applied in steps, Newton per step, automatic cut-back
+//!   ([`CutBack`], also the strength steps of `loam_analysis::StrengthReduction`);
 //! - [`Dynamic`]: Newmark / Bossak time stepping with Newton per step.
 //!
 //! Each analysis's step is one driver over named stages (docs/theory.md §1): connect the
@@ -27,17 +27,13 @@ mod quasi_static;
 mod report;
 mod residual;
 mod slivers;
-mod strength_reduction;
 mod tangent;
 
 pub use arc_length::{ArcLengthSettings, ArcLengthState, Peak};
+pub use cutback::{CutBack, StepScale};
 pub use dynamic::{Dynamic, DynamicSettings, DynamicState, MassMatrix};
 pub use loam_kernels::{ConnectError, InvalidSetting, RunError};
 pub use loam_model::{AntiLocking, Kinematics, Model, ModelError, PlaneConstraint};
 pub use points::PointUpdateError;
 pub use quasi_static::{LoadControl, QuasiStatic, QuasiStaticSettings, QuasiStaticState};
 pub use report::{IterationProfile, StepError, StepReport};
-pub use strength_reduction::{
-    has_strength, reduced_strength, FactorOfSafety, SearchSoFar, StrengthReduction, StrengthReductionError,
-    StrengthTrial, TrialStart,
-};

@@ -11,12 +11,14 @@ use crate::cutback::{CutBack, StepScale};
 use crate::engine::Engine;
 use crate::points::PointUpdateError;
 use crate::{IterationProfile, StepError, StepReport};
+use loam_constitutive::ConstitutiveLaw;
 use loam_kernels::{on_pool, RunError};
 use loam_model::{AnalysisKind, LoadLevel, Model, ModelError, ModelState, PointChange};
 use loam_solve::{
     norm, BlockPattern, LinearSolver, LinearSolverChoice, LinearSolverKind, LinearSolverTimings, NewtonError,
     NewtonReport, NewtonSettings,
 };
+use std::sync::Arc;
 use std::time::Instant;
 
 /// Settings of a quasi-static analysis.
@@ -333,13 +335,34 @@ impl<const D: usize> QuasiStatic<D> {
         Ok(report)
     }
 
+    /// Connect the committed state to the background, as its next attempt will see it (a
+    /// no-op where it is connected already).
+    pub fn connect_committed(&mut self) -> Result<(), StepError> {
+        self.engine.connect(self.step)
+    }
+
     /// One attempt to bring the committed state back to equilibrium at its own load factor
-    /// after its laws changed (a strength-reduction search lowering the strength of a state
-    /// that held): the stages of [`QuasiStatic::attempt`] at zero load increment, on the
-    /// connectivity of that state. On success the state is committed; on failure nothing
-    /// changes. The extrapolated increment is left as it was (this attempt has no load
-    /// increment to scale it by).
-    pub(crate) fn attempt_at_held_load(&mut self) -> Result<NewtonReport, NewtonError<PointUpdateError>> {
+    /// under the laws `materials` (a strength-reduction search lowering the strength of a
+    /// state that held; connected by [`QuasiStatic::connect_committed`]): the stages of
+    /// [`QuasiStatic::attempt`] at zero load increment. Converged: the state is committed
+    /// with the new laws. Not converged: nothing changes, the laws included. The outer error
+    /// is the model's refusal of the laws.
+    pub fn attempt_with_materials(
+        &mut self,
+        materials: Vec<Arc<dyn ConstitutiveLaw>>,
+    ) -> Result<Result<NewtonReport, NewtonError<PointUpdateError>>, ModelError> {
+        let before = self.engine.model.materials().to_vec();
+        self.engine.model.set_materials(materials)?;
+        let attempt = self.attempt_at_held_load();
+        if attempt.is_err() {
+            self.engine.model.set_materials(before)?;
+        }
+        Ok(attempt)
+    }
+
+    /// [`QuasiStatic::attempt_with_materials`] once the laws are set. The extrapolated
+    /// increment is left as it was (this attempt has no load increment to scale it by).
+    fn attempt_at_held_load(&mut self) -> Result<NewtonReport, NewtonError<PointUpdateError>> {
         self.engine.external_forces(LoadLevel::Factor(self.load_factor));
         self.prescribe(self.load_factor);
         let report = self.engine.newton(None)?;

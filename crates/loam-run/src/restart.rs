@@ -11,12 +11,10 @@
 //! else is rebuilt from the scene, as it was built at the start, so the resumed run takes
 //! the steps the interrupted one would have taken with the same numbers.
 
-use loam_analysis::{Analysis, AnalysisState};
+use loam_analysis::{Analysis, AnalysisState, FactorOfSafety, SearchSoFar, StrengthTrial};
 use loam_explicit::ExplicitState;
 use loam_format::checkpoint::{Checkpoint, CheckpointError, CheckpointHeader, Section};
-use loam_implicit::{
-    ArcLengthState, DynamicState, FactorOfSafety, Peak, QuasiStatic, QuasiStaticState, SearchSoFar, StrengthTrial,
-};
+use loam_implicit::{ArcLengthState, DynamicState, Peak, QuasiStatic, QuasiStaticState};
 use loam_model::{Model, ModelState};
 use loam_points::{Column, PointStore};
 use loam_solve::LinearSolverKind;

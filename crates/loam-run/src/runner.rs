@@ -8,15 +8,15 @@
 use crate::monitor::MonitorColumns;
 use crate::point_fields::{default_fields, write_frame, write_points_csv};
 use crate::restart::{self, CheckpointEvery, CheckpointWritten, Checkpoints, OutputsState, Phase, RunTotals};
-use loam_analysis::{Analysis, AnalysisError, Collapse, Progress};
+use loam_analysis::{
+    Analysis, AnalysisError, Collapse, FactorOfSafety, Progress, SearchSoFar, StrengthReduction,
+    StrengthReductionError, StrengthTrial, TrialStart,
+};
 use loam_format::checkpoint::{Checkpoint, CheckpointError, CheckpointHeader};
 use loam_format::output::{CsvCell, CsvWriter, OutputError, PvdWriter};
 use loam_format::output_dir::{clear_output_dir, prepare_output_dir, remove_temp_files, OutputDirError};
 use loam_format::run_plots::plot_run;
-use loam_implicit::{
-    FactorOfSafety, Peak, QuasiStatic, SearchSoFar, StrengthReduction, StrengthReductionError, StrengthTrial,
-    TrialStart,
-};
+use loam_implicit::{Peak, QuasiStatic};
 use loam_model::{ExternalWork, LoadLevel, Model, ModelError, PointChange};
 use loam_scene::FieldSpec;
 use loam_scene::{

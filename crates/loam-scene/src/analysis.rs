@@ -8,10 +8,10 @@ use super::solver::Solver;
 use super::{
     AnalysisSpec, ControlSpec, LawSpec, LinearSpec, LoadedScene, MethodSpec, SceneError, StrengthReductionSpec,
 };
-use loam_analysis::{Analysis, AnalysisError};
+use loam_analysis::{has_strength, Analysis, AnalysisError};
 use loam_explicit::{Explicit, ExplicitError, ExplicitSettings, TimeStep};
 use loam_implicit::{
-    has_strength, ArcLengthSettings, Dynamic, DynamicSettings, LoadControl, QuasiStatic, QuasiStaticSettings, StepError,
+    ArcLengthSettings, Dynamic, DynamicSettings, LoadControl, QuasiStatic, QuasiStaticSettings, StepError,
 };
 use loam_kernels::{ConnectError, InvalidSetting};
 use loam_model::{AnalysisKind, Model, ModelOption, Unaccepted};

@@ -15,9 +15,8 @@
 //! loads from zero at its factor and bisection between a factor that held and one that
 //! failed brackets F to the tolerance.
 
-use crate::cutback::{CutBack, StepScale};
-use crate::{LoadControl, QuasiStatic, QuasiStaticSettings, QuasiStaticState, StepError};
 use loam_constitutive::ConstitutiveLaw;
+use loam_implicit::{CutBack, LoadControl, QuasiStatic, QuasiStaticSettings, QuasiStaticState, StepError, StepScale};
 use loam_kernels::{ConnectError, InvalidSetting};
 use loam_model::{Model, ModelError, ModelState};
 use loam_solve::NewtonReport;
@@ -365,18 +364,12 @@ fn lower_strength<const D: usize>(
     model: &Model<D>,
     factor: f64,
 ) -> Result<Result<NewtonReport, String>, StrengthReductionError> {
-    let step = held.steps_done();
-    match held.engine.connect(step) {
+    match held.connect_committed() {
         Err(e) if runs_away(&e) => return Ok(Err(e.to_string())),
         Err(source) => return Err(StrengthReductionError::Trial { factor, source }),
         Ok(()) => {}
     }
-    let before = held.model().materials().to_vec();
-    held.engine.model.set_materials(reduced_materials(model, factor)?)?;
-    let attempt = held.attempt_at_held_load();
-    if attempt.is_err() {
-        held.engine.model.set_materials(before)?;
-    }
+    let attempt = held.attempt_with_materials(reduced_materials(model, factor)?)?;
     Ok(attempt.map_err(|e| e.to_string()))
 }
 
