@@ -292,8 +292,9 @@ impl<const D: usize> Dynamic<D> {
     }
 
     /// The nodal mass, velocity and acceleration of the committed points, scattered
-    /// mass-weighted (zero on constrained dofs). Nodes that persist from step to step keep
-    /// their own velocity and acceleration, mapped once at the start.
+    /// mass-weighted (zero on constrained dofs and along an inclined roller's normal).
+    /// Nodes that persist from step to step keep their own velocity and acceleration,
+    /// mapped once at the start.
     fn map_to_nodes(&mut self) {
         if self.engine.model.background().moves_with_body() {
             return;
@@ -321,10 +322,12 @@ impl<const D: usize> Dynamic<D> {
                     out[i] += w * point_field[p][i];
                 }
             });
-            for (k, (v, &fixed)) in field.iter_mut().zip(&e.constrained).enumerate() {
+            let held = e.frames.assembly_mask(&e.constrained);
+            for (k, (v, &fixed)) in field.iter_mut().zip(held).enumerate() {
                 let m = nodal_mass[k / D];
                 *v = if fixed || m <= 0.0 { 0.0 } else { *v / m };
             }
+            e.frames.hold_in_field(field);
         }
     }
 
@@ -347,10 +350,12 @@ impl<const D: usize> Dynamic<D> {
             let hoop = axisymmetric.then(|| conn.support_values(p)[a] / x[p][0]);
             internal_force(pts.volume()[p], &pts.stress()[p], &c, average.map(|avg| avg.average(k)), hoop)
         });
+        let held = e.frames.assembly_mask(&e.constrained);
         for (k, a) in self.acceleration.iter_mut().enumerate() {
             let m = self.inertia.nodal_mass[k / D];
-            *a = if e.constrained[k] || m <= 0.0 { 0.0 } else { (f_ext[k] - f_int[k]) / m };
+            *a = if held[k] || m <= 0.0 { 0.0 } else { (f_ext[k] - f_int[k]) / m };
         }
+        e.frames.hold_in_field(&mut self.acceleration);
         let (acc, conn) = (&self.acceleration, &e.conn);
         e.model
             .points_mut()

@@ -119,6 +119,17 @@ impl<const D: usize> LocalFrames<D> {
         }
     }
 
+    /// A nodal field (global, D per active node) without its held components at the framed
+    /// nodes: v_I ← T Π Tᵀ v_I, Π zeroing the held local dofs (a dynamic step's nodal
+    /// velocity and acceleration, which the roller stops along its normal).
+    pub fn hold_in_field(&self, v: &mut [f64]) {
+        self.to_local(v);
+        for &dof in &self.held {
+            v[dof] = 0.0;
+        }
+        self.to_global(v);
+    }
+
     /// The tangent at the framed nodes in their frames, their held dofs eliminated.
     pub fn hold_in_matrix(&self, pattern: &BlockPattern, matrix: &mut SystemMatrix) {
         matrix.transform_blocks(pattern, |a| self.frame(a));

@@ -92,8 +92,8 @@ const ACCEPTED: [Acceptance; 12] = [
     },
     Acceptance {
         is: |o| matches!(o, ModelOption::InclinedRoller { .. }),
-        by: [true, false, true],
-        why: "is a roller on an inclined plane, held in a local frame at the nodes; the quasi-static and explicit analyses take it (the implicit dynamic one not yet)",
+        by: [true, true, true],
+        why: "",
     },
     Acceptance {
         is: |o| matches!(o, ModelOption::FrictionalPlane { .. }),
