@@ -2,7 +2,7 @@
 //!
 //! This facade re-exports the layered crates so that a user can depend on one crate:
 //! - [`grid`]: the background (Cartesian grid or body-fitted mesh), basis functions,
-//!   connectivity;
+//!   connectivity, the band scatter of points to nodes;
 //! - [`points`]: the material point store and its generation;
 //! - [`constitutive`]: constitutive laws and the small/finite strain updates;
 //! - [`solve`]: sparse assembly, linear solvers, Newton's control;
@@ -10,7 +10,8 @@
 //! - [`kernels`]: the point–node stages every analysis shares;
 //! - [`implicit`]: quasi-static and Newmark-dynamic implicit analysis;
 //! - [`explicit`]: explicit MPM (USF, USL, MUSL) for comparison;
-//! - [`analysis`]: one stepping interface over the three analyses;
+//! - [`analysis`]: one stepping interface over the three analyses, and the
+//!   strength-reduction search for a factor of safety;
 //! - [`format`]: the file formats: VTU/PVD/CSV outputs, plots, the checkpoint container;
 //! - [`scene`]: scene files: their schema, validation and the model and analysis they build;
 //! - [`run`]: the runner of a scene with its outputs, checkpoint and restart.

@@ -74,8 +74,9 @@ fn bspline_small_strain_column_is_second_order() {
     assert!(e32.top_displacement < 2.0e-4, "e_u = {}", e32.top_displacement);
 }
 
-/// The same scene gives bitwise the same numbers with 1 and 2 threads: assembly gathers in
-/// a fixed order and the point loops are independent.
+/// The same scene gives bitwise the same numbers with 1 and 2 threads: the transfers scatter
+/// in the bands' fixed order, assembly gathers in a fixed order and the point loops are
+/// independent.
 #[test]
 fn one_or_many_threads_give_identical_results() {
     let run = |threads| {

@@ -104,7 +104,7 @@ fn the_extrapolated_predictor_keeps_the_roller() {
 /// roller holds: no point ends more than 1 cm below it, the compression of a cell (0.5 m)
 /// at twice the static strain at the block's base, ρ g H cos 30° / E = 8.7e-3 (measured
 /// 3 mm; with the nodal velocity and acceleration keeping their normal components at the
-/// roller's nodes, 78 mm).
+/// roller's nodes, 78 mm). The roller's force is normal to the plane at every step.
 #[test]
 fn a_block_slides_down_an_inclined_roller_in_implicit_dynamics() {
     let text = TROUGH
@@ -133,6 +133,20 @@ fn a_block_slides_down_an_inclined_roller_in_implicit_dynamics() {
     println!("down the slope {down}, expected {expected}; lowest point above the plane {lowest:?}");
     assert!((down / expected - 1.0).abs() < 1e-6, "the centre of mass moved {down} down the slope, not {expected}");
     assert!(lowest.0 > 0.0 && lowest.1 > -0.01, "a point went {} below the roller", -lowest.1);
+    // The roller's force is its held (normal) dofs' residual turned to the global frame:
+    // normal to the plane to round-off, at every step.
+    let log = std::fs::read_to_string(dir.path().join("run_log.csv")).unwrap();
+    let header: Vec<&str> = log.lines().next().unwrap().split(',').collect();
+    let (rx, ry) = (
+        header.iter().position(|c| *c == "incline0_reaction_x").unwrap(),
+        header.iter().position(|c| *c == "incline0_reaction_y").unwrap(),
+    );
+    let weight = mass * 10.0;
+    for row in log.lines().skip(1) {
+        let v: Vec<f64> = row.split(',').map(|v| v.parse().unwrap()).collect();
+        let along = v[rx] * cos + v[ry] * sin;
+        assert!(along.abs() <= 1e-9 * weight, "the roller's force has {along} along the plane");
+    }
 }
 
 /// The trough in explicit dynamics with local damping: once the block has settled, the

@@ -258,7 +258,9 @@ impl<const D: usize> Connectivity<D> {
             .map(|p| support(p).last().map_or(0, |&last| (last - support(p)[0]) as usize))
             .max()
             .unwrap_or(0);
-        let width = span + 1;
+        debug_assert!((0..count.len()).all(|p| support(p).windows(2).all(|w| w[0] < w[1])), "supports ascend");
+        // Without points, one band over every node rather than one per node.
+        let width = if count.is_empty() { num_nodes.max(1) } else { span + 1 };
         let first_node = |p: usize| support(p).first().map_or(0, |&g| g as usize);
         self.bands.group_by(count.len(), num_nodes.div_ceil(width).max(1), |p| first_node(p) / width);
         let active = &self.active_nodes.active_to_grid;

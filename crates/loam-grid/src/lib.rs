@@ -3,8 +3,9 @@
 //! (linear "standard MPM", GIMP, quadratic B-splines), the body-fitted mesh of the updated
 //! Lagrangian FEM reference, both behind [`Background`], and the per-step connectivity:
 //! which nodes each point's basis touches, which nodes are active, and which points touch
-//! each node; and the deterministic band scatter that maps points to nodes. Also the ghost-penalty faces of cut cells, the one lexicographic numbering
-//! and the one Gauss–Legendre rule of the workspace.
+//! each node; and the deterministic band scatter that maps points to nodes. Also the
+//! ghost-penalty faces of cut cells, the one lexicographic numbering and the one
+//! Gauss–Legendre rule of the workspace.
 //!
 //! The grid is reset every step (updated Lagrangian MPM): it carries no state of its own.
 //! See docs/theory.md §4 for the basis functions (Bardenhagen & Kober 2004; iGIMP of

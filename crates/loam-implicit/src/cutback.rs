@@ -187,7 +187,7 @@ impl CutBack {
 
     /// The report of step `step`, which reached `load_factor` and `time` with `reactions`,
     /// started at `start`.
-    pub fn into_report(
+    pub(crate) fn into_report(
         self,
         step: usize,
         load_factor: f64,

@@ -169,6 +169,11 @@ impl<const D: usize> Engine<D> {
         self.fallbacks
     }
 
+    /// Whether the connectivity is that of the committed points.
+    pub fn is_connected(&self) -> bool {
+        self.conn_current
+    }
+
     pub fn linear_solver(&self) -> &dyn LinearSolver {
         self.linear.as_ref()
     }

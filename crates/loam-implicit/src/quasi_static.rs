@@ -351,6 +351,7 @@ impl<const D: usize> QuasiStatic<D> {
         &mut self,
         materials: Vec<Arc<dyn ConstitutiveLaw>>,
     ) -> Result<Result<NewtonReport, NewtonError<PointUpdateError>>, ModelError> {
+        debug_assert!(self.engine.is_connected(), "connect_committed comes first");
         let before = self.engine.model.materials().to_vec();
         self.engine.model.set_materials(materials)?;
         let attempt = self.attempt_at_held_load();

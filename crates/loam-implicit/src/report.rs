@@ -92,7 +92,7 @@ pub struct IterationProfile {
     pub krylov_iterations: usize,
     /// Bytes the linear solver holds beyond the assembled tangent (0 where not known).
     pub solver_bytes: usize,
-    /// Basis evaluation, active nodes, adjacency, sparsity pattern.
+    /// Basis evaluation, active nodes, adjacency, the points' bands, sparsity pattern.
     pub connectivity: Duration,
     /// Point kinematics, stress update and tangent, internal force scatter.
     pub points_and_residual: Duration,

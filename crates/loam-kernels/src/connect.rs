@@ -5,9 +5,9 @@ use loam_grid::{ActiveNodes, Connectivity, NodeLayout};
 use loam_model::Model;
 
 /// Connect the points of `model` at the configuration the mechanics is written on to its
-/// background (basis values and gradients, active nodes, node → point adjacency) and mark
-/// the constrained dofs of the active nodes in `layout`: the planes' and the bodies'.
-/// `step` names the step in an error.
+/// background (basis values and gradients, active nodes, node → point adjacency, the
+/// points' bands) and mark the constrained dofs of the active nodes in `layout`: the
+/// planes' and the bodies'. `step` names the step in an error.
 pub fn connect<const D: usize>(
     model: &Model<D>,
     layout: &NodeLayout,

@@ -69,11 +69,11 @@ mod tests {
     use loam_grid::{BasisKind, Grid};
     use nalgebra::Vector2;
 
-    /// The linear basis reproduces a linear nodal field at any point, and the gather of the
+    /// The linear basis reproduces a linear nodal field at any point, and the scatter of the
     /// basis values over the points is each node's share of them (partition of unity:
     /// the shares sum to the number of points).
     #[test]
-    fn interpolation_reproduces_linear_fields_and_gathers_partition_unity() {
+    fn interpolation_reproduces_linear_fields_and_scatters_partition_unity() {
         let grid = Grid::new(Vector2::zeros(), Vector2::new(0.5, 1.0), [4, 3]).unwrap();
         let positions = [Vector2::new(0.3, 0.4), Vector2::new(1.1, 2.7), Vector2::new(1.9, 1.0)];
         let mut conn = Connectivity::new(BasisKind::Linear);
