@@ -322,12 +322,7 @@ impl<const D: usize> Dynamic<D> {
                     out[i] += w * point_field[p][i];
                 }
             });
-            let held = e.frames.assembly_mask(&e.constrained);
-            for (k, (v, &fixed)) in field.iter_mut().zip(held).enumerate() {
-                let m = nodal_mass[k / D];
-                *v = if fixed || m <= 0.0 { 0.0 } else { *v / m };
-            }
-            e.frames.hold_in_field(field);
+            per_unit_mass(e, nodal_mass, field, |_, momentum| momentum);
         }
     }
 
@@ -350,12 +345,7 @@ impl<const D: usize> Dynamic<D> {
             let hoop = axisymmetric.then(|| conn.support_values(p)[a] / x[p][0]);
             internal_force(pts.volume()[p], &pts.stress()[p], &c, average.map(|avg| avg.average(k)), hoop)
         });
-        let held = e.frames.assembly_mask(&e.constrained);
-        for (k, a) in self.acceleration.iter_mut().enumerate() {
-            let m = self.inertia.nodal_mass[k / D];
-            *a = if held[k] || m <= 0.0 { 0.0 } else { (f_ext[k] - f_int[k]) / m };
-        }
-        e.frames.hold_in_field(&mut self.acceleration);
+        per_unit_mass(e, &self.inertia.nodal_mass, &mut self.acceleration, |k, _| f_ext[k] - f_int[k]);
         let (acc, conn) = (&self.acceleration, &e.conn);
         e.model
             .points_mut()
@@ -415,6 +405,23 @@ impl<const D: usize> Dynamic<D> {
             );
         }
     }
+}
+
+/// A nodal velocity or acceleration a step starts from: `value(k, field[k]) / m_I` on every
+/// dof k of a node I with mass that no constraint holds, zero elsewhere, and without its
+/// normal component at the nodes of inclined rollers (docs/theory.md §5).
+fn per_unit_mass<const D: usize>(
+    engine: &Engine<D>,
+    nodal_mass: &[f64],
+    field: &mut [f64],
+    value: impl Fn(usize, f64) -> f64,
+) {
+    let held = engine.frames.assembly_mask(&engine.constrained);
+    for (k, (v, &fixed)) in field.iter_mut().zip(held).enumerate() {
+        let m = nodal_mass[k / D];
+        *v = if fixed || m <= 0.0 { 0.0 } else { value(k, *v) / m };
+    }
+    engine.frames.hold_in_field(field);
 }
 
 #[cfg(test)]

@@ -123,10 +123,7 @@ impl<const D: usize> LocalFrames<D> {
     /// nodes: v_I ← T Π Tᵀ v_I, Π zeroing the held local dofs (a dynamic step's nodal
     /// velocity and acceleration, which the roller stops along its normal).
     pub fn hold_in_field(&self, v: &mut [f64]) {
-        self.to_local(v);
-        for &dof in &self.held {
-            v[dof] = 0.0;
-        }
+        self.hold_in_load(v);
         self.to_global(v);
     }
 
