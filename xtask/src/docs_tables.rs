@@ -2,7 +2,7 @@
 //! the run that produced them, not copied by hand.
 //!
 //! A report section marks a table with `<!-- table: ID -->` on the line before it
-//! ([`Report::mark_table`](crate::report::Report::mark_table)). A table of the docs that
+//! (`Report::mark_table` in the binary's `report.rs`). A table of the docs that
 //! is generated carries the marker `<!-- table: ID, cargo xtask verify --quick -->` (or
 //! without `--quick`, for the full sweep) on the line before it; a run of that mode
 //! replaces the table's rows (the consecutive lines that start with `|`) by the report's.
@@ -10,7 +10,7 @@
 use anyhow::{bail, Result};
 
 /// The marker of table `id` in a report.
-pub(crate) fn report_marker(id: &str) -> String {
+pub fn report_marker(id: &str) -> String {
     format!("<!-- table: {id} -->")
 }
 
@@ -35,7 +35,7 @@ fn docs_marker(line: &str, quick: bool) -> Option<&str> {
 /// id, and the ids replaced; a marked table the report lacks (its section did not run) is
 /// left as it is. A marked table the report has but the docs marker is not followed by a
 /// table is an error.
-pub(crate) fn update(docs: &str, report: &str, quick: bool) -> Result<(String, Vec<String>)> {
+pub fn update(docs: &str, report: &str, quick: bool) -> Result<(String, Vec<String>)> {
     let report_lines: Vec<&str> = report.lines().collect();
     let lines: Vec<&str> = docs.lines().collect();
     let (mut out, mut replaced) = (Vec::with_capacity(lines.len()), Vec::new());

@@ -7,7 +7,6 @@
 
 mod columns;
 mod contact;
-mod docs_tables;
 mod dynamics;
 mod footing;
 mod granular;
@@ -146,7 +145,7 @@ fn verify(quick: bool, out: &Path, only: &[String], update_docs: bool) -> Result
     if update_docs {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/verification.md");
         let docs = std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
-        let (text, ids) = docs_tables::update(&docs, &report.md, quick)?;
+        let (text, ids) = xtask::docs_tables::update(&docs, &report.md, quick)?;
         std::fs::write(&path, text).with_context(|| format!("writing {}", path.display()))?;
         eprintln!("verify: wrote tables {} of docs/verification.md", ids.join(", "));
     }

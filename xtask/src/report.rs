@@ -61,7 +61,7 @@ impl Report {
     /// Mark the table that follows as table `id`, which `--update-docs` copies into the
     /// docs where they carry its marker (`docs_tables`).
     pub fn mark_table(&mut self, id: &str) -> Result<()> {
-        writeln!(self.md, "{}", crate::docs_tables::report_marker(id))?;
+        writeln!(self.md, "{}", xtask::docs_tables::report_marker(id))?;
         Ok(())
     }
 

@@ -3,10 +3,7 @@
 //! stays on one steeper than its angle of friction; bodies in contact keep their momentum.
 //! `cargo xtask verify` runs the longer cases; these are shortened to 0.6 s.
 
-#[allow(dead_code, unused_imports)] // helpers shared with the other explicit tests
-mod common;
-
-use common::assert_same_state;
+use crate::common::assert_same_state;
 use loam_constitutive::Elastic;
 use loam_explicit::{
     Explicit, ExplicitError, ExplicitSettings, Kinematics, LeapfrogEnergy, Model, TimeStep, UpdateScheme,

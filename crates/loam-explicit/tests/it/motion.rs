@@ -1,9 +1,7 @@
 //! Explicit MPM against exact motions and the verification problems of docs/verification.md
 //! (V1a with local damping, V2, V5). Figures are printed (`--nocapture`) and bounded.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use loam_constitutive::Elastic;
 use loam_explicit::Model;
 use loam_explicit::{
