@@ -16,6 +16,7 @@ mod implicit_dynamics;
 mod implicit_mpm;
 mod inclined;
 mod loads;
+mod newton_retry;
 mod prescribed_displacement;
 mod restart;
 mod run_scenes;

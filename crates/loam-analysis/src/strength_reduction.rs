@@ -281,9 +281,16 @@ impl StrengthReduction {
     }
 
     /// A trial's settings: load-controlled whatever `trial.control` says (it holds or
-    /// fails at the full load).
+    /// fails at the full load). A trial from zero, whose failure is the search's sign of
+    /// collapse, takes whole Newton corrections without a second try
+    /// (`NewtonSettings::retry`; docs/theory.md §14); under [`TrialStart::LastHeld`]
+    /// only the first trial runs here, at the lower factor, which must hold.
     fn trial_settings(&self) -> QuasiStaticSettings {
-        QuasiStaticSettings { control: LoadControl::LoadFactor, ..self.trial.clone() }
+        let mut newton = self.trial.newton;
+        if self.start == TrialStart::Zero {
+            newton.retry_backtracks = 0;
+        }
+        QuasiStaticSettings { control: LoadControl::LoadFactor, newton, ..self.trial.clone() }
     }
 
     /// Apply the full load to the model reduced by `factor`.

@@ -103,7 +103,7 @@ impl CutBack {
         done.iterations += report.iterations();
         done.linear_iterations += report.linear_iterations;
         done.linear_setup += std::time::Duration::from_secs_f64(report.linear_setup_s);
-        done.direct_fallbacks += report.direct_fallbacks;
+        done.direct_fallbacks += report.direct_fallbacks as usize;
         if report.residuals.len() > done.hardest_residuals.len() {
             done.hardest_residuals.clone_from(&report.residuals);
         }
@@ -144,7 +144,7 @@ impl CutBack {
     ) -> Result<(), StepError> {
         let residuals = &report.residuals;
         self.done.cutbacks += 1;
-        self.done.direct_fallbacks += report.direct_fallbacks;
+        self.done.direct_fallbacks += report.direct_fallbacks as usize;
         // A cut-back is the step control doing its job (the run log and the progress
         // count them; strength reduction fails trials on purpose), so it is information,
         // not a warning; a run that cannot go on returns an error.

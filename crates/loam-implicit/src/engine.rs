@@ -65,6 +65,8 @@ pub(crate) struct Engine<const D: usize> {
     /// −R, the right-hand side of a correction's solve.
     rhs: Vec<f64>,
     correction: Vec<f64>,
+    /// The increment a Newton solve started from, for its second try.
+    du_start: Vec<f64>,
     /// B-bar or assumed strain: the cell-averaged support gradients, `stride` per point
     /// (empty without them).
     cell_gradients: Vec<SVector<f64, D>>,
@@ -149,6 +151,7 @@ impl<const D: usize> Engine<D> {
             residual: Vec::new(),
             rhs: Vec::new(),
             correction: Vec::new(),
+            du_start: Vec::new(),
             cell_gradients: Vec::new(),
             groups: CellGroups::default(),
             ghost: Vec::new(),
@@ -390,15 +393,48 @@ impl<const D: usize> Engine<D> {
     /// Stage 4, Newton's method (docs/theory.md §6) from the increment in `du` (zero, a
     /// prescribed displacement or a predictor): update the points and the residual, then
     /// until converged assemble, solve, update the points along the correction (shortened
-    /// where the residual grew) and check. `inertia` adds the
-    /// Newmark terms of a dynamic step. On success `du` holds the converged increment and
-    /// the trial state is the step's; nothing is committed either way.
-    pub fn newton(&mut self, mut inertia: Option<&mut Inertia>) -> Result<NewtonReport, NewtonError<PointUpdateError>> {
+    /// where the residual grew) and check. Where that fails with whole corrections, once
+    /// more from the same increment with the line search (`NewtonSettings::retry`).
+    /// `inertia` adds the Newmark terms of a dynamic step. On success `du` holds the
+    /// converged increment and the trial state is the step's; nothing is committed either
+    /// way.
+    pub fn newton(&mut self, inertia: Option<&mut Inertia>) -> Result<NewtonReport, NewtonError<PointUpdateError>> {
+        self.newton_under(self.newton, inertia)
+    }
+
+    /// [`Engine::newton`] under `settings` instead of the analysis's own.
+    pub fn newton_under(
+        &mut self,
+        settings: NewtonSettings,
+        mut inertia: Option<&mut Inertia>,
+    ) -> Result<NewtonReport, NewtonError<PointUpdateError>> {
         self.size_buffers();
+        let Some(retry) = settings.retry() else {
+            return self.newton_with(settings, inertia);
+        };
+        self.du_start.clone_from(&self.du);
+        let first = match self.newton_with(settings, inertia.as_deref_mut()) {
+            Err(first) => first,
+            converged => return converged,
+        };
+        tracing::debug!(%first, "Newton tried again from the same start, with the line search");
+        self.du.copy_from_slice(&self.du_start);
+        match self.newton_with(retry, inertia) {
+            Ok(report) => Ok(report.after_failed_try(first.report())),
+            Err(second) => Err(second.after_failed_try(first.report())),
+        }
+    }
+
+    /// [`Engine::newton`]'s loop under `settings`, from the increment `du` holds.
+    fn newton_with(
+        &mut self,
+        settings: NewtonSettings,
+        mut inertia: Option<&mut Inertia>,
+    ) -> Result<NewtonReport, NewtonError<PointUpdateError>> {
         let reference = self
             .update_points_and_residual(inertia.as_deref_mut())
             .map_err(|source| NewtonError::Problem { source, report: NewtonReport::default() })?;
-        let mut newton = NewtonControl::start(self.newton, norm(&self.residual), reference)?;
+        let mut newton = NewtonControl::start(settings, norm(&self.residual), reference)?;
         loop {
             newton.next_iteration()?;
             self.assemble(inertia.as_deref());

@@ -363,10 +363,14 @@ impl<const D: usize> QuasiStatic<D> {
 
     /// [`QuasiStatic::attempt_with_materials`] once the laws are set. The extrapolated
     /// increment is left as it was (this attempt has no load increment to scale it by).
+    /// Newton takes whole corrections without a second try (`NewtonSettings::retry`): a
+    /// strength step's failure is the search's sign of collapse, and a line search carries
+    /// Newton to equilibria of the discrete problem beyond it (docs/theory.md §14).
     fn attempt_at_held_load(&mut self) -> Result<NewtonReport, NewtonError<PointUpdateError>> {
         self.engine.external_forces(LoadLevel::Factor(self.load_factor));
         self.prescribe(self.load_factor);
-        let report = self.engine.newton(None)?;
+        let whole = NewtonSettings { retry_backtracks: 0, ..self.settings.newton };
+        let report = self.engine.newton_under(whole, None)?;
         self.engine.commit();
         Ok(report)
     }

@@ -778,6 +778,9 @@ pub struct SolverSpec {
     pub max_iterations: usize,
     /// Most backtracks of the line search along one Newton correction (0: none).
     pub max_backtracks: usize,
+    /// With `max_backtracks: 0`, the backtracks of the second try of a solve that failed
+    /// with whole corrections, before the step is cut back (0: no second try).
+    pub retry_backtracks: usize,
     /// `None`: `Auto`.
     pub linear: Option<LinearSpec>,
     /// Quasi-static: start each load step from the last increment, scaled (default false).
@@ -792,6 +795,7 @@ impl Default for SolverSpec {
             increment_tolerance: n.increment_tolerance,
             max_iterations: n.max_iterations,
             max_backtracks: n.max_backtracks,
+            retry_backtracks: n.retry_backtracks,
             linear: None,
             extrapolate: QuasiStaticSettings::default().extrapolate,
         }

@@ -46,21 +46,23 @@ impl LoadedScene {
                 ),
             ));
         }
-        if sv.max_backtracks > MAX_BACKTRACKS {
-            return Err(self.error(
-                &at("max_backtracks"),
-                format!(
-                    "max_backtracks is {}; it must be 0 to {MAX_BACKTRACKS} (each backtrack at least halves the \
-                     step along the correction, so {MAX_BACKTRACKS} reach below 1e-6 of it)",
-                    sv.max_backtracks
-                ),
-            ));
+        for (key, value) in [("max_backtracks", sv.max_backtracks), ("retry_backtracks", sv.retry_backtracks)] {
+            if value > MAX_BACKTRACKS {
+                return Err(self.error(
+                    &at(key),
+                    format!(
+                        "{key} is {value}; it must be 0 to {MAX_BACKTRACKS} (each backtrack at least halves the \
+                         step along the correction, so {MAX_BACKTRACKS} reach below 1e-6 of it)"
+                    ),
+                ));
+            }
         }
         let newton = NewtonSettings {
             residual_tolerance: sv.residual_tolerance,
             increment_tolerance: sv.increment_tolerance,
             max_iterations: sv.max_iterations,
             max_backtracks: sv.max_backtracks,
+            retry_backtracks: sv.retry_backtracks,
             ..NewtonSettings::default()
         };
         Ok(Solver {

@@ -254,6 +254,7 @@ fn cases() -> Vec<(&'static str, usize, String)> {
         ),
         ("max iterations zero", 2, c(&[("residual_tolerance: 1e-9", "residual_tolerance: 1e-9, max_iterations: 0")])),
         ("too many backtracks", 2, c(&[("residual_tolerance: 1e-9", "residual_tolerance: 1e-9, max_backtracks: 50")])),
+        ("too many retry backtracks", 2, c(&[("residual_tolerance: 1e-9", "residual_tolerance: 1e-9, retry_backtracks: 21")])),
         ("linear lu", 2, c(&[("residual_tolerance: 1e-9", "residual_tolerance: 1e-9, linear: Some(Lu)")])),
         ("solver unknown key", 2, c(&[("residual_tolerance: 1e-9", "residual_tolerance: 1e-9, linearr: None")])),
         ("bbar finite strain", 2, c(&[(PLANE, &option("anti_locking: BBar,"))])),

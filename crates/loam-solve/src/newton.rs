@@ -15,6 +15,14 @@
 //! that grows past `divergence_factor` times the initial one, a failed factorisation or the
 //! iteration limit. An unconverged step is never reported as converged.
 //!
+//! The line search is off by default: where whole corrections converge they converge
+//! quadratically, and shortening them near a corner of a yield surface can cost more
+//! corrections than it saves. But a solve that fails with whole corrections is started
+//! again from the same increment with the line search ([`NewtonSettings::retry`]) before
+//! the caller cuts the step back: the first iterate of a step in which many points yield
+//! at once can overshoot so far that whole corrections never recover, where a shortened
+//! one does (a refined 3D slope's first load step).
+//!
 //! An iterative linear solver is asked for the relative residual of
 //! [`NewtonControl::linear_tolerance`], an inexact-Newton forcing term (Eisenstat & Walker,
 //! SIAM J. Sci. Comput. 17, 1996, choice 2): loose while Newton is far from the solution,
@@ -37,6 +45,10 @@ pub struct NewtonSettings {
     /// Most backtracks along one correction that raised the residual's norm (the line
     /// search, module docs); 0 (the default) takes every correction whole.
     pub max_backtracks: usize,
+    /// Where a solve that takes every correction whole fails, it is started again from
+    /// the same increment with this many backtracks a correction before the caller cuts
+    /// the step back (module docs); 0: no second try.
+    pub retry_backtracks: usize,
 }
 
 impl Default for NewtonSettings {
@@ -47,7 +59,17 @@ impl Default for NewtonSettings {
             max_iterations: 20,
             divergence_factor: 1e8,
             max_backtracks: 0,
+            retry_backtracks: 4,
         }
+    }
+}
+
+impl NewtonSettings {
+    /// The settings of the second try after a solve with whole corrections failed, or
+    /// `None` when there is none: the solve already backtracked, or no retry is asked for.
+    pub fn retry(&self) -> Option<Self> {
+        (self.max_backtracks == 0 && self.retry_backtracks > 0)
+            .then_some(Self { max_backtracks: self.retry_backtracks, ..*self })
     }
 }
 
@@ -63,13 +85,29 @@ pub struct NewtonReport {
     /// Seconds spent preparing the linear solves: factorisations, or multigrid set-up.
     pub linear_setup_s: f64,
     /// Corrections whose Krylov solve failed and were solved by a direct solver instead.
-    pub direct_fallbacks: usize,
+    pub direct_fallbacks: u32,
+    /// Corrections of a first try with whole corrections that failed, before this solve
+    /// started again with the line search ([`NewtonSettings::retry_backtracks`]); the
+    /// residuals and increments above are the second try's. (This and `direct_fallbacks`
+    /// are `u32`s, which keeps `NewtonError` within 128 bytes.)
+    pub abandoned: u32,
 }
 
 impl NewtonReport {
-    /// Number of corrections (linear solves) made.
+    /// Number of corrections (linear solves) made, those of an abandoned first try
+    /// included.
     pub fn iterations(&self) -> usize {
-        self.increments.len()
+        self.abandoned as usize + self.increments.len()
+    }
+
+    /// This report of a second try, after a first try whose report is `first` failed:
+    /// its corrections and linear work are counted here.
+    pub fn after_failed_try(mut self, first: &NewtonReport) -> Self {
+        self.abandoned += u32::try_from(first.iterations()).unwrap_or(u32::MAX);
+        self.linear_iterations += first.linear_iterations;
+        self.linear_setup_s += first.linear_setup_s;
+        self.direct_fallbacks += first.direct_fallbacks;
+        self
     }
 
     pub fn final_residual(&self) -> f64 {
@@ -98,6 +136,16 @@ impl<E: std::error::Error + 'static> NewtonError<E> {
             NewtonError::IterationLimit(r) | NewtonError::Diverged(r) | NewtonError::NonFinite(r) => r,
             NewtonError::Linear { report, .. } | NewtonError::Problem { report, .. } => report,
         }
+    }
+
+    /// This failure of a second try, after a first try whose report is `first` failed too.
+    pub fn after_failed_try(mut self, first: &NewtonReport) -> Self {
+        let report = match &mut self {
+            NewtonError::IterationLimit(r) | NewtonError::Diverged(r) | NewtonError::NonFinite(r) => r,
+            NewtonError::Linear { report, .. } | NewtonError::Problem { report, .. } => report,
+        };
+        *report = std::mem::take(report).after_failed_try(first);
+        self
     }
 }
 
@@ -176,7 +224,7 @@ impl NewtonControl {
     pub fn linear_solved(&mut self, iterations: usize, setup: std::time::Duration, fell_back: bool) {
         self.report.linear_iterations += iterations;
         self.report.linear_setup_s += setup.as_secs_f64();
-        self.report.direct_fallbacks += usize::from(fell_back);
+        self.report.direct_fallbacks += u32::from(fell_back);
     }
 
     /// Check the residual after the last correction: `Ok(true)` when converged, `Ok(false)`
