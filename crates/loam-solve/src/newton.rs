@@ -469,4 +469,27 @@ mod tests {
         assert_eq!(newton.backtrack(1.0, f64::INFINITY, 1.0, 0), Some(0.1));
         assert_eq!(newton.backtrack(1.0, f64::NAN, 1.0, 0), Some(0.1));
     }
+
+    /// The second try backtracks only where the first took whole corrections, and its
+    /// report counts the first try's corrections and linear work.
+    #[test]
+    fn a_second_try_follows_only_whole_corrections_and_counts_the_first() {
+        let whole = NewtonSettings::default();
+        assert_eq!(whole.retry().map(|r| r.max_backtracks), Some(4));
+        assert_eq!(NewtonSettings { retry_backtracks: 0, ..whole }.retry(), None);
+        assert_eq!(NewtonSettings { max_backtracks: 2, ..whole }.retry(), None);
+        let first = NewtonReport {
+            residuals: vec![1.0, 2.0, 3.0],
+            increments: vec![1.0, 1.0],
+            linear_iterations: 7,
+            direct_fallbacks: 1,
+            ..Default::default()
+        };
+        let second = NewtonReport { residuals: vec![1.0, 1e-12], increments: vec![1e-9], ..Default::default() };
+        let both = second.after_failed_try(&first);
+        assert_eq!((both.iterations(), both.abandoned, both.linear_iterations, both.direct_fallbacks), (3, 2, 7, 1));
+        assert_eq!(both.final_residual(), 1e-12);
+        let failed = NewtonError::<Never>::Diverged(NewtonReport { increments: vec![1.0], ..Default::default() });
+        assert_eq!(failed.after_failed_try(&first).report().iterations(), 3);
+    }
 }
