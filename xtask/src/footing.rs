@@ -363,7 +363,7 @@ fn circular(report: &mut Report) -> Result<()> {
                 .map_or(format!("{q:.3} | {error:+.4}"), |f| format!("— | {}", f.split(':').next().unwrap_or(f)));
             writeln!(report.md, "| {kind} | {cells} | {shown} | {cutbacks} | {wall:.2} |")?;
             let name = format!("V3 circular {kind} {cells} cells per R");
-            if rough && cells == 16 {
+            if cells == 16 {
                 report.rows.push(Row::checked(&name, "|q/c/N_c - 1|", error.abs(), CIRCULAR_Q_U));
             } else {
                 report.rows.push(Row::info(&name, "q/c/N_c - 1", error));

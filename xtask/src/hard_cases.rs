@@ -152,7 +152,7 @@ fn softening_section(quick: bool, report: &mut Report) -> Result<()> {
         report.rows.push(Row::info(format!("H2 softening {cells} cells"), "peak_load", s.peak));
         report.rows.push(Row::info(format!("H2 softening {cells} cells"), "shortening_reached", s.reached));
     }
-    writeln!(report.md, "\nWhy each run stopped:\n\n{}\n\nThe coarse mesh follows the softening branch down towards the residual strength. The finer meshes stop soon after the peak with Newton finding no equilibrium. Their band is narrower and the specimen unloads faster: most likely a snap-back, which displacement control cannot follow (loam's arc-length control takes loads, not a prescribed displacement). The peak itself is mesh-independent to 2 %. A regularised law (non-local or gradient plasticity) is what makes the post-peak branch objective; loam does not have one.\n", stops.join("\n"))?;
+    writeln!(report.md, "\nWhy each run stopped:\n\n{}\n\nThe coarse mesh follows the softening branch down towards the residual strength. The finer meshes' band is narrower and the specimen unloads faster, with a snap-back soon after the peak that displacement control cannot follow (loam's arc-length control takes loads, not a prescribed displacement): whole Newton corrections find no equilibrium past it, and Newton's second try, with the line search (docs/theory.md §6), may find one on its far side, the load falling at once by several percent, and go on down the branch; the list above says where each run stopped. The peak itself is mesh-independent to 2 %. A regularised law (non-local or gradient plasticity) is what makes the post-peak branch objective; loam does not have one.\n", stops.join("\n"))?;
     Ok(())
 }
 
