@@ -33,7 +33,9 @@ fn a_step_whole_corrections_cannot_take_is_taken_by_the_second_try_without_a_cut
     assert_eq!(with.iter().map(|r| r.cutbacks).sum::<usize>(), 0);
     let first = &with[0];
     let second_try = first.hardest_residuals.len() - 1;
-    assert_eq!(first.iterations, 20 + second_try, "the abandoned try's 20 corrections are counted");
+    assert_eq!(first.hardest_abandoned, 20, "the first try ran to the iteration limit");
+    assert_eq!(first.iterations, 20 + second_try, "the abandoned try's corrections are counted");
+    assert_eq!(first.most_iterations(), first.iterations);
     // Steps whole corrections take are untouched by the retry, bit for bit.
     let (a, b) = (pushed_footing(8, 0), pushed_footing(8, 4));
     assert!(a.iter().zip(&b).all(|(a, b)| a.iterations == b.iterations && a.reactions == b.reactions));

@@ -81,8 +81,11 @@ fn multigrid_cg_gives_the_same_numbers_on_one_and_two_threads() {
 fn a_failed_krylov_solve_falls_back_on_the_direct_solver() {
     let path = std::path::Path::new("examples/footing_von_mises.ron");
     let source = std::fs::read_to_string(path).unwrap();
+    // Without Newton's second try: where whole corrections fail, the direct and the
+    // Krylov runs abandon their first tries after different numbers of corrections, so
+    // their counts would differ though both converge; cut back, they take the same path.
     let run = |linear: &str| {
-        let text = source.replace("solver: (", &format!("solver: (linear: Some({linear}), "));
+        let text = source.replace("solver: (", &format!("solver: (linear: Some({linear}), retry_backtracks: 0, "));
         let scene = loam::scene::LoadedScene::parse(path, text).unwrap();
         let mut analysis = scene.build::<2>().unwrap();
         (0..4).map(|_| analysis.step().unwrap()).collect::<Vec<_>>()

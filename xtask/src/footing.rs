@@ -75,8 +75,8 @@ impl FootingRun {
     fn record(&mut self, r: StepReport, tolerance: f64) {
         self.curve.push((r.load_factor * SETTLEMENT, -r.reactions[0][1] / COHESION));
         self.cutbacks += r.cutbacks;
-        let to_tolerance =
-            r.hardest_residuals.iter().position(|&x| x <= tolerance).unwrap_or(r.hardest_residuals.len());
+        let to_tolerance = r.hardest_abandoned
+            + r.hardest_residuals.iter().position(|&x| x <= tolerance).unwrap_or(r.hardest_residuals.len());
         self.to_tolerance = self.to_tolerance.max(to_tolerance);
         if r.most_iterations() > self.max_iterations {
             self.max_iterations = r.most_iterations();

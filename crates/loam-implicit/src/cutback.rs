@@ -46,8 +46,10 @@ struct Tally {
     direct_fallbacks: usize,
     /// Relative residuals of the last sub-step.
     residuals: Vec<f64>,
-    /// Relative residuals of the converged sub-step with the most corrections.
+    /// Relative residuals of the converged sub-step with the most corrections, and the
+    /// corrections of the first try it abandoned.
     hardest_residuals: Vec<f64>,
+    hardest_abandoned: usize,
     active_nodes: usize,
 }
 
@@ -104,8 +106,10 @@ impl CutBack {
         done.linear_iterations += report.linear_iterations;
         done.linear_setup += std::time::Duration::from_secs_f64(report.linear_setup_s);
         done.direct_fallbacks += report.direct_fallbacks as usize;
-        if report.residuals.len() > done.hardest_residuals.len() {
+        let most = done.hardest_abandoned + done.hardest_residuals.len().saturating_sub(1);
+        if done.hardest_residuals.is_empty() || report.iterations() > most {
             done.hardest_residuals.clone_from(&report.residuals);
+            done.hardest_abandoned = report.abandoned as usize;
         }
         done.residuals = report.residuals;
         done.active_nodes = active_nodes;
@@ -219,6 +223,7 @@ impl CutBack {
             direct_fallbacks: done.direct_fallbacks,
             residuals: done.residuals,
             hardest_residuals: done.hardest_residuals,
+            hardest_abandoned: done.hardest_abandoned,
             active_nodes: done.active_nodes,
             dofs: done.active_nodes * dofs_per_node,
             reactions,

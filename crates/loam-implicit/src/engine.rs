@@ -67,6 +67,9 @@ pub(crate) struct Engine<const D: usize> {
     correction: Vec<f64>,
     /// The increment a Newton solve started from, for its second try.
     du_start: Vec<f64>,
+    /// Whether a correction of the solve under way raised the residual's norm or left a
+    /// point that cannot be updated: where none did, a second try would be the first again.
+    overshot: bool,
     /// B-bar or assumed strain: the cell-averaged support gradients, `stride` per point
     /// (empty without them).
     cell_gradients: Vec<SVector<f64, D>>,
@@ -152,6 +155,7 @@ impl<const D: usize> Engine<D> {
             rhs: Vec::new(),
             correction: Vec::new(),
             du_start: Vec::new(),
+            overshot: false,
             cell_gradients: Vec::new(),
             groups: CellGroups::default(),
             ghost: Vec::new(),
@@ -393,8 +397,9 @@ impl<const D: usize> Engine<D> {
     /// Stage 4, Newton's method (docs/theory.md §6) from the increment in `du` (zero, a
     /// prescribed displacement or a predictor): update the points and the residual, then
     /// until converged assemble, solve, update the points along the correction (shortened
-    /// where the residual grew) and check. Where that fails with whole corrections, once
-    /// more from the same increment with the line search (`NewtonSettings::retry`).
+    /// where the residual grew) and check. Where that fails with whole corrections, one of
+    /// which raised the residual, once more from the same increment with the line search
+    /// (`NewtonSettings::retry`); where both fail, the first failure is the error.
     /// `inertia` adds the Newmark terms of a dynamic step. On success `du` holds the
     /// converged increment and the trial state is the step's; nothing is committed either
     /// way.
@@ -413,15 +418,26 @@ impl<const D: usize> Engine<D> {
             return self.newton_with(settings, inertia);
         };
         self.du_start.clone_from(&self.du);
+        self.overshot = false;
         let first = match self.newton_with(settings, inertia.as_deref_mut()) {
             Err(first) => first,
             converged => return converged,
         };
+        if !self.overshot {
+            // No correction raised the residual, so the line search would shorten none:
+            // the second try would repeat the first.
+            return Err(first);
+        }
         tracing::debug!(%first, "Newton tried again from the same start, with the line search");
         self.du.copy_from_slice(&self.du_start);
         match self.newton_with(retry, inertia) {
             Ok(report) => Ok(report.after_failed_try(first.report())),
-            Err(second) => Err(second.after_failed_try(first.report())),
+            // The first failure says what whole corrections met (a lost pivot traced to
+            // slivers, a divergence), which is what a cut-back reports.
+            Err(second) => {
+                tracing::debug!(%second, "the second try failed too");
+                Err(first)
+            }
         }
     }
 
@@ -467,6 +483,7 @@ impl<const D: usize> Engine<D> {
         loop {
             let updated = self.update_points_and_residual(inertia.as_deref_mut());
             let after = if updated.is_ok() { norm(&self.residual) } else { f64::INFINITY };
+            self.overshot |= after > before || after.is_nan();
             let Some(shorter) = newton.backtrack(before, after, alpha, backtracks) else {
                 return updated.map(|reference| (reference, alpha));
             };

@@ -28,8 +28,11 @@ pub struct StepReport {
     /// Relative residuals of the last sub-step, before the first and after each correction.
     pub residuals: Vec<f64>,
     /// Relative residuals of the converged sub-step with the most corrections (the first
-    /// such sub-step on a tie); see [`most_iterations`](Self::most_iterations).
+    /// such sub-step on a tie); see [`most_iterations`](Self::most_iterations). Where that
+    /// sub-step abandoned a first try, its second try's.
     pub hardest_residuals: Vec<f64>,
+    /// Corrections of the first try that sub-step abandoned (0 where it had none).
+    pub hardest_abandoned: usize,
     pub active_nodes: usize,
     pub dofs: usize,
     /// Per constraint (scene order), the support reaction Σ (f_int − f_ext) over its nodes
@@ -44,10 +47,11 @@ impl StepReport {
         self.residuals.last().copied().unwrap_or(f64::NAN)
     }
 
-    /// The most corrections one converged sub-step needed (its residual history holds the
-    /// one before the first correction and one after each).
+    /// The most corrections one converged sub-step needed, those of an abandoned first try
+    /// included (its residual history holds the one before the first correction and one
+    /// after each).
     pub fn most_iterations(&self) -> usize {
-        self.hardest_residuals.len().saturating_sub(1)
+        self.hardest_abandoned + self.hardest_residuals.len().saturating_sub(1)
     }
 }
 

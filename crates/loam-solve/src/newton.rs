@@ -137,16 +137,6 @@ impl<E: std::error::Error + 'static> NewtonError<E> {
             NewtonError::Linear { report, .. } | NewtonError::Problem { report, .. } => report,
         }
     }
-
-    /// This failure of a second try, after a first try whose report is `first` failed too.
-    pub fn after_failed_try(mut self, first: &NewtonReport) -> Self {
-        let report = match &mut self {
-            NewtonError::IterationLimit(r) | NewtonError::Diverged(r) | NewtonError::NonFinite(r) => r,
-            NewtonError::Linear { report, .. } | NewtonError::Problem { report, .. } => report,
-        };
-        *report = std::mem::take(report).after_failed_try(first);
-        self
-    }
 }
 
 /// Forcing term of the first Newton iteration, and the loosest of any: four digits. A
@@ -489,7 +479,5 @@ mod tests {
         let both = second.after_failed_try(&first);
         assert_eq!((both.iterations(), both.abandoned, both.linear_iterations, both.direct_fallbacks), (3, 2, 7, 1));
         assert_eq!(both.final_residual(), 1e-12);
-        let failed = NewtonError::<Never>::Diverged(NewtonReport { increments: vec![1.0], ..Default::default() });
-        assert_eq!(failed.after_failed_try(&first).report().iterations(), 3);
     }
 }
