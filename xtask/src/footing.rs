@@ -8,7 +8,7 @@
 
 use crate::report::{Report, Row};
 use crate::soil::{self, COHESION, POISSON, YOUNG};
-use anyhow::Result;
+use anyhow::{Context, Result};
 use loam::constitutive::{ConeFit, ConstitutiveLaw, DruckerPrager, Elastic, MohrCoulomb};
 use loam::format::output::plot::{Plot, Series};
 use loam::format::output::{CsvCell, CsvWriter};
@@ -249,10 +249,12 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
     writeln!(report.md, "## V3 strip footing\n\nRigid rough footing, half-width b = 1 (B = 2b), pushed {SETTLEMENT} b = 0.1 B in {LOAD_STEPS} load steps (extrapolated start) into weightless soil; half model 10 b × 5 b, linear basis, 2×2 points per cell, small strain, geometrically linear (points held at their places, Prandtl's small-deformation setting), E = {YOUNG:e}, ν = {POISSON} (and 0.49 for the locking case), c = {COHESION}. q = footing reaction / b; q_u = q at the settlement of 0.1 B (docs/verification.md §V3), q(0.04 b) is shown beside it; reference (2 + π) c_u (von Mises, c_u = σ_y/√3) and c N_c (Mohr–Coulomb and Drucker–Prager fitted in plane strain, associated). Plain: every point's own strain (locks); B-bar: cell-averaged dilatation; assumed strain: the cell's average strain plus β = {STABILIZATION} times each point's deviatoric deviation (docs/theory.md §13). The bound |q_u/q_ref − 1| ≤ 5 % is checked for every law with the assumed strain on the finest mesh of the full sweep ({finest_assumed} cells per b); every curve is checked to rise to its plateau without a drop. Curves: footing_curves.csv, footing_curves.svg.\n")?;
     writeln!(report.md, "| law | treatment | cells per b | q(0.04 b)/c | q_u/c | reference | q_u/q_ref − 1 | largest drop / q_ref | max Newton its per sub-step | max corrections to 1e-9 | cut-backs | wall [s] |\n|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")?;
     let mut sweep = Sweep::new(&report.out)?;
-    for law in &laws()? {
+    let laws = laws()?;
+    let mut runs = sweep_runs(&laws, quick, report).into_iter();
+    for law in &laws {
         let (mut law_drop, mut stopped) = (0.0f64, 0usize);
         for (anti_locking, meshes) in treatments(quick) {
-            let (drop, n_stopped) = treatment(quick, report, &mut sweep, law, anti_locking, meshes)?;
+            let (drop, n_stopped) = treatment(quick, report, &mut sweep, law, (anti_locking, meshes), &mut runs)?;
             law_drop = law_drop.max(drop);
             stopped += n_stopped;
         }
@@ -335,59 +337,80 @@ fn circular(report: &mut Report) -> Result<()> {
         report.md,
         "| footing | cells per R | q/c | / N_c − 1 | cut-backs | wall [s] |\n|---|---:|---:|---:|---:|---:|"
     )?;
-    for (rough, nc) in [(true, 6.05), (false, 5.69)] {
+    let jobs: Vec<(bool, f64, usize)> =
+        [(true, 6.05), (false, 5.69)].into_iter().flat_map(|(rough, nc)| [4, 8, 16].map(|n| (rough, nc, n))).collect();
+    let runs = report.runs(&jobs, |&(rough, _, cells)| circular_run(&tresca, rough, cells));
+    for (&(rough, nc, cells), (q, cutbacks, failure, wall)) in jobs.iter().zip(runs) {
         let kind = if rough { "rough" } else { "smooth" };
-        for cells in [4, 8, 16] {
-            eprintln!("verify: V3 circular footing, {kind}, {cells} cells per R");
-            let t = Instant::now();
-            let model = circular_footing_model(tresca.clone(), cells, SETTLEMENT, rough);
-            let settings = QuasiStaticSettings { load_steps: CIRCULAR_STEPS, extrapolate: true, ..Default::default() };
-            let mut qs = QuasiStatic::new(model, settings);
-            let (mut q, mut cutbacks, mut failure) = (f64::NAN, 0, None);
-            while !qs.is_finished() {
-                match qs.step() {
-                    Ok(r) => {
-                        q = -r.reactions[0][1] / (std::f64::consts::PI * COHESION);
-                        cutbacks += r.cutbacks;
-                    }
-                    Err(e) => {
-                        failure = Some(format!("stopped at step {}: {e}", qs.steps_done() + 1));
-                        break;
-                    }
-                }
-            }
-            let wall = t.elapsed().as_secs_f64();
-            let error = if failure.is_some() { f64::NAN } else { q / nc - 1.0 };
-            let shown = failure
-                .as_deref()
-                .map_or(format!("{q:.3} | {error:+.4}"), |f| format!("— | {}", f.split(':').next().unwrap_or(f)));
-            writeln!(report.md, "| {kind} | {cells} | {shown} | {cutbacks} | {wall:.2} |")?;
-            let name = format!("V3 circular {kind} {cells} cells per R");
-            if cells == 16 {
-                report.rows.push(Row::checked(&name, "|q/c/N_c - 1|", error.abs(), CIRCULAR_Q_U));
-            } else {
-                report.rows.push(Row::info(&name, "q/c/N_c - 1", error));
-            }
+        let error = if failure.is_some() { f64::NAN } else { q / nc - 1.0 };
+        let shown = failure
+            .as_deref()
+            .map_or(format!("{q:.3} | {error:+.4}"), |f| format!("— | {}", f.split(':').next().unwrap_or(f)));
+        writeln!(report.md, "| {kind} | {cells} | {shown} | {cutbacks} | {wall:.2} |")?;
+        let name = format!("V3 circular {kind} {cells} cells per R");
+        if cells == 16 {
+            report.rows.push(Row::checked(&name, "|q/c/N_c - 1|", error.abs(), CIRCULAR_Q_U));
+        } else {
+            report.rows.push(Row::info(&name, "q/c/N_c - 1", error));
         }
     }
     writeln!(report.md)?;
     Ok(())
 }
 
-/// One law with one treatment on its meshes: the table rows, the observed order of q_u
-/// and, for the assumed strain, the verdict. Returns the largest drop / q_ref and the
-/// number of runs that stopped short.
+/// One circular footing: q/c at the end, cut-backs, why it stopped (if it did), wall time.
+fn circular_run(tresca: &Arc<dyn ConstitutiveLaw>, rough: bool, cells: usize) -> (f64, usize, Option<String>, f64) {
+    let kind = if rough { "rough" } else { "smooth" };
+    eprintln!("verify: V3 circular footing, {kind}, {cells} cells per R");
+    let t = Instant::now();
+    let model = circular_footing_model(tresca.clone(), cells, SETTLEMENT, rough);
+    let settings = QuasiStaticSettings { load_steps: CIRCULAR_STEPS, extrapolate: true, ..Default::default() };
+    let mut qs = QuasiStatic::new(model, settings);
+    let (mut q, mut cutbacks, mut failure) = (f64::NAN, 0, None);
+    while !qs.is_finished() {
+        match qs.step() {
+            Ok(r) => {
+                q = -r.reactions[0][1] / (std::f64::consts::PI * COHESION);
+                cutbacks += r.cutbacks;
+            }
+            Err(e) => {
+                failure = Some(format!("stopped at step {}: {e}", qs.steps_done() + 1));
+                break;
+            }
+        }
+    }
+    (q, cutbacks, failure, t.elapsed().as_secs_f64())
+}
+
+/// Every run of the sweep, in the order of the table (law, treatment, mesh).
+fn sweep_runs(laws: &[FootingLaw], quick: bool, report: &Report) -> Vec<FootingRun> {
+    let jobs: Vec<(&FootingLaw, AntiLocking, usize)> = laws
+        .iter()
+        .flat_map(|law| {
+            treatments(quick).into_iter().flat_map(move |(a, meshes)| meshes.iter().map(move |&cells| (law, a, cells)))
+        })
+        .collect();
+    report.runs(&jobs, |&(law, anti_locking, cells)| {
+        eprintln!("verify: V3 {}, {}, {cells} cells per b", law.name, treatment_name(anti_locking));
+        run(&law.law, cells, anti_locking)
+    })
+}
+
+/// One law with one treatment on its meshes, from their `runs` in order: the table rows,
+/// the observed order of q_u and, for the assumed strain, the verdict. Returns the largest
+/// drop / q_ref and the number of runs that stopped short.
 fn treatment(
     quick: bool,
     report: &mut Report,
     sweep: &mut Sweep,
     law: &FootingLaw,
-    anti_locking: AntiLocking,
-    meshes: &[usize],
+    (anti_locking, meshes): (AntiLocking, &[usize]),
+    runs: &mut impl Iterator<Item = FootingRun>,
 ) -> Result<(f64, usize)> {
     let (mut drop, mut stopped, mut ratios, mut finest) = (0.0f64, 0, Vec::new(), None);
     for &cells in meshes {
-        let r = run_row(report, sweep, law, anti_locking, cells)?;
+        let r = runs.next().context("the sweep ran fewer footings than its table has rows")?;
+        run_row(report, sweep, law, anti_locking, cells, &r)?;
         if anti_locking == ASSUMED && cells == *meshes.last().unwrap() {
             sweep.finest(law, cells, &r);
         }
@@ -411,7 +434,7 @@ fn treatment(
     Ok((drop, stopped))
 }
 
-/// One run: its table row (and why it stopped, if it did), its curve and its rows of the
+/// One run's table row (and why it stopped, if it did), its curve and its rows of the
 /// bounds table.
 fn run_row(
     report: &mut Report,
@@ -419,10 +442,9 @@ fn run_row(
     law: &FootingLaw,
     anti_locking: AntiLocking,
     cells: usize,
-) -> Result<FootingRun> {
+    r: &FootingRun,
+) -> Result<()> {
     let (name, nc, treatment) = (&law.name, law.nc, treatment_name(anti_locking));
-    eprintln!("verify: V3 {name}, {treatment}, {cells} cells per b");
-    let r = run(&law.law, cells, anti_locking);
     let q_u = r.q_u();
     let ratio = q_u / nc - 1.0;
     let drop = r.largest_drop() / nc;
@@ -430,11 +452,11 @@ fn run_row(
     if let Some(f) = &r.failure {
         writeln!(report.md, "\n{name}, {treatment}, {cells} cells per b stopped: {f}\n")?;
     }
-    sweep.curve(law, treatment, cells, &r)?;
+    sweep.curve(law, treatment, cells, r)?;
     let case = format!("V3 {name} {treatment} {cells}/b");
     report.rows.push(Row::info(&case, "qu_over_q_ref_minus_1", ratio));
     report.rows.push(Row::info(&case, "max_newton_corrections_to_1e-9", r.to_tolerance as f64));
-    Ok(r)
+    Ok(())
 }
 
 /// The assumed strain's verdict on a law from its finest run. Every law's bound, the

@@ -5,6 +5,7 @@
 use anyhow::Result;
 use loam::format::output::{CsvCell, CsvWriter};
 use loam_verification::Bound;
+use rayon::prelude::*;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -48,6 +49,8 @@ pub(crate) struct Report {
     pub md: String,
     pub rows: Vec<Row>,
     pub out: PathBuf,
+    /// Runs of a section may go side by side (`verify --side-by-side`).
+    pub side_by_side: bool,
 }
 
 impl Report {
@@ -55,7 +58,28 @@ impl Report {
     pub fn new(out: &Path) -> Result<Self> {
         let mut md = String::new();
         writeln!(md, "# loam verification report\n")?;
-        Ok(Self { md, rows: Vec::new(), out: out.to_owned() })
+        Ok(Self { md, rows: Vec::new(), out: out.to_owned(), side_by_side: false })
+    }
+
+    /// An empty part of a report, for one section to write into `out`; [`Report::append`]
+    /// puts it in its place.
+    pub fn part(out: &Path, side_by_side: bool) -> Self {
+        Self { md: String::new(), rows: Vec::new(), out: out.to_owned(), side_by_side }
+    }
+
+    /// `part`'s markdown and rows after this report's.
+    pub fn append(&mut self, part: Report) {
+        self.md.push_str(&part.md);
+        self.rows.extend(part.rows);
+    }
+
+    /// `run` of every job, in order: side by side if the report allows it.
+    pub fn runs<J: Sync, R: Send>(&self, jobs: &[J], run: impl Fn(&J) -> R + Sync + Send) -> Vec<R> {
+        if self.side_by_side {
+            jobs.par_iter().map(run).collect()
+        } else {
+            jobs.iter().map(run).collect()
+        }
     }
 
     /// Mark the table that follows as table `id`, which `--update-docs` copies into the

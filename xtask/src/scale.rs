@@ -85,3 +85,88 @@ pub fn run(dim: usize, cells: &[usize], solver: &str, contrast: f64) -> Result<(
     }
     Ok(())
 }
+
+/// `examples/slope_3d.ron` at cells of `cell_size` (the example's own is 2 m), its strength
+/// divided by `factor` (c and tan φ), gravity in the example's load steps without the
+/// strength-reduction search, the linear solver `solver`: one profiled Newton iteration, then
+/// every load step's Newton effort and wall time, and the peak memory. Issue 34's case: the
+/// 3D elastoplastic slope an engineer would refine.
+pub fn run_slope(cell_size: f64, factor: f64, solver: &str, steps: Option<usize>) -> Result<()> {
+    use loam::analysis::Analysis;
+    use loam::scene::{AnalysisSpec, LawSpec, LinearSpec, LoadedScene};
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/slope_3d.ron");
+    let mut loaded = LoadedScene::read(&path).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let scene = &mut loaded.scene;
+    let extent: Vec<f64> = scene.grid.cell_size.iter().zip(&scene.grid.cells).map(|(h, n)| h * *n as f64).collect();
+    let cells: Vec<usize> = extent.iter().map(|l| (l / cell_size).round() as usize).collect();
+    if cells.iter().zip(&extent).any(|(&n, l)| n == 0 || (n as f64 * cell_size - l).abs() > 1e-9 * l) {
+        bail!("--slope {cell_size}: the cell size must divide the grid's extent {extent:?}");
+    }
+    scene.grid.cell_size = vec![cell_size; 3];
+    scene.grid.cells = cells;
+    for m in &mut scene.materials {
+        if let LawSpec::MohrCoulomb { cohesion, friction, .. } = &mut m.law {
+            *cohesion /= factor;
+            *friction = (friction.to_radians().tan() / factor).atan().to_degrees();
+        }
+    }
+    if let AnalysisSpec::QuasiStatic { strength_reduction, load_steps, .. } = &mut scene.analysis {
+        *strength_reduction = None;
+        *load_steps = steps.unwrap_or(*load_steps);
+    }
+    scene.solver.linear = Some(match solver {
+        "auto" => LinearSpec::Auto,
+        "direct" => LinearSpec::Direct,
+        "iterative" => LinearSpec::Iterative,
+        other => bail!("--solver {other}: expected auto, direct or iterative"),
+    });
+    let t = Instant::now();
+    let Analysis::QuasiStatic(mut qs) = loaded.build::<3>().map_err(|e| anyhow::anyhow!("{e}"))? else {
+        bail!("examples/slope_3d.ron is no longer a quasi-static analysis");
+    };
+    println!(
+        "slope_3d at {cell_size} m cells, c and tan φ / {factor}: {} points, built in {:.1} s",
+        qs.model().points().len(),
+        t.elapsed().as_secs_f64()
+    );
+    let p = qs.profile_iteration()?;
+    println!(
+        "one iteration ({}): {} dofs, {} nnz | connect {:.2} s | points+residual {:.2} | assembly {:.2} | symbolic {:.2} | numeric {:.2} | solve {:.2} ({} Krylov) | solver {:.2} GB",
+        qs.linear_solver_kind(),
+        p.dofs,
+        p.nonzeros,
+        p.connectivity.as_secs_f64(),
+        p.points_and_residual.as_secs_f64(),
+        p.assembly.as_secs_f64(),
+        p.symbolic.as_secs_f64(),
+        p.numeric.as_secs_f64(),
+        p.solve.as_secs_f64(),
+        p.krylov_iterations,
+        p.solver_bytes as f64 / 1e9,
+    );
+    let start = Instant::now();
+    let (mut iterations, mut cutbacks) = (0, 0);
+    while !qs.is_finished() {
+        let r = qs.step()?;
+        iterations += r.iterations;
+        cutbacks += r.cutbacks;
+        println!(
+            "step {:>2}: λ {:.2} | {} corrections ({} in its hardest sub-step, {} of them abandoned), {} Krylov, {} LU fallbacks | {} cut-backs | {:.1} s",
+            r.step,
+            r.load_factor,
+            r.iterations,
+            r.hardest_residuals.len(),
+            r.hardest_abandoned,
+            r.linear_iterations,
+            r.direct_fallbacks,
+            r.cutbacks,
+            r.wall_time.as_secs_f64()
+        );
+    }
+    let mem = peak_memory().map_or(f64::NAN, |b| b as f64 / 1e9);
+    println!(
+        "load: {iterations} corrections, {cutbacks} cut-backs, {:.1} s | peak {mem:.2} GB",
+        start.elapsed().as_secs_f64()
+    );
+    Ok(())
+}

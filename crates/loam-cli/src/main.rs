@@ -9,7 +9,7 @@ use loam_run::{
     checkpoint_interval, checkpoint_scene, resume_scene, run_scene_with, CheckpointEvery, CheckpointWritten, Progress,
     RunEvent, RunOptions, RunSummary, CHECKPOINT_FILE,
 };
-use loam_scene::LoadedScene;
+use loam_scene::{LoadedScene, SceneSummary};
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -218,16 +218,7 @@ fn default_out(file: &Path) -> PathBuf {
 /// `loam check`: build the scene's analysis, every check included, and say what it holds.
 fn check(scene: &Path, max_memory: Option<u64>) -> anyhow::Result<()> {
     let loaded = load(scene, max_memory)?;
-    let (points, dofs) = match loaded.scene.dimension {
-        3 => {
-            let a = loaded.build::<3>()?;
-            (a.model().points().len(), a.model().background().num_nodes() * 3)
-        }
-        _ => {
-            let a = loaded.build::<2>()?;
-            (a.model().points().len(), a.model().background().num_nodes() * 2)
-        }
-    };
+    let SceneSummary { points, nodal_dofs: dofs } = loaded.check()?;
     println!(
         "{}: ok — {}D, {points} material points, {dofs} nodal dofs at most",
         scene.display(),

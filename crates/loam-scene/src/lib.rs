@@ -131,6 +131,15 @@ fn text_of(path: &Path, bytes: Vec<u8>) -> Result<String, SceneError> {
     })
 }
 
+/// What a built scene holds ([`LoadedScene::check`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SceneSummary {
+    /// Material points.
+    pub points: usize,
+    /// Displacement dofs of every grid node: an upper bound on the system's size.
+    pub nodal_dofs: usize,
+}
+
 /// A parsed scene with its source, so that later errors can point into the file.
 #[derive(Debug, Clone)]
 pub struct LoadedScene {
@@ -205,6 +214,20 @@ impl LoadedScene {
             return Err(self.error(path, format!("{what} has the value {x}; every component must be finite")));
         }
         Ok(SVector::from_column_slice(v))
+    }
+
+    /// Build the scene in its own dimension, every check included (`loam check`), and count
+    /// what it holds. Not generic, so that its callers do not each compile the analyses
+    /// again for both dimensions.
+    pub fn check(&self) -> Result<SceneSummary, SceneError> {
+        fn summary<const D: usize>(analysis: Analysis<D>) -> SceneSummary {
+            let model = analysis.model();
+            SceneSummary { points: model.points().len(), nodal_dofs: model.background().num_nodes() * D }
+        }
+        match self.scene.dimension {
+            3 => self.build::<3>().map(summary),
+            _ => self.build::<2>().map(summary),
+        }
     }
 
     /// Build the model and analysis of a `D`-dimensional scene, checking everything that can
