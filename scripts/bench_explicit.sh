@@ -8,7 +8,7 @@ cd "$(dirname "$0")/.."
 out=${1:-target/bench_explicit}
 threads=${RAYON_NUM_THREADS:-$(nproc)}
 mkdir -p "$out"
-cargo bench --bench explicit -- --warm-up-time 1 --measurement-time 5 | tee "$out/loam.txt"
+cargo bench -p loam-bench --bench explicit -- --warm-up-time 1 --measurement-time 5 | tee "$out/loam.txt"
 if ! python3 -c "import taichi" 2>/dev/null; then
     echo "taichi is not installed (pip install taichi): no peer figures"
     exit 0

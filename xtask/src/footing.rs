@@ -250,7 +250,10 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
     writeln!(report.md, "| law | treatment | cells per b | q(0.04 b)/c | q_u/c | reference | q_u/q_ref − 1 | largest drop / q_ref | max Newton its per sub-step | max corrections to 1e-9 | cut-backs | wall [s] |\n|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")?;
     let mut sweep = Sweep::new(&report.out)?;
     let laws = laws()?;
-    let mut runs = sweep_runs(&laws, quick, report).into_iter();
+    // The circular footings first: the longest of them, left to the end, would run alone
+    // there while the sweep's short runs share the cores.
+    let (circular_runs, runs) = report.both(|| circular_runs(report), || sweep_runs(&laws, quick, report));
+    let mut runs = runs.into_iter();
     for law in &laws {
         let (mut law_drop, mut stopped) = (0.0f64, 0usize);
         for (anti_locking, meshes) in treatments(quick) {
@@ -265,7 +268,7 @@ pub fn verify(quick: bool, report: &mut Report) -> Result<()> {
         report.rows.push(Row::checked(&every, "runs_stopped_before_0.1B", stopped as f64, RUNS_STOPPED));
     }
     sweep.finish(report)?;
-    circular(report)?;
+    circular(report, circular_runs?)?;
     finite_strain(quick, report)
 }
 
@@ -328,19 +331,14 @@ const CIRCULAR_STEPS: usize = 40;
 
 /// The circular footing on Tresca soil (Mohr–Coulomb with φ = ψ = 0), axisymmetric,
 /// rough and smooth, against Eason & Shield's 6.05 and Shield's 5.69: q at 0.2 R.
-fn circular(report: &mut Report) -> Result<()> {
-    let tresca: Arc<dyn ConstitutiveLaw> =
-        Arc::new(MohrCoulomb::from_degrees(Elastic::new(YOUNG, POISSON)?, COHESION, 0.0, 0.0)?);
+fn circular(report: &mut Report, runs: Vec<CircularRun>) -> Result<()> {
     writeln!(report.md, "## V3 circular footing, axisymmetric\n\nA rigid footing of radius R = 1 on the V3 soil as Tresca (Mohr–Coulomb, c = {COHESION}, φ = ψ = 0), 6 R wide and 5 R deep, linear basis, B-bar, 2×2 points per cell, small strain, geometrically linear, pushed {SETTLEMENT} R in {CIRCULAR_STEPS} steps (extrapolated start); rough: the footing's nodes held radially. q = footing force / π R² at 0.2 R; references N_c = 6.05 rough (Eason & Shield 1960), 5.69 smooth (Shield 1955).\n")?;
     report.mark_table("V3-circular")?;
     writeln!(
         report.md,
         "| footing | cells per R | q/c | / N_c − 1 | cut-backs | wall [s] |\n|---|---:|---:|---:|---:|---:|"
     )?;
-    let jobs: Vec<(bool, f64, usize)> =
-        [(true, 6.05), (false, 5.69)].into_iter().flat_map(|(rough, nc)| [4, 8, 16].map(|n| (rough, nc, n))).collect();
-    let runs = report.runs(&jobs, |&(rough, _, cells)| circular_run(&tresca, rough, cells));
-    for (&(rough, nc, cells), (q, cutbacks, failure, wall)) in jobs.iter().zip(runs) {
+    for (&(rough, nc, cells), (q, cutbacks, failure, wall)) in CIRCULAR_JOBS.iter().zip(runs) {
         let kind = if rough { "rough" } else { "smooth" };
         let error = if failure.is_some() { f64::NAN } else { q / nc - 1.0 };
         let shown = failure
@@ -358,8 +356,22 @@ fn circular(report: &mut Report) -> Result<()> {
     Ok(())
 }
 
-/// One circular footing: q/c at the end, cut-backs, why it stopped (if it did), wall time.
-fn circular_run(tresca: &Arc<dyn ConstitutiveLaw>, rough: bool, cells: usize) -> (f64, usize, Option<String>, f64) {
+/// The circular footings: rough then smooth (with their N_c), each at 4, 8 and 16 cells per R.
+const CIRCULAR_JOBS: [(bool, f64, usize); 6] =
+    [(true, 6.05, 4), (true, 6.05, 8), (true, 6.05, 16), (false, 5.69, 4), (false, 5.69, 8), (false, 5.69, 16)];
+
+/// q/c at the end, cut-backs, why it stopped (if it did), wall time.
+type CircularRun = (f64, usize, Option<String>, f64);
+
+/// Every circular footing of [`CIRCULAR_JOBS`], in order.
+fn circular_runs(report: &Report) -> Result<Vec<CircularRun>> {
+    let tresca: Arc<dyn ConstitutiveLaw> =
+        Arc::new(MohrCoulomb::from_degrees(Elastic::new(YOUNG, POISSON)?, COHESION, 0.0, 0.0)?);
+    Ok(report.runs(&CIRCULAR_JOBS, |&(rough, _, cells)| circular_run(&tresca, rough, cells)))
+}
+
+/// One circular footing.
+fn circular_run(tresca: &Arc<dyn ConstitutiveLaw>, rough: bool, cells: usize) -> CircularRun {
     let kind = if rough { "rough" } else { "smooth" };
     eprintln!("verify: V3 circular footing, {kind}, {cells} cells per R");
     let t = Instant::now();

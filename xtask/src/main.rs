@@ -118,7 +118,7 @@ fn main() -> Result<()> {
         Cmd::Tangents { out } => tangents::run(&out),
         Cmd::Bench { args } => {
             let status = std::process::Command::new(env!("CARGO"))
-                .args(["bench", "--package", "loam"])
+                .args(["bench", "--package", "loam-bench"])
                 .args(&args)
                 .status()
                 .context("running cargo bench")?;

@@ -82,6 +82,15 @@ impl Report {
         }
     }
 
+    /// `a()` and `b()`: side by side if the report allows it.
+    pub fn both<A: Send, B: Send>(&self, a: impl FnOnce() -> A + Send, b: impl FnOnce() -> B + Send) -> (A, B) {
+        if self.side_by_side {
+            rayon::join(a, b)
+        } else {
+            (a(), b())
+        }
+    }
+
     /// Mark the table that follows as table `id`, which `--update-docs` copies into the
     /// docs where they carry its marker (`docs_tables`).
     pub fn mark_table(&mut self, id: &str) -> Result<()> {
