@@ -89,7 +89,7 @@ enum Cmd {
         /// The slope's strength divided by this (c and tan φ).
         #[arg(long, default_value_t = 1.6)]
         factor: f64,
-        /// The slope's load steps (default: the example's).
+        /// Stop the slope after this many of its load steps (default: all of them).
         #[arg(long)]
         steps: Option<usize>,
     },

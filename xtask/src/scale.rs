@@ -5,7 +5,7 @@
 //! is its own.
 
 use anyhow::{bail, Context, Result};
-use loam::implicit::{Kinematics, Model, QuasiStatic, QuasiStaticSettings};
+use loam::implicit::{IterationProfile, Kinematics, Model, QuasiStatic, QuasiStaticSettings};
 use loam::solve::LinearSolverChoice;
 use loam_verification::layered_block;
 use std::time::Instant;
@@ -16,6 +16,22 @@ fn peak_memory() -> Option<u64> {
     let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
     let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
     Some(kb * 1024)
+}
+
+/// A profiled iteration's size and phases, in seconds.
+fn phases(p: &IterationProfile) -> String {
+    format!(
+        "{} dofs | {} nnz | connect {:.2} s | points+residual {:.2} | assembly {:.2} | symbolic {:.2} | numeric {:.2} | solve {:.2} ({} Krylov)",
+        p.dofs,
+        p.nonzeros,
+        p.connectivity.as_secs_f64(),
+        p.points_and_residual.as_secs_f64(),
+        p.assembly.as_secs_f64(),
+        p.symbolic.as_secs_f64(),
+        p.numeric.as_secs_f64(),
+        p.solve.as_secs_f64(),
+        p.krylov_iterations
+    )
 }
 
 /// One size in this process: build, profile one iteration, run one load step; print one
@@ -43,17 +59,9 @@ fn run_model<const D: usize>(n: usize, model: Model<D>, solver: LinearSolverChoi
     let step = t.elapsed().as_secs_f64();
     let mem = peak_memory().map_or(f64::NAN, |b| b as f64 / 1e9);
     println!(
-        "{n}^{D} {} | {points} points | {} dofs | {} nnz | build {build:.2} s | connect {:.2} | points+residual {:.2} | assembly {:.2} | symbolic {:.2} | numeric {:.2} | solve {:.2} ({} Krylov) | step {step:.2} s, {} Newton iterations ({} Krylov), {:.2} s per iteration, residuals {:?} | peak {mem:.2} GB",
+        "{n}^{D} {} | {points} points | build {build:.2} s | {} | step {step:.2} s, {} Newton iterations ({} Krylov), {:.2} s per iteration, residuals {:?} | peak {mem:.2} GB",
         qs.linear_solver_kind(),
-        p.dofs,
-        p.nonzeros,
-        p.connectivity.as_secs_f64(),
-        p.points_and_residual.as_secs_f64(),
-        p.assembly.as_secs_f64(),
-        p.symbolic.as_secs_f64(),
-        p.numeric.as_secs_f64(),
-        p.solve.as_secs_f64(),
-        p.krylov_iterations,
+        phases(&p),
         report.iterations,
         report.linear_iterations,
         step / report.iterations.max(1) as f64,
@@ -89,8 +97,8 @@ pub fn run(dim: usize, cells: &[usize], solver: &str, contrast: f64) -> Result<(
 /// `examples/slope_3d.ron` at cells of `cell_size` (the example's own is 2 m), its strength
 /// divided by `factor` (c and tan φ), gravity in the example's load steps without the
 /// strength-reduction search, the linear solver `solver`: one profiled Newton iteration, then
-/// every load step's Newton effort and wall time, and the peak memory. Issue 34's case: the
-/// 3D elastoplastic slope an engineer would refine.
+/// each load step's Newton effort and wall time (the first `steps` of them, or all), and the
+/// peak memory. Issue 34's case: the 3D elastoplastic slope an engineer would refine.
 pub fn run_slope(cell_size: f64, factor: f64, solver: &str, steps: Option<usize>) -> Result<()> {
     use loam::analysis::Analysis;
     use loam::scene::{AnalysisSpec, LawSpec, LinearSpec, LoadedScene};
@@ -110,9 +118,8 @@ pub fn run_slope(cell_size: f64, factor: f64, solver: &str, steps: Option<usize>
             *friction = (friction.to_radians().tan() / factor).atan().to_degrees();
         }
     }
-    if let AnalysisSpec::QuasiStatic { strength_reduction, load_steps, .. } = &mut scene.analysis {
+    if let AnalysisSpec::QuasiStatic { strength_reduction, .. } = &mut scene.analysis {
         *strength_reduction = None;
-        *load_steps = steps.unwrap_or(*load_steps);
     }
     scene.solver.linear = Some(match solver {
         "auto" => LinearSpec::Auto,
@@ -131,22 +138,14 @@ pub fn run_slope(cell_size: f64, factor: f64, solver: &str, steps: Option<usize>
     );
     let p = qs.profile_iteration()?;
     println!(
-        "one iteration ({}): {} dofs, {} nnz | connect {:.2} s | points+residual {:.2} | assembly {:.2} | symbolic {:.2} | numeric {:.2} | solve {:.2} ({} Krylov) | solver {:.2} GB",
+        "one iteration ({}): {} | solver {:.2} GB",
         qs.linear_solver_kind(),
-        p.dofs,
-        p.nonzeros,
-        p.connectivity.as_secs_f64(),
-        p.points_and_residual.as_secs_f64(),
-        p.assembly.as_secs_f64(),
-        p.symbolic.as_secs_f64(),
-        p.numeric.as_secs_f64(),
-        p.solve.as_secs_f64(),
-        p.krylov_iterations,
-        p.solver_bytes as f64 / 1e9,
+        phases(&p),
+        p.solver_bytes as f64 / 1e9
     );
     let start = Instant::now();
     let (mut iterations, mut cutbacks) = (0, 0);
-    while !qs.is_finished() {
+    while !qs.is_finished() && qs.steps_done() < steps.unwrap_or(usize::MAX) {
         let r = qs.step()?;
         iterations += r.iterations;
         cutbacks += r.cutbacks;
