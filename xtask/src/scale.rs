@@ -101,7 +101,7 @@ pub fn run(dim: usize, cells: &[usize], solver: &str, contrast: f64) -> Result<(
 /// peak memory. Issue 34's case: the 3D elastoplastic slope an engineer would refine.
 pub fn run_slope(cell_size: f64, factor: f64, solver: &str, steps: Option<usize>) -> Result<()> {
     use loam::analysis::Analysis;
-    use loam::scene::{AnalysisSpec, LawSpec, LinearSpec, LoadedScene};
+    use loam::scene::{AnalysisSpec, LinearSpec, LoadedScene};
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/slope_3d.ron");
     let mut loaded = LoadedScene::read(&path).map_err(|e| anyhow::anyhow!("{e}"))?;
     let scene = &mut loaded.scene;
@@ -112,12 +112,6 @@ pub fn run_slope(cell_size: f64, factor: f64, solver: &str, steps: Option<usize>
     }
     scene.grid.cell_size = vec![cell_size; 3];
     scene.grid.cells = cells;
-    for m in &mut scene.materials {
-        if let LawSpec::MohrCoulomb { cohesion, friction, .. } = &mut m.law {
-            *cohesion /= factor;
-            *friction = (friction.to_radians().tan() / factor).atan().to_degrees();
-        }
-    }
     if let AnalysisSpec::QuasiStatic { strength_reduction, .. } = &mut scene.analysis {
         *strength_reduction = None;
     }
@@ -128,7 +122,9 @@ pub fn run_slope(cell_size: f64, factor: f64, solver: &str, steps: Option<usize>
         other => bail!("--solver {other}: expected auto, direct or iterative"),
     });
     let t = Instant::now();
-    let Analysis::QuasiStatic(mut qs) = loaded.build::<3>().map_err(|e| anyhow::anyhow!("{e}"))? else {
+    let built = loaded.build::<3>().map_err(|e| anyhow::anyhow!("{e}"))?;
+    // The laws' own strength reduction, as a search would apply it (c and tan φ / F).
+    let Analysis::QuasiStatic(mut qs) = built.with_strength_reduced(factor)? else {
         bail!("examples/slope_3d.ron is no longer a quasi-static analysis");
     };
     println!(
@@ -154,7 +150,7 @@ pub fn run_slope(cell_size: f64, factor: f64, solver: &str, steps: Option<usize>
             r.step,
             r.load_factor,
             r.iterations,
-            r.hardest_residuals.len(),
+            r.most_iterations(),
             r.hardest_abandoned,
             r.linear_iterations,
             r.direct_fallbacks,
