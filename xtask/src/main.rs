@@ -117,8 +117,14 @@ fn main() -> Result<()> {
         Cmd::Scale { cells, solver, dim, contrast, .. } => scale::run(dim, &cells, &solver, contrast),
         Cmd::Tangents { out } => tangents::run(&out),
         Cmd::Bench { args } => {
+            // The criterion benchmarks, unless the arguments pick their own: the package's
+            // `explicit_block` is a profiler's driver that needs a size.
+            let picked = args.iter().any(|a| a == "--bench");
+            let criterion: &[&str] =
+                if picked { &[] } else { &["--bench", "column", "--bench", "explicit", "--bench", "laws"] };
             let status = std::process::Command::new(env!("CARGO"))
                 .args(["bench", "--package", "loam-bench"])
+                .args(criterion)
                 .args(&args)
                 .status()
                 .context("running cargo bench")?;

@@ -8,11 +8,14 @@
 //! (docs/benchmarks.md, Explicit speed).
 //!
 //! ```text
-//! cargo run --release --example explicit_block -- DIM CELLS STEPS [gimp|bspline]
-//! cargo run --release --example explicit_block -- 2 256 20
+//! cargo bench -p loam-bench --bench explicit_block -- DIM CELLS STEPS [gimp|bspline]
+//! cargo bench -p loam-bench --bench explicit_block -- 2 256 20
 //! RAYON_NUM_THREADS=1 valgrind --tool=cachegrind --cache-sim=no \
-//!     target/release/examples/explicit_block 2 128 6
+//!     $(cargo bench -p loam-bench --bench explicit_block --no-run --message-format=json \
+//!       | jq -r 'select(.executable != null) | .executable') 2 128 6
 //! ```
+//!
+//! A bench target rather than an example so that `cargo test` does not build it.
 
 use loam::explicit::{Explicit, ExplicitSettings, StepPhases};
 use loam::grid::BasisKind;
@@ -53,7 +56,8 @@ fn run<const D: usize>(cells: usize, basis: BasisKind, steps: usize) -> Result<(
 }
 
 fn main() -> ExitCode {
-    let args: Vec<String> = std::env::args().skip(1).collect();
+    // `cargo bench` appends `--bench` to a harness-less target's arguments.
+    let args: Vec<String> = std::env::args().skip(1).filter(|a| a != "--bench").collect();
     let usage = "usage: explicit_block DIM(2|3) CELLS STEPS [gimp|bspline]";
     let number = |i: usize| args.get(i).and_then(|s| s.parse::<usize>().ok());
     let basis = match args.get(3).map(String::as_str) {
