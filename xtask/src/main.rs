@@ -73,7 +73,8 @@ enum Cmd {
         /// Cells a side, comma separated; each size runs in its own process.
         #[arg(long, value_delimiter = ',', default_value = "16,24,32")]
         cells: Vec<usize>,
-        /// auto, direct or iterative.
+        /// auto, direct or iterative (as a scene's `linear`), or a method: lu, cholesky, cg,
+        /// bicgstab.
         #[arg(long, default_value = "auto")]
         solver: String,
         /// 2 or 3.

@@ -6,6 +6,7 @@
 
 use anyhow::{bail, Context, Result};
 use loam::implicit::{IterationProfile, Kinematics, Model, QuasiStatic, QuasiStaticSettings};
+use loam::scene::LinearSpec;
 use loam::solve::LinearSolverChoice;
 use loam_verification::layered_block;
 use std::time::Instant;
@@ -70,14 +71,24 @@ fn run_model<const D: usize>(n: usize, model: Model<D>, solver: LinearSolverChoi
     Ok(())
 }
 
+/// `--solver`: a scene's `linear` (docs/scene-format.md) in lower case. `direct` in 3D
+/// reuses a Newton solve's first factor; `lu` and `cholesky` factorise every correction.
+fn linear_spec(name: &str) -> Result<LinearSpec> {
+    Ok(match name {
+        "auto" => LinearSpec::Auto,
+        "direct" => LinearSpec::Direct,
+        "iterative" => LinearSpec::Iterative,
+        "lu" => LinearSpec::Lu,
+        "cholesky" => LinearSpec::Cholesky,
+        "cg" => LinearSpec::Cg,
+        "bicgstab" => LinearSpec::BiCgStab,
+        other => bail!("--solver {other}: expected auto, direct, iterative, lu, cholesky, cg or bicgstab"),
+    })
+}
+
 /// Every size in a child process of its own.
 pub fn run(dim: usize, cells: &[usize], solver: &str, contrast: f64) -> Result<()> {
-    let choice = match solver {
-        "auto" => LinearSolverChoice::Auto,
-        "direct" => LinearSolverChoice::Direct,
-        "iterative" => LinearSolverChoice::Iterative,
-        other => bail!("--solver {other}: expected auto, direct or iterative"),
-    };
+    let choice = LinearSolverChoice::from(linear_spec(solver)?);
     if let [n] = cells {
         return run_one(dim, *n, choice, contrast);
     }
@@ -101,7 +112,7 @@ pub fn run(dim: usize, cells: &[usize], solver: &str, contrast: f64) -> Result<(
 /// peak memory. Issue 34's case: the 3D elastoplastic slope an engineer would refine.
 pub fn run_slope(cell_size: f64, factor: f64, solver: &str, steps: Option<usize>) -> Result<()> {
     use loam::analysis::Analysis;
-    use loam::scene::{AnalysisSpec, LinearSpec, LoadedScene};
+    use loam::scene::{AnalysisSpec, LoadedScene};
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/slope_3d.ron");
     let mut loaded = LoadedScene::read(&path).map_err(|e| anyhow::anyhow!("{e}"))?;
     let scene = &mut loaded.scene;
@@ -115,12 +126,7 @@ pub fn run_slope(cell_size: f64, factor: f64, solver: &str, steps: Option<usize>
     if let AnalysisSpec::QuasiStatic { strength_reduction, .. } = &mut scene.analysis {
         *strength_reduction = None;
     }
-    scene.solver.linear = Some(match solver {
-        "auto" => LinearSpec::Auto,
-        "direct" => LinearSpec::Direct,
-        "iterative" => LinearSpec::Iterative,
-        other => bail!("--solver {other}: expected auto, direct or iterative"),
-    });
+    scene.solver.linear = Some(linear_spec(solver)?);
     let t = Instant::now();
     let built = loaded.build::<3>().map_err(|e| anyhow::anyhow!("{e}"))?;
     // The laws' own strength reduction, as a search would apply it (c and tan φ / F).
@@ -142,17 +148,22 @@ pub fn run_slope(cell_size: f64, factor: f64, solver: &str, steps: Option<usize>
     let start = Instant::now();
     let (mut iterations, mut cutbacks) = (0, 0);
     while !qs.is_finished() && qs.steps_done() < steps.unwrap_or(usize::MAX) {
+        let before = qs.linear_solver_timings();
         let r = qs.step()?;
+        let after = qs.linear_solver_timings();
         iterations += r.iterations;
         cutbacks += r.cutbacks;
         println!(
-            "step {:>2}: λ {:.2} | {} corrections ({} in its hardest sub-step, {} of them abandoned), {} Krylov, {} LU fallbacks | {} cut-backs | {:.1} s",
+            "step {:>2}: λ {:.2} | {} corrections ({} in its hardest sub-step, {} of them abandoned), {} factorisations ({:.1} s), {} Krylov ({:.1} s), {} LU fallbacks | {} cut-backs | {:.1} s",
             r.step,
             r.load_factor,
             r.iterations,
             r.most_iterations(),
             r.hardest_abandoned,
+            after.numeric_count - before.numeric_count,
+            (after.numeric - before.numeric).as_secs_f64(),
             r.linear_iterations,
+            (after.solve - before.solve).as_secs_f64(),
             r.direct_fallbacks,
             r.cutbacks,
             r.wall_time.as_secs_f64()

@@ -101,6 +101,14 @@ pub(crate) struct Engine<const D: usize> {
 /// plastic 2D problems, where the iterative solver is not yet verified, keep the direct one.
 const ITERATIVE_FROM_DOFS: [usize; 3] = [usize::MAX, 100_000, 5_000];
 
+/// In 3D, where the LU is most of a correction, a non-symmetric tangent the settings did
+/// not force onto LU (`Auto`, `Direct`) is solved by GMRES preconditioned by the LDLᵀ
+/// factor of its symmetric part, with at most this many iterations before its LU
+/// (docs/theory.md §19: on the 1 m slope the symmetric part's factor costs a fifth of the
+/// LU, an iteration a hundredth, and GMRES took 1 to 59). In 2D the LU costs a few solves,
+/// and stays.
+const SYMMETRIC_PART_ITERATIONS: [Option<usize>; 3] = [None, None, Some(100)];
+
 /// A failed Krylov solve is repeated by sparse LU up to this many dofs, by dimension: about
 /// 4 GB of factor in 3D (32³ cells took 3 GB with Cholesky), far less in 2D. Above it the
 /// step is cut back.
@@ -131,7 +139,7 @@ impl<const D: usize> Engine<D> {
             LinearSolverChoice::Iterative => LinearSolverKind::for_tangent(true, definite),
             LinearSolverChoice::Direct | LinearSolverChoice::Auto => LinearSolverKind::for_tangent(false, definite),
         };
-        let linear = kind.solver();
+        let linear = Self::solver_for(kind, linear_choice);
         let layout = NodeLayout::motion(D);
         Self {
             conn: Connectivity::new(model.basis()),
@@ -171,6 +179,22 @@ impl<const D: usize> Engine<D> {
         }
     }
 
+    /// The solver of `kind` under `choice`: LU preconditions by the symmetric part where
+    /// `SYMMETRIC_PART_ITERATIONS` says so, unless the settings forced the method.
+    fn solver_for(kind: LinearSolverKind, choice: LinearSolverChoice) -> Box<dyn LinearSolver> {
+        match SYMMETRIC_PART_ITERATIONS[D - 1] {
+            Some(iterations) if kind == LinearSolverKind::Lu && !matches!(choice, LinearSolverChoice::Forced(_)) => {
+                Box::new(SparseDirectSolver::new(kind).with_symmetric_part(iterations))
+            }
+            _ => kind.solver(),
+        }
+    }
+
+    /// A new solver as the engine's was made (for profiling it apart).
+    pub fn new_linear_solver(&self) -> Box<dyn LinearSolver> {
+        Self::solver_for(self.linear.kind(), self.linear_choice)
+    }
+
     /// Corrections whose Krylov solve failed and were solved by sparse LU, so far.
     pub fn direct_fallbacks(&self) -> usize {
         self.fallbacks
@@ -206,7 +230,7 @@ impl<const D: usize> Engine<D> {
     /// (nothing when `None`: the first step resolves it).
     pub fn resume_linear_solver(&mut self, kind: Option<LinearSolverKind>) {
         if let Some(kind) = kind {
-            self.set_linear_solver(kind.solver());
+            self.set_linear_solver(Self::solver_for(kind, self.linear_choice));
         }
         self.conn_current = false;
     }
@@ -264,7 +288,8 @@ impl<const D: usize> Engine<D> {
         follower_couplings(&self.model, &self.conn, &self.loads, &mut self.extra_couplings);
         let changed = self.pattern.update_with(&PointCouplings(&self.conn), &self.extra_couplings);
         self.resolve_linear_solver()?;
-        if self.linear.wants_lattice() && (changed || self.lattice.is_none()) {
+        let on_grid = self.model.background().mesh().is_none();
+        if on_grid && self.linear.uses_lattice() && (changed || self.lattice.is_none()) {
             self.lattice = Some(self.node_lattice());
         }
         if self.model.anti_locking() != AntiLocking::None {

@@ -435,7 +435,7 @@ impl<const D: usize> QuasiStatic<D> {
         self.engine.assemble(None);
         let assembly = t.elapsed();
         let e = &self.engine;
-        let mut solver = e.linear_solver().kind().solver();
+        let mut solver = e.new_linear_solver();
         let system = e.linear_system();
         solver.prepare(&system).map_err(|e| not_converged(e.to_string()))?;
         let rhs: Vec<f64> = e.residual().iter().map(|v| -v).collect();

@@ -1,6 +1,10 @@
 //! Multigrid-preconditioned Krylov solvers (docs/theory.md §19) on faer's matrix-free
 //! interface: conjugate gradients for symmetric positive definite tangents, BiCGStab for
-//! the others (non-associated plasticity, follower loads, softening).
+//! the others (non-associated plasticity, follower loads, softening). And GMRES, for a
+//! non-symmetric tangent preconditioned by the factor of its symmetric part (the direct
+//! solver's, `linear.rs`): a preconditioner that close to the inverse needs few
+//! iterations, so GMRES's vector per iteration costs little, and it applies the
+//! preconditioner once per iteration where BiCGStab does twice.
 //!
 //! BiCGStab rather than GMRES: faer provides it, its memory is a fixed handful of vectors
 //! (GMRES keeps one per iteration up to a restart length, which then has to be chosen and
@@ -15,7 +19,10 @@
 
 use crate::linear::{KrylovFailure, LinearSolveStats, LinearSolver, LinearSystem};
 use crate::multigrid::{dot, Multigrid};
-use crate::{BlockMatrix, LinearSolveError, LinearSolverKind, LinearSolverTimings, MatrixLayout, SystemMatrix};
+use crate::{
+    BlockMatrix, LinearSolveError, LinearSolverKind, LinearSolverTimings, MatrixLayout, SparseDirectSolver,
+    SystemMatrix,
+};
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::matrix_free::bicgstab::{bicgstab, bicgstab_scratch, BicgError, BicgParams};
 use faer::matrix_free::conjugate_gradient::{conjugate_gradient, conjugate_gradient_scratch, CgError, CgParams};
@@ -47,17 +54,18 @@ fn columns(out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, f: impl Fn(&[f64], &mut [
     }
 }
 
+/// `LinOp` for `$t`, square of size `$size(self)`, applying `$apply(self, x, y)`.
 macro_rules! real_linop {
-    ($t:ty, $apply:expr) => {
+    ($t:ty, $size:expr, $apply:expr) => {
         impl LinOp<f64> for $t {
             fn apply_scratch(&self, _rhs_ncols: usize, _par: Par) -> StackReq {
                 StackReq::EMPTY
             }
             fn nrows(&self) -> usize {
-                self.fine().num_dofs()
+                $size(self)
             }
             fn ncols(&self) -> usize {
-                self.fine().num_dofs()
+                $size(self)
             }
             fn apply(&self, out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, _par: Par, _stack: &mut MemStack) {
                 columns(out, rhs, |x, y| $apply(self, x, y));
@@ -69,21 +77,40 @@ macro_rules! real_linop {
     };
 }
 
-impl Operator<'_> {
-    fn fine(&self) -> &BlockMatrix {
-        self.0
+/// An assembled system, in either layout, as a faer operator.
+#[derive(Debug)]
+pub(crate) struct SystemOperator<'a>(pub &'a LinearSystem<'a>);
+
+/// A direct solver's factor (of an earlier tangent) as a faer preconditioner.
+pub(crate) struct FactorPrecond<'a>(pub &'a SparseDirectSolver);
+
+impl std::fmt::Debug for FactorPrecond<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "the {} factor of {} dofs", self.0.kind(), self.0.num_dofs())
     }
 }
 
-impl VCycle<'_> {
-    fn fine(&self) -> &BlockMatrix {
-        self.1
-    }
-}
-
-real_linop!(Operator<'_>, |s: &Operator<'_>, x: &[f64], y: &mut [f64]| s.0.apply(x, y));
-real_linop!(VCycle<'_>, |s: &VCycle<'_>, x: &[f64], y: &mut [f64]| s.0.apply(s.1, x, y));
+real_linop!(Operator<'_>, |s: &Operator<'_>| s.0.num_dofs(), |s: &Operator<'_>, x: &[f64], y: &mut [f64]| s
+    .0
+    .apply(x, y));
+real_linop!(VCycle<'_>, |s: &VCycle<'_>| s.1.num_dofs(), |s: &VCycle<'_>, x: &[f64], y: &mut [f64]| s
+    .0
+    .apply(s.1, x, y));
 impl Precond<f64> for VCycle<'_> {}
+real_linop!(
+    SystemOperator<'_>,
+    |s: &SystemOperator<'_>| s.0.pattern.num_dofs(),
+    |s: &SystemOperator<'_>, x: &[f64], y: &mut [f64]| s.0.matrix.mul_vec(s.0.pattern, x, y)
+);
+real_linop!(
+    FactorPrecond<'_>,
+    |s: &FactorPrecond<'_>| s.0.num_dofs(),
+    |s: &FactorPrecond<'_>, x: &[f64], y: &mut [f64]| {
+        y.copy_from_slice(x);
+        s.0.apply_factor(y);
+    }
+);
+impl Precond<f64> for FactorPrecond<'_> {}
 
 /// A multigrid-preconditioned Krylov solver. See the module docs.
 #[derive(Debug)]
@@ -130,56 +157,80 @@ impl IterativeSolver {
         rel_tol: f64,
         history: Option<&mut Vec<f64>>,
     ) -> KrylovOutcome {
-        let n = rhs.len();
-        // A zero start, declared as a possibly non-zero one: with `InitialGuessStatus::Zero`
-        // faer 0.24.4's CG and BiCGStab start from an uninitialised residual instead of b.
-        // The price is one product.
-        x.iter_mut().for_each(|v| *v = 0.0);
-        let a = Operator(fine);
-        let m = VCycle(&self.multigrid, fine);
-        let b = MatRef::from_column_major_slice(rhs, n, 1);
-        let out = MatMut::from_column_major_slice_mut(x, n, 1);
         let b_norm = dot(rhs, rhs).sqrt();
-        let mut r = vec![0.0; if history.is_some() { n } else { 0 }];
+        let mut r = vec![0.0; if history.is_some() { rhs.len() } else { 0 }];
         let mut hist = history;
-        let callback = |xk: MatRef<'_, f64>| {
+        let on_iterate = |xk: MatRef<'_, f64>| {
             if let Some(h) = hist.as_deref_mut() {
                 let xs: Vec<f64> = xk.col(0).iter().copied().collect();
                 fine.residual(rhs, &xs, &mut r);
                 h.push(dot(&r, &r).sqrt() / b_norm);
             }
         };
-        match self.kind {
-            LinearSolverKind::Cg => {
-                let params = CgParams {
-                    initial_guess: InitialGuessStatus::MaybeNonZero,
-                    abs_tolerance: 0.0,
-                    rel_tolerance: rel_tol,
-                    max_iters: self.max_iterations,
-                    ..Default::default()
-                };
-                let mut buf = MemBuffer::new(conjugate_gradient_scratch(&m, &a, 1, Par::Seq));
-                match conjugate_gradient(out, &m, &a, b, params, callback, Par::Seq, MemStack::new(&mut buf)) {
-                    Ok(info) => KrylovOutcome::Converged(info.iter_count, info.rel_residual),
-                    Err(CgError::NoConvergence { rel_residual, .. }) => KrylovOutcome::NotConverged(rel_residual),
-                    Err(CgError::NonPositiveDefiniteOperator) => KrylovOutcome::Breakdown("the tangent"),
-                    Err(CgError::NonPositiveDefinitePreconditioner) => KrylovOutcome::Breakdown("the preconditioner"),
-                }
+        let method = Krylov { kind: self.kind, rel_tol, max_iterations: self.max_iterations };
+        method.solve(&Operator(fine), &VCycle(&self.multigrid, fine), rhs, x, on_iterate)
+    }
+}
+
+/// A Krylov method with its stopping rule: CG for `LinearSolverKind::Cg` and `Cholesky`
+/// (a factor preconditioning a symmetric tangent), GMRES for `Lu` (an LU factor
+/// preconditioning a non-symmetric one), BiCGStab for `BiCgStab`.
+pub(crate) struct Krylov {
+    pub kind: LinearSolverKind,
+    pub rel_tol: f64,
+    pub max_iterations: usize,
+}
+
+impl Krylov {
+    /// Solve `a x = rhs` from a zero guess, preconditioned by `m`; `on_iterate` sees every
+    /// iterate of CG and BiCGStab (GMRES forms its iterate only at the end).
+    pub fn solve(
+        &self,
+        a: &impl LinOp<f64>,
+        m: &impl Precond<f64>,
+        rhs: &[f64],
+        x: &mut [f64],
+        on_iterate: impl FnMut(MatRef<'_, f64>),
+    ) -> KrylovOutcome {
+        let n = rhs.len();
+        // A zero start, declared as a possibly non-zero one: with `InitialGuessStatus::Zero`
+        // faer 0.24.4's CG and BiCGStab start from an uninitialised residual instead of b.
+        // The price is one product.
+        x.iter_mut().for_each(|v| *v = 0.0);
+        let b = MatRef::from_column_major_slice(rhs, n, 1);
+        let out = MatMut::from_column_major_slice_mut(x, n, 1);
+        let (rel_tolerance, max_iters) = (self.rel_tol, self.max_iterations);
+        if self.kind == LinearSolverKind::Lu {
+            return gmres(a, m, rhs, x, rel_tolerance, max_iters);
+        }
+        if matches!(self.kind, LinearSolverKind::Cg | LinearSolverKind::Cholesky) {
+            let params = CgParams {
+                initial_guess: InitialGuessStatus::MaybeNonZero,
+                abs_tolerance: 0.0,
+                rel_tolerance,
+                max_iters,
+                ..Default::default()
+            };
+            let mut buf = MemBuffer::new(conjugate_gradient_scratch(m, a, 1, Par::Seq));
+            match conjugate_gradient(out, m, a, b, params, on_iterate, Par::Seq, MemStack::new(&mut buf)) {
+                Ok(info) => KrylovOutcome::Converged(info.iter_count, info.rel_residual),
+                Err(CgError::NoConvergence { rel_residual, .. }) => KrylovOutcome::NotConverged(rel_residual),
+                Err(CgError::NonPositiveDefiniteOperator) => KrylovOutcome::Breakdown("the tangent"),
+                Err(CgError::NonPositiveDefinitePreconditioner) => KrylovOutcome::Breakdown("the preconditioner"),
             }
-            _ => {
-                let params = BicgParams {
-                    initial_guess: InitialGuessStatus::MaybeNonZero,
-                    abs_tolerance: 0.0,
-                    rel_tolerance: rel_tol,
-                    max_iters: self.max_iterations,
-                    ..Default::default()
-                };
-                let id = IdentityPrecond { dim: n };
-                let mut buf = MemBuffer::new(bicgstab_scratch(id, &m, &a, 1, Par::Seq));
-                match bicgstab(out, id, &m, &a, b, params, callback, Par::Seq, MemStack::new(&mut buf)) {
-                    Ok(info) => KrylovOutcome::Converged(info.iter_count, info.rel_residual),
-                    Err(BicgError::NoConvergence { rel_residual, .. }) => KrylovOutcome::NotConverged(rel_residual),
-                }
+        } else {
+            let params = BicgParams {
+                initial_guess: InitialGuessStatus::MaybeNonZero,
+                abs_tolerance: 0.0,
+                rel_tolerance,
+                max_iters,
+                ..Default::default()
+            };
+            let id = IdentityPrecond { dim: n };
+            let mut buf = MemBuffer::new(bicgstab_scratch(id, m, a, 1, Par::Seq));
+            match bicgstab(out, id, m, a, b, params, on_iterate, Par::Seq, MemStack::new(&mut buf)) {
+                Ok(info) => KrylovOutcome::Converged(info.iter_count, info.rel_residual),
+                Err(BicgError::NoConvergence { rel_residual, .. }) => KrylovOutcome::NotConverged(rel_residual),
             }
         }
     }
@@ -193,7 +244,96 @@ fn operator<'a>(converted: &'a BlockMatrix, system: &'a LinearSystem<'_>) -> &'a
     }
 }
 
-enum KrylovOutcome {
+/// `y = op x` for an operator that needs no scratch (all of this module's).
+fn apply(op: &impl LinOp<f64>, x: &[f64], y: &mut [f64]) {
+    let n = x.len();
+    let out = MatMut::from_column_major_slice_mut(y, n, 1);
+    let mut none: [std::mem::MaybeUninit<u8>; 0] = [];
+    op.apply(out, MatRef::from_column_major_slice(x, n, 1), Par::Seq, MemStack::new(&mut none));
+}
+
+/// Right-preconditioned GMRES without restart (Saad & Schultz 1986; Saad, Iterative
+/// Methods for Sparse Linear Systems, 2003, §6.5 and §9.3.2) from a zero guess: the
+/// Arnoldi basis by modified Gram–Schmidt, the least-squares problem by Givens rotations,
+/// whose last entry is the residual's norm ‖b − A x‖. The preconditioned directions
+/// z_j = M⁻¹ v_j are kept (flexible GMRES's form), so that the iterate x = Σ y_j z_j costs
+/// no further preconditioner application. Sequential reductions: the same result for any
+/// thread count.
+fn gmres(
+    a: &impl LinOp<f64>,
+    m: &impl LinOp<f64>,
+    rhs: &[f64],
+    x: &mut [f64],
+    rel_tol: f64,
+    max_iterations: usize,
+) -> KrylovOutcome {
+    let beta = dot(rhs, rhs).sqrt();
+    if beta == 0.0 {
+        return KrylovOutcome::Converged(0, 0.0);
+    }
+    let mut basis: Vec<Vec<f64>> = vec![rhs.iter().map(|b| b / beta).collect()];
+    let mut directions: Vec<Vec<f64>> = Vec::new();
+    // Column j of the Hessenberg matrix, rotated: `h[j]` holds its j + 1 upper entries.
+    let mut h: Vec<Vec<f64>> = Vec::new();
+    let (mut cs, mut sn, mut g): (Vec<f64>, Vec<f64>, _) = (Vec::new(), Vec::new(), vec![beta]);
+    let mut w = vec![0.0; rhs.len()];
+    for j in 0..max_iterations {
+        let mut z = vec![0.0; rhs.len()];
+        apply(m, &basis[j], &mut z);
+        apply(a, &z, &mut w);
+        directions.push(z);
+        let mut column: Vec<f64> = Vec::with_capacity(j + 2);
+        for v in &basis {
+            let hij = dot(&w, v);
+            w.iter_mut().zip(v).for_each(|(w, v)| *w -= hij * v);
+            column.push(hij);
+        }
+        let next = dot(&w, &w).sqrt();
+        for i in 0..j {
+            let (a, b) = (column[i], column[i + 1]);
+            column[i] = cs[i] * a + sn[i] * b;
+            column[i + 1] = -sn[i] * a + cs[i] * b;
+        }
+        let r = column[j].hypot(next);
+        if !(r.is_finite() && r > 0.0) {
+            return KrylovOutcome::NotConverged(g[j].abs() / beta);
+        }
+        let (c, s) = (column[j] / r, next / r);
+        column[j] = r;
+        g.push(-s * g[j]);
+        g[j] *= c;
+        cs.push(c);
+        sn.push(s);
+        h.push(column);
+        let residual = g[j + 1].abs() / beta;
+        if residual <= rel_tol || next == 0.0 {
+            combine(&h, &g, &directions, x);
+            return KrylovOutcome::Converged(j + 1, residual);
+        }
+        basis.push(w.iter().map(|w| w / next).collect());
+    }
+    KrylovOutcome::NotConverged(g[max_iterations].abs() / beta)
+}
+
+/// x = Σ y_j z_j with R y = g, R the rotated Hessenberg matrix (upper triangular; column j
+/// is `h[j]`).
+fn combine(h: &[Vec<f64>], g: &[f64], directions: &[Vec<f64>], x: &mut [f64]) {
+    let k = h.len();
+    let mut y = g[..k].to_vec();
+    for i in (0..k).rev() {
+        let yi = y[i] / h[i][i];
+        y[i] = yi;
+        for (l, yl) in y.iter_mut().enumerate().take(i) {
+            *yl -= h[i][l] * yi;
+        }
+    }
+    x.iter_mut().for_each(|v| *v = 0.0);
+    for (yj, z) in y.iter().zip(directions) {
+        x.iter_mut().zip(z).for_each(|(x, z)| *x += yj * z);
+    }
+}
+
+pub(crate) enum KrylovOutcome {
     Converged(usize, f64),
     NotConverged(f64),
     /// CG met a direction of non-positive curvature in the named operator.
@@ -287,18 +427,18 @@ impl LinearSolver for IterativeSolver {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::{BlockPattern, Couplings, NodeLattice, SparseDirectSolver};
 
     /// The edges of an n × n node lattice as two-node elements.
-    struct LatticeEdges {
+    pub(crate) struct LatticeEdges {
         edges: Vec<[u32; 2]>,
         node_edges: Vec<Vec<(u32, u32)>>,
     }
 
     impl LatticeEdges {
-        fn new(n: u32) -> Self {
+        pub(crate) fn new(n: u32) -> Self {
             let mut edges = Vec::new();
             for y in 0..n {
                 for x in 0..n {
@@ -336,7 +476,7 @@ mod tests {
     /// A graph Laplacian on an n × n lattice times the 2 × 2 block `k`, the bottom row of
     /// nodes held, with a stiffness that jumps by `contrast` across the middle: the system,
     /// its lattice and a load.
-    fn lattice_system(
+    pub(crate) fn lattice_system(
         n: u32,
         k: [f64; 4],
         contrast: f64,
@@ -438,6 +578,56 @@ mod tests {
             x
         };
         assert_eq!(solve(&rows), solve(&columns));
+    }
+
+    /// A dense operator, for GMRES on a system whose solution is chosen.
+    #[derive(Debug)]
+    struct Dense(Vec<Vec<f64>>);
+    real_linop!(Dense, |s: &Dense| s.0.len(), |s: &Dense, x: &[f64], y: &mut [f64]| {
+        y.iter_mut().zip(&s.0).for_each(|(y, row)| *y = dot(row, x));
+    });
+
+    /// GMRES on a non-symmetric 12 × 12 system (a convection–diffusion stencil with a
+    /// strong upwind term), unpreconditioned and preconditioned by the Jacobi diagonal:
+    /// the chosen solution comes back to 1e-10 within the dimension's iterations (exact
+    /// arithmetic needs at most n), and the residual it reports is the true
+    /// ‖b − A x‖ / ‖b‖.
+    #[test]
+    fn gmres_solves_a_non_symmetric_system() {
+        let n = 12;
+        let a: Vec<Vec<f64>> = (0..n)
+            .map(|i| {
+                (0..n)
+                    .map(|j| match j as i64 - i as i64 {
+                        0 => 2.0 + 0.1 * i as f64,
+                        -1 => -1.8,
+                        1 => -0.2,
+                        _ => 0.0,
+                    })
+                    .collect()
+            })
+            .collect();
+        let jacobi =
+            Dense((0..n).map(|i| (0..n).map(|j| if i == j { 1.0 / a[i][i] } else { 0.0 }).collect()).collect());
+        let identity = Dense((0..n).map(|i| (0..n).map(|j| f64::from(i == j)).collect()).collect());
+        let a = Dense(a);
+        let exact: Vec<f64> = (0..n).map(|i| (i as f64 * 0.7).sin() + 1.0).collect();
+        let mut b = vec![0.0; n];
+        apply(&a, &exact, &mut b);
+        for m in [&identity, &jacobi] {
+            let mut x = vec![0.0; n];
+            let KrylovOutcome::Converged(iterations, reported) = gmres(&a, m, &b, &mut x, 1e-12, n) else {
+                panic!("GMRES did not converge in n iterations");
+            };
+            assert!(iterations <= n);
+            let error = x.iter().zip(&exact).map(|(x, e)| (x - e).abs()).fold(0.0, f64::max);
+            assert!(error < 1e-10, "error {error:.2e}");
+            let mut ax = vec![0.0; n];
+            apply(&a, &x, &mut ax);
+            let r: Vec<f64> = b.iter().zip(&ax).map(|(b, ax)| b - ax).collect();
+            let true_residual = dot(&r, &r).sqrt() / dot(&b, &b).sqrt();
+            assert!((true_residual - reported).abs() < 1e-13, "{true_residual:.3e} vs {reported:.3e}");
+        }
     }
 
     #[test]
