@@ -23,7 +23,6 @@ mod water;
 
 use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
-use rayon::prelude::*;
 use report::Report;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -168,8 +167,7 @@ fn verify(quick: bool, out: &Path, only: &[String], update_docs: bool, side_by_s
     // Side by side, the sections share the cores: a run's serial stretches (a factorisation,
     // a small problem's assembly) leave a core to the others. Every result is the same with
     // any number of threads; only the wall times include the neighbours' load.
-    let parts: Vec<Result<Report>> =
-        if side_by_side { selected.par_iter().map(run).collect() } else { selected.iter().map(run).collect() };
+    let parts: Vec<Result<Report>> = report::runs(side_by_side, &selected, run);
     let mut report = Report::new(out)?;
     for part in parts {
         report.append(part?);

@@ -53,6 +53,16 @@ pub(crate) struct Report {
     pub side_by_side: bool,
 }
 
+/// `run` of every job, results in the jobs' order: in rayon's pool if `side_by_side`, one
+/// after another otherwise.
+pub fn runs<J: Sync, R: Send>(side_by_side: bool, jobs: &[J], run: impl Fn(&J) -> R + Sync + Send) -> Vec<R> {
+    if side_by_side {
+        jobs.par_iter().map(run).collect()
+    } else {
+        jobs.iter().map(run).collect()
+    }
+}
+
 impl Report {
     /// An empty report under its title, to be written into `out`.
     pub fn new(out: &Path) -> Result<Self> {
@@ -75,11 +85,7 @@ impl Report {
 
     /// `run` of every job, in order: side by side if the report allows it.
     pub fn runs<J: Sync, R: Send>(&self, jobs: &[J], run: impl Fn(&J) -> R + Sync + Send) -> Vec<R> {
-        if self.side_by_side {
-            jobs.par_iter().map(run).collect()
-        } else {
-            jobs.iter().map(run).collect()
-        }
+        runs(self.side_by_side, jobs, run)
     }
 
     /// `a()` and `b()`: side by side if the report allows it.

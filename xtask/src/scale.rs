@@ -61,7 +61,7 @@ fn run_model<const D: usize>(n: usize, model: Model<D>, solver: LinearSolverChoi
     let mem = peak_memory().map_or(f64::NAN, |b| b as f64 / 1e9);
     println!(
         "{n}^{D} {} | {points} points | build {build:.2} s | {} | step {step:.2} s, {} Newton iterations ({} Krylov), {:.2} s per iteration, residuals {:?} | peak {mem:.2} GB",
-        qs.linear_solver_kind(),
+        qs.linear_solver_description(),
         phases(&p),
         report.iterations,
         report.linear_iterations,
@@ -141,7 +141,7 @@ pub fn run_slope(cell_size: f64, factor: f64, solver: &str, steps: Option<usize>
     let p = qs.profile_iteration()?;
     println!(
         "one iteration ({}): {} | solver {:.2} GB",
-        qs.linear_solver_kind(),
+        qs.linear_solver_description(),
         phases(&p),
         p.solver_bytes as f64 / 1e9
     );

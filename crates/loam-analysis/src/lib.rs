@@ -218,8 +218,8 @@ impl<const D: usize> Analysis<D> {
     /// The linear solver, or that explicit analysis has none.
     pub fn solver(&self) -> String {
         match self {
-            Analysis::QuasiStatic(a) => a.linear_solver_kind().to_string(),
-            Analysis::Dynamic(a) => a.linear_solver_kind().to_string(),
+            Analysis::QuasiStatic(a) => a.linear_solver_description(),
+            Analysis::Dynamic(a) => a.linear_solver_description(),
             Analysis::Explicit(_) => "no linear solver (explicit)".to_string(),
         }
     }

@@ -185,6 +185,11 @@ impl<const D: usize> Dynamic<D> {
         self.engine.linear_solver().kind()
     }
 
+    /// The linear solver's method in words.
+    pub fn linear_solver_description(&self) -> String {
+        self.engine.linear_solver().description()
+    }
+
     /// The state [`Dynamic::resume`] takes back.
     pub fn state(&self) -> DynamicState {
         DynamicState {

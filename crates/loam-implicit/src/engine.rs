@@ -21,7 +21,8 @@ use loam_kernels::{
 use loam_model::{AntiLocking, FreeBody, Kinematics, LoadLevel, Model, ModelError, PointChange};
 use loam_solve::{
     norm, BlockPattern, LinearSolveError, LinearSolver, LinearSolverChoice, LinearSolverKind, LinearSystem,
-    NewtonControl, NewtonError, NewtonReport, NewtonSettings, NodeLattice, SparseDirectSolver, SystemMatrix,
+    NewtonControl, NewtonError, NewtonReport, NewtonSettings, NodeLattice, SparseDirectSolver, SymmetricPart,
+    SystemMatrix,
 };
 use nalgebra::SVector;
 use rayon::prelude::*;
@@ -101,13 +102,15 @@ pub(crate) struct Engine<const D: usize> {
 /// plastic 2D problems, where the iterative solver is not yet verified, keep the direct one.
 const ITERATIVE_FROM_DOFS: [usize; 3] = [usize::MAX, 100_000, 5_000];
 
-/// In 3D, where the LU is most of a correction, a non-symmetric tangent the settings did
-/// not force onto LU (`Auto`, `Direct`) is solved by GMRES preconditioned by the LDLᵀ
-/// factor of its symmetric part, with at most this many iterations before its LU
-/// (docs/theory.md §19: on the 1 m slope the symmetric part's factor costs a fifth of the
-/// LU, an iteration a hundredth, and GMRES took 1 to 59). In 2D the LU costs a few solves,
-/// and stays.
-const SYMMETRIC_PART_ITERATIONS: [Option<usize>; 3] = [None, None, Some(100)];
+/// In 3D, where the LU is most of a correction, a non-symmetric tangent of 20 000 dofs or
+/// more that the settings did not force onto LU (`Auto`, `Direct`) is solved by GMRES
+/// preconditioned by the LDLᵀ factor of its symmetric part, with at most 100 iterations
+/// before its LU (docs/theory.md §19: on the 1 m slope, 35 217 dofs, the symmetric part's
+/// factor costs a fifth of the LU, an iteration a hundredth, and GMRES took 1 to 59; on
+/// the 2 m one, 5 187 dofs, the LU is cheap and near collapse GMRES did not converge, so
+/// its strength search took longer). In 2D the LU costs a few solves, and stays.
+const SYMMETRIC_PART: [Option<SymmetricPart>; 3] =
+    [None, None, Some(SymmetricPart { from_dofs: 20_000, max_iterations: 100 })];
 
 /// A failed Krylov solve is repeated by sparse LU up to this many dofs, by dimension: about
 /// 4 GB of factor in 3D (32³ cells took 3 GB with Cholesky), far less in 2D. Above it the
@@ -180,11 +183,11 @@ impl<const D: usize> Engine<D> {
     }
 
     /// The solver of `kind` under `choice`: LU preconditions by the symmetric part where
-    /// `SYMMETRIC_PART_ITERATIONS` says so, unless the settings forced the method.
+    /// `SYMMETRIC_PART` says so, unless the settings forced the method.
     fn solver_for(kind: LinearSolverKind, choice: LinearSolverChoice) -> Box<dyn LinearSolver> {
-        match SYMMETRIC_PART_ITERATIONS[D - 1] {
-            Some(iterations) if kind == LinearSolverKind::Lu && !matches!(choice, LinearSolverChoice::Forced(_)) => {
-                Box::new(SparseDirectSolver::new(kind).with_symmetric_part(iterations))
+        match SYMMETRIC_PART[D - 1] {
+            Some(part) if kind == LinearSolverKind::Lu && !matches!(choice, LinearSolverChoice::Forced(_)) => {
+                Box::new(SparseDirectSolver::new(kind).with_symmetric_part(part))
             }
             _ => kind.solver(),
         }
@@ -265,7 +268,7 @@ impl<const D: usize> Engine<D> {
         if self.linear.wants_lattice() && !on_grid {
             return Err(StepError::LinearSolver(LinearSolveError::NoLattice));
         }
-        tracing::info!(solver = %self.linear.kind(), dofs, "linear solver chosen {source}");
+        tracing::info!(solver = %self.linear.description(), dofs, "linear solver chosen {source}");
         Ok(())
     }
 

@@ -242,6 +242,11 @@ impl<const D: usize> QuasiStatic<D> {
         self.engine.linear_solver().kind()
     }
 
+    /// The linear solver's method in words.
+    pub fn linear_solver_description(&self) -> String {
+        self.engine.linear_solver().description()
+    }
+
     pub fn linear_solver_timings(&self) -> LinearSolverTimings {
         self.engine.linear_solver().timings()
     }

@@ -20,7 +20,7 @@ pub use block_matrix::BlockMatrix;
 pub use krylov::IterativeSolver;
 pub use linear::{
     KrylovFailure, LinearSolveError, LinearSolveStats, LinearSolver, LinearSolverChoice, LinearSolverKind,
-    LinearSolverTimings, LinearSystem, SparseDirectSolver,
+    LinearSolverTimings, LinearSystem, SparseDirectSolver, SymmetricPart,
 };
 pub use multigrid::{Multigrid, NodeLattice};
 pub use newton::{norm, NewtonControl, NewtonError, NewtonReport, NewtonSettings};

@@ -29,7 +29,7 @@ use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::sparse::linalg::{LltError, LuError};
 use faer::sparse::FaerError;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
-use faer::{Conj, MatMut, Side};
+use faer::{Conj, MatMut, Par, Side};
 use rayon::prelude::*;
 use std::time::{Duration, Instant};
 
@@ -148,6 +148,10 @@ pub trait LinearSolver: Send {
         rel_tol: f64,
     ) -> Result<LinearSolveStats, LinearSolveError>;
     fn timings(&self) -> LinearSolverTimings;
+    /// The method in words (what a run's summary and log name).
+    fn description(&self) -> String {
+        self.kind().to_string()
+    }
     /// Bytes the solver holds beyond the assembled system (a factor, a hierarchy); 0 where
     /// it is not known.
     fn bytes(&self) -> usize {
@@ -215,6 +219,16 @@ pub struct LinearSolverTimings {
     pub iterations: usize,
 }
 
+/// Where and how long GMRES on the symmetric part's factor is tried (see
+/// [`SparseDirectSolver::with_symmetric_part`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SymmetricPart {
+    /// Systems of fewer dofs take the LU at once.
+    pub from_dofs: usize,
+    /// GMRES iterations before the LU.
+    pub max_iterations: usize,
+}
+
 /// The factor a [`SparseDirectSolver`] holds.
 enum Factor {
     None,
@@ -230,9 +244,9 @@ enum Factor {
 /// A sparse direct solver with symbolic reuse. See the module docs.
 pub struct SparseDirectSolver {
     kind: LinearSolverKind,
-    /// With LU: the most GMRES iterations on the tangent, preconditioned by the LDLᵀ factor
-    /// of its symmetric part, before the tangent is factorised by LU (`None`: LU at once).
-    symmetric_part: Option<usize>,
+    /// With LU: from how many dofs the symmetric part's LDLᵀ preconditions GMRES, and the
+    /// most iterations before the tangent's LU (`None`: LU at once).
+    symmetric_part: Option<SymmetricPart>,
     generation: Option<u64>,
     /// The symbolic LLᵀ / LDLᵀ, in the nested-dissection order of the node lattice where
     /// the system has one, AMD's otherwise.
@@ -262,14 +276,16 @@ impl SparseDirectSolver {
         }
     }
 
-    /// For LU: solve by GMRES preconditioned by the LDLᵀ factor of the tangent's symmetric
-    /// part, (K + Kᵀ)/2, to the tolerance asked, and factorise the tangent by LU only
-    /// where that factor fails or GMRES does not converge in `max_iterations`
-    /// (docs/theory.md §19). The symmetric part's factor is several times cheaper than
-    /// faer's LU, whose column ordering bounds its fill by that of KᵀK.
-    pub fn with_symmetric_part(mut self, max_iterations: usize) -> Self {
+    /// For LU, on systems of `part.from_dofs` or more: solve by GMRES preconditioned by
+    /// the LDLᵀ factor of the tangent's symmetric part, (K + Kᵀ)/2, to the tolerance asked,
+    /// and factorise the tangent by LU only where that factor fails or GMRES does not
+    /// converge in `part.max_iterations` (docs/theory.md §19). The symmetric part's factor
+    /// is several times cheaper than faer's LU, whose column ordering bounds its fill by
+    /// that of KᵀK. The LDLᵀ and its solves run on one thread, so that the result is the
+    /// same for any thread count.
+    pub fn with_symmetric_part(mut self, part: SymmetricPart) -> Self {
         if self.kind == LinearSolverKind::Lu {
-            self.symmetric_part = Some(max_iterations);
+            self.symmetric_part = Some(part);
         }
         self
     }
@@ -437,8 +453,8 @@ impl SparseDirectSolver {
                 LltRef::new(symbolic, l).solve_in_place_with_conj(Conj::No, mat, par, MemStack::new(&mut buf));
             }
             (Factor::SymmetricPart(l), Some(symbolic)) => {
-                let mut buf = MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(1, par));
-                LdltRef::new(symbolic, l).solve_in_place_with_conj(Conj::No, mat, par, MemStack::new(&mut buf));
+                let mut buf = MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(1, Par::Seq));
+                LdltRef::new(symbolic, l).solve_in_place_with_conj(Conj::No, mat, Par::Seq, MemStack::new(&mut buf));
             }
             _ => return false,
         }
@@ -455,7 +471,7 @@ impl SparseDirectSolver {
         x: &mut [f64],
         rel_tol: f64,
     ) -> Result<LinearSolveStats, LinearSolveError> {
-        let max_iterations = self.symmetric_part.expect("the symmetric part preconditions");
+        let max_iterations = self.symmetric_part.expect("the symmetric part preconditions").max_iterations;
         let t = Instant::now();
         let method = Krylov { kind: LinearSolverKind::Lu, rel_tol, max_iterations };
         let outcome = method.solve(&SystemOperator(system), &FactorPrecond(self), rhs, x, |_| {});
@@ -524,7 +540,7 @@ fn numeric_llt(
 fn numeric_ldlt(symbolic: &SymbolicCholesky<usize>, pattern: &BlockPattern, values: &[f64]) -> Option<Vec<f64>> {
     let n = pattern.num_dofs();
     let structure = SymbolicSparseColMatRef::new_checked(n, n, pattern.col_ptr(), None, pattern.row_idx());
-    let par = faer::get_global_parallelism();
+    let par = Par::Seq;
     let mut l = vec![0.0; symbolic.len_val()];
     let mut buf = MemBuffer::try_new(symbolic.factorize_numeric_ldlt_scratch::<f64>(par, Default::default())).ok()?;
     symbolic
@@ -550,6 +566,15 @@ impl LinearSolver for SparseDirectSolver {
         true
     }
 
+    fn description(&self) -> String {
+        match self.symmetric_part {
+            Some(part) => {
+                format!("sparse LU, or from {} dofs GMRES preconditioned by the symmetric part's LDLᵀ", part.from_dofs)
+            }
+            None => self.kind.to_string(),
+        }
+    }
+
     /// The LLᵀ or LDLᵀ factor's values and the symmetric part (faer does not tell an
     /// LU's size).
     fn bytes(&self) -> usize {
@@ -560,7 +585,8 @@ impl LinearSolver for SparseDirectSolver {
     }
 
     fn prepare(&mut self, system: &LinearSystem<'_>) -> Result<(), LinearSolveError> {
-        if self.symmetric_part.is_some() && self.factorize_symmetric_part(system)? {
+        let large = |part: SymmetricPart| system.pattern.num_dofs() >= part.from_dofs;
+        if self.symmetric_part.is_some_and(large) && self.factorize_symmetric_part(system)? {
             return Ok(());
         }
         self.factorize_tangent(system)
@@ -712,7 +738,8 @@ mod tests {
         let mut exact = vec![0.0; rhs.len()];
         lu.solve(&system, &rhs, &mut exact, 0.0).unwrap();
         for (max_iterations, tolerance, factorisations) in [(40, 1e-9, 1), (1, 1e-13, 2)] {
-            let mut s = SparseDirectSolver::new(LinearSolverKind::Lu).with_symmetric_part(max_iterations);
+            let part = SymmetricPart { from_dofs: 1, max_iterations };
+            let mut s = SparseDirectSolver::new(LinearSolverKind::Lu).with_symmetric_part(part);
             s.prepare(&system).unwrap();
             let mut x = vec![0.0; rhs.len()];
             let stats = s.solve(&system, &rhs, &mut x, 1e-10).unwrap();
