@@ -65,6 +65,11 @@ fn main() -> ExitCode {
         Some("bspline") => Some(BasisKind::QuadraticBSpline),
         Some(_) => None,
     };
+    if args.is_empty() {
+        // `cargo bench` runs every bench target without arguments: nothing to run here.
+        eprintln!("{usage}");
+        return ExitCode::SUCCESS;
+    }
     let result = match (number(0), number(1), number(2), basis) {
         (Some(2), Some(cells), Some(steps), Some(basis)) if cells > 0 => run::<2>(cells, basis, steps),
         (Some(3), Some(cells), Some(steps), Some(basis)) if cells > 0 => run::<3>(cells, basis, steps),

@@ -72,7 +72,8 @@ fn run_model<const D: usize>(n: usize, model: Model<D>, solver: LinearSolverChoi
 }
 
 /// `--solver`: a scene's `linear` (docs/scene-format.md) in lower case. `direct` in 3D
-/// reuses a Newton solve's first factor; `lu` and `cholesky` factorise every correction.
+/// from 20 000 dofs takes GMRES on the symmetric part's factor for a non-symmetric
+/// tangent; `lu` and `cholesky` factorise every correction.
 fn linear_spec(name: &str) -> Result<LinearSpec> {
     Ok(match name {
         "auto" => LinearSpec::Auto,

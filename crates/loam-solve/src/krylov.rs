@@ -81,12 +81,12 @@ macro_rules! real_linop {
 #[derive(Debug)]
 pub(crate) struct SystemOperator<'a>(pub &'a LinearSystem<'a>);
 
-/// A direct solver's factor (of an earlier tangent) as a faer preconditioner.
+/// A direct solver's factor (of the tangent's symmetric part) as a faer preconditioner.
 pub(crate) struct FactorPrecond<'a>(pub &'a SparseDirectSolver);
 
 impl std::fmt::Debug for FactorPrecond<'_> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "the {} factor of {} dofs", self.0.kind(), self.0.num_dofs())
+        write!(f, "the factor of {} dofs", self.0.num_dofs())
     }
 }
 
@@ -172,9 +172,9 @@ impl IterativeSolver {
     }
 }
 
-/// A Krylov method with its stopping rule: CG for `LinearSolverKind::Cg` and `Cholesky`
-/// (a factor preconditioning a symmetric tangent), GMRES for `Lu` (an LU factor
-/// preconditioning a non-symmetric one), BiCGStab for `BiCgStab`.
+/// A Krylov method with its stopping rule: CG for `LinearSolverKind::Cg`, GMRES for `Lu`
+/// (the LDLᵀ of the symmetric part preconditioning a non-symmetric tangent), BiCGStab for
+/// the others.
 pub(crate) struct Krylov {
     pub kind: LinearSolverKind,
     pub rel_tol: f64,
@@ -203,7 +203,7 @@ impl Krylov {
         if self.kind == LinearSolverKind::Lu {
             return gmres(a, m, rhs, x, rel_tolerance, max_iters);
         }
-        if matches!(self.kind, LinearSolverKind::Cg | LinearSolverKind::Cholesky) {
+        if self.kind == LinearSolverKind::Cg {
             let params = CgParams {
                 initial_guess: InitialGuessStatus::MaybeNonZero,
                 abs_tolerance: 0.0,

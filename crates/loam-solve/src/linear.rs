@@ -426,10 +426,11 @@ impl SparseDirectSolver {
         Ok(self.symbolic_lu.as_ref().expect("just computed"))
     }
 
-    /// Solve A x = rhs in place with the last factorisation.
+    /// Solve A x = rhs in place with the last factorisation (of A itself: a factor of its
+    /// symmetric part only preconditions, `LinearSolver::solve`).
     pub fn solve_in_place(&mut self, rhs: &mut [f64]) -> Result<(), LinearSolveError> {
         let t = Instant::now();
-        if !self.apply_factor(rhs) {
+        if matches!(self.factor, Factor::SymmetricPart(_)) || !self.apply_factor(rhs) {
             return Err(LinearSolveError::NotFactorised);
         }
         self.timings.solve += t.elapsed();
@@ -567,11 +568,12 @@ impl LinearSolver for SparseDirectSolver {
     }
 
     fn description(&self) -> String {
+        const GMRES: &str = "GMRES preconditioned by the symmetric part's LDLᵀ";
         match self.symmetric_part {
-            Some(part) => {
-                format!("sparse LU, or from {} dofs GMRES preconditioned by the symmetric part's LDLᵀ", part.from_dofs)
-            }
-            None => self.kind.to_string(),
+            // Before the first factorisation the size is not known.
+            Some(part) if self.dofs == 0 => format!("sparse LU, or from {} dofs {GMRES}", part.from_dofs),
+            Some(part) if self.dofs >= part.from_dofs => format!("{GMRES} (sparse LU where that fails)"),
+            _ => self.kind.to_string(),
         }
     }
 
