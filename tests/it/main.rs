@@ -10,6 +10,7 @@ mod axisymmetric;
 mod body_constraint;
 mod docs;
 mod excavation;
+mod frictional_plane;
 mod geostatic;
 mod ghost;
 mod implicit_dynamics;

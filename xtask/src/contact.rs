@@ -1,11 +1,12 @@
-//! V9, a block on a frictional incline (docs/verification.md §V9): explicit runs of
-//! `loam_verification::sliding` against the rigid block's a = g (sin θ − μ cos θ), the
+//! V9, a block on a frictional incline (docs/verification.md §V9): explicit and implicit
+//! dynamic runs of `loam_verification::sliding` against the rigid block's a = g (sin θ − μ cos θ), the
 //! plane's force against Coulomb's cone, and a block that friction holds; V10, a rigid
 //! retaining wall against Rankine's active and passive thrust (`loam_verification::wall`).
 
 use crate::report::{Report, Row};
 use anyhow::Result;
 use loam::explicit::{Explicit, ExplicitSettings, TimeStep, UpdateScheme};
+use loam::implicit::{Dynamic, DynamicSettings};
 use loam::model::Model;
 use loam_verification::sliding::{block_displacement, block_speed, bounds, fitted_slope, SlidingBlock};
 use loam_verification::wall::{self, WallMove, SETTLE};
@@ -26,14 +27,21 @@ enum Posed {
     Belt(f64),
 }
 
-/// One case: the block, how it is posed, how long it runs and its local damping.
+/// One case: the block, how it is posed, how long it runs, its local damping, and
+/// whether it runs in implicit dynamics instead of explicit MPM.
 struct Case {
     name: &'static str,
     block: SlidingBlock,
     posed: Posed,
     duration: f64,
     damping: f64,
+    implicit: bool,
 }
+
+/// The implicit cases' time step: about six steps a period of the block's ringing
+/// (40 Hz), which Bossak's α = −0.3 damps; the sliding itself, a constant acceleration,
+/// the Newmark family integrates exactly.
+const IMPLICIT_STEP: f64 = 0.004;
 
 /// What a run measured: the fitted acceleration down the slope, the plane's mean
 /// tangential over normal force, the mean displacement down the slope, steps and wall time.
@@ -48,6 +56,9 @@ struct Measured {
 /// Run `model` for the case, sampling the centre of mass's velocity along `downhill`; the
 /// first fifth of the run (the block settling onto the plane) is left out of the fits.
 fn run<const D: usize>(case: &Case, model: Model<D>, downhill: SVector<f64, D>) -> Result<Measured> {
+    if case.implicit {
+        return run_implicit(case, model, downhill);
+    }
     // Bodies in contact take their stress from the contact-corrected grid velocities (USL).
     let scheme =
         if matches!(case.posed, Posed::Slab | Posed::Belt(_)) { UpdateScheme::Usl } else { UpdateScheme::Musl };
@@ -85,10 +96,48 @@ fn run<const D: usize>(case: &Case, model: Model<D>, downhill: SVector<f64, D>) 
     })
 }
 
+/// [`run`] in implicit dynamics: Bossak's α = −0.3 (β and γ from it), Δt =
+/// `IMPLICIT_STEP`, the plane's force its reaction at each step's end.
+fn run_implicit<const D: usize>(case: &Case, model: Model<D>, downhill: SVector<f64, D>) -> Result<Measured> {
+    let alpha = -0.3;
+    let settings = DynamicSettings {
+        bossak_alpha: alpha,
+        beta: 0.25 * (1.0 - alpha) * (1.0 - alpha),
+        gamma: 0.5 - alpha,
+        ..DynamicSettings::trapezoidal(IMPLICIT_STEP, case.duration)
+    };
+    let start = Instant::now();
+    let mut dynamic = Dynamic::new(model, settings)?;
+    let (mut times, mut speeds) = (Vec::new(), Vec::new());
+    let (mut normal, mut tangential, mut steps) = (0.0, 0.0, 0);
+    while !dynamic.is_finished() {
+        let r = dynamic.step()?;
+        steps = r.step;
+        if r.time < 0.2 * case.duration {
+            continue;
+        }
+        times.push(r.time);
+        speeds.push(block_speed(dynamic.model(), &downhill));
+        // The plane is the model's only support: its reaction comes first.
+        let f = SVector::<f64, D>::from_fn(|i, _| r.reactions[0][i]);
+        let along = f.dot(&downhill) * downhill;
+        normal += (f - along).norm();
+        tangential += along.norm();
+    }
+    Ok(Measured {
+        acceleration: fitted_slope(&times, &speeds),
+        force_ratio: tangential / normal,
+        displacement: block_displacement(dynamic.model(), &downhill),
+        steps,
+        wall: start.elapsed().as_secs_f64(),
+    })
+}
+
 pub fn verify(_quick: bool, report: &mut Report) -> Result<()> {
     let slide = |friction, inclined| SlidingBlock { slope_deg: 30.0, friction, inclined };
     let level = |friction| SlidingBlock { slope_deg: 0.0, friction, inclined: false };
-    let case = |name, block, posed, duration, damping| Case { name, block, posed, duration, damping };
+    let case = |name, block, posed, duration, damping| Case { name, block, posed, duration, damping, implicit: false };
+    let implicit = |name, block, posed, duration| Case { name, block, posed, duration, damping: 0.0, implicit: true };
     let cases = [
         case("level base, gravity turned", slide(0.3, false), Posed::Plane, 1.0, 0.0),
         case("level base, smooth", slide(0.0, false), Posed::Plane, 0.6, 0.0),
@@ -100,6 +149,9 @@ pub fn verify(_quick: bool, report: &mut Report) -> Result<()> {
         case("elastic slab, two bodies, stuck (damping 0.5)", slide(0.7, false), Posed::Slab, 1.0, 0.5),
         case("rigid slab (a rigid body)", slide(0.3, false), Posed::Belt(0.0), 1.0, 0.0),
         case("conveyor belt at 1 m/s, level", level(0.3), Posed::Belt(1.0), 0.3, 0.0),
+        implicit("level base, gravity turned, implicit dynamics", slide(0.3, false), Posed::Plane, 1.0),
+        implicit("inclined plane, implicit dynamics", slide(0.3, true), Posed::Plane, 1.0),
+        implicit("level base, 3D, slip along x = z, implicit dynamics", slide(0.3, false), Posed::Plane3d, 0.5),
     ];
     writeln!(report.md, "## V9 block on a frictional incline\n\nAn elastic block (1 × 0.5 m, 0.4 m deep in 3D; ρ = 2 t/m³, E = 10 MPa, ν = 0.3) released unstressed on a rigid frictional plane (`frictional_planes`), or on an elastic slab of the same soil 0.3 m thick held at its base, the two bodies in contact (`body_contact`), or on a rigid slab 0.3 m thick and as long as the block travels (`rigid_bodies`, at rest or moved at 1 m/s on a level base: a conveyor belt that drags the block at g (sin θ + μ cos θ) until it rides along), θ = 30°, g = 10 m/s², cells of 0.1 m, 2 points a cell per axis, GIMP, finite strain, explicit MUSL (USL for the two bodies, as contact needs), CFL 0.5. Acceleration: the least-squares slope of the centre of mass's velocity down the slope after the first fifth of the run; force ratio: the plane's time-averaged tangential over normal force over the same window. References: a = g (sin θ − μ cos θ), the ratio μ while sliding (the plane's or the rigid body's force); a block with tan θ < μ stays put (its mean displacement over the frictionless block's travel ½ g sin θ t²).\n")?;
     report.mark_table("sliding")?;

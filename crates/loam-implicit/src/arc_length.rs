@@ -161,9 +161,9 @@ impl<const D: usize> QuasiStatic<D> {
             let tolerance = newton.linear_tolerance();
             let solved = e.solve_prepared(&s.rhs, &mut s.du_r, tolerance).and_then(|i| {
                 let j = e.solve_prepared(&s.load, &mut s.du_f, tolerance)?;
-                Ok(i + j)
+                Ok((i.iterations + j.iterations, setup + i.factorised + j.factorised))
             });
-            let iterations = solved.map_err(|x| newton.linear_failure(x))?;
+            let (iterations, setup) = solved.map_err(|x| newton.linear_failure(x))?;
             newton.linear_solved(iterations, setup, e.direct_fallbacks() > fallbacks);
             let dl = arc_correction(&e.du, &s.du_r, &s.du_f, length);
             let mut squares = 0.0;

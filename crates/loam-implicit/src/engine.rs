@@ -20,9 +20,9 @@ use loam_kernels::{
 };
 use loam_model::{AntiLocking, FreeBody, Kinematics, LoadLevel, Model, ModelError, PointChange};
 use loam_solve::{
-    norm, BlockPattern, LinearSolveError, LinearSolver, LinearSolverChoice, LinearSolverKind, LinearSystem,
-    NewtonControl, NewtonError, NewtonReport, NewtonSettings, NodeLattice, SparseDirectSolver, SymmetricPart,
-    SystemMatrix,
+    norm, BlockPattern, LinearSolveError, LinearSolveStats, LinearSolver, LinearSolverChoice, LinearSolverKind,
+    LinearSystem, NewtonControl, NewtonError, NewtonReport, NewtonSettings, NodeLattice, SparseDirectSolver,
+    SymmetricPart, SystemMatrix,
 };
 use nalgebra::SVector;
 use rayon::prelude::*;
@@ -129,14 +129,16 @@ impl<const D: usize> Engine<D> {
     /// and no buoyancy follows a changing volume, LU otherwise (never a silent
     /// symmetrisation; a softening tangent is indefinite and Cholesky would stop at the
     /// first negative pivot; the stiffness of a follower load, or of the buoyancy on a
-    /// point's current volume in finite strain, is not symmetric). `indefinite` says the
+    /// point's current volume in finite strain, and the friction of a slipping node on a
+    /// frictional plane are not symmetric). `indefinite` says the
     /// analysis goes where the tangent is indefinite whatever the model (past a limit point).
     pub fn new(model: Model<D>, newton: NewtonSettings, linear_choice: LinearSolverChoice, indefinite: bool) -> Self {
         let definite = !indefinite
             && model.symmetric_tangent()
             && !model.can_soften()
             && !has_follower(model.loads())
-            && (model.water().is_none() || model.kinematics() == Kinematics::SmallStrain);
+            && (model.water().is_none() || model.kinematics() == Kinematics::SmallStrain)
+            && model.frictional_planes().iter().all(|p| p.friction() == 0.0);
         let kind = match linear_choice {
             LinearSolverChoice::Forced(kind) => kind,
             LinearSolverChoice::Iterative => LinearSolverKind::for_tangent(true, definite),
@@ -216,10 +218,16 @@ impl<const D: usize> Engine<D> {
     /// needs a grid).
     pub fn set_linear_solver(&mut self, solver: Box<dyn LinearSolver>) {
         self.linear_choice = LinearSolverChoice::Forced(solver.kind());
+        // The next connect resolves (logs) the new solver.
+        self.install_linear_solver(solver, false);
+    }
+
+    /// `solver` in place of the engine's, `resolved` or to be resolved at the next connect,
+    /// which gives it the lattice it may want.
+    fn install_linear_solver(&mut self, solver: Box<dyn LinearSolver>, resolved: bool) {
         self.matrix = SystemMatrix::new(solver.layout());
         self.linear = solver;
-        self.linear_resolved = false;
-        // The next connect resolves the new solver and gives it the lattice it may want.
+        self.linear_resolved = resolved;
         self.conn_current = false;
     }
 
@@ -230,10 +238,11 @@ impl<const D: usize> Engine<D> {
     }
 
     /// Resume with the linear solver `kind` resolved by the run that saved the state
-    /// (nothing when `None`: the first step resolves it).
+    /// (nothing when `None`: the first step resolves it), under the settings' own choice
+    /// (so that `new_linear_solver` makes the same solver, with its symmetric part).
     pub fn resume_linear_solver(&mut self, kind: Option<LinearSolverKind>) {
         if let Some(kind) = kind {
-            self.set_linear_solver(Self::solver_for(kind, self.linear_choice));
+            self.install_linear_solver(Self::solver_for(kind, self.linear_choice), true);
         }
         self.conn_current = false;
     }
@@ -280,7 +289,7 @@ impl<const D: usize> Engine<D> {
             return Ok(());
         }
         connect(&self.model, &self.layout, &mut self.conn, &mut self.constrained, step)?;
-        if !self.model.inclined_rollers().is_empty() {
+        if !self.model.inclined_rollers().is_empty() || !self.model.frictional_planes().is_empty() {
             self.frames.connect(&self.model, self.conn.active_nodes(), &mut self.constrained);
         }
         self.loads.connect(&self.model, self.conn.active_nodes(), step)?;
@@ -475,6 +484,7 @@ impl<const D: usize> Engine<D> {
         settings: NewtonSettings,
         mut inertia: Option<&mut Inertia>,
     ) -> Result<NewtonReport, NewtonError<PointUpdateError>> {
+        self.frames.reset_contacts(&mut self.constrained);
         let reference = self
             .update_points_and_residual(inertia.as_deref_mut())
             .map_err(|source| NewtonError::Problem { source, report: NewtonReport::default() })?;
@@ -488,7 +498,8 @@ impl<const D: usize> Engine<D> {
             let (reference, alpha) =
                 self.update_along_correction(&newton, inertia.as_deref_mut()).map_err(|e| newton.problem_failure(e))?;
             newton.corrected(alpha * norm(&self.correction), norm(&self.du));
-            if newton.converged(norm(&self.residual), reference)? {
+            // An iterate where a contact changed state is not an equilibrium of its own.
+            if newton.converged(norm(&self.residual), reference)? && !self.frames.contact_changed() {
                 return Ok(newton.into_report());
             }
         }
@@ -537,6 +548,7 @@ impl<const D: usize> Engine<D> {
 
     /// Update points, then the residual at `du`; returns the reference force norm.
     pub fn update_points_and_residual(&mut self, inertia: Option<&mut Inertia>) -> Result<f64, PointUpdateError> {
+        self.frames.settle(&mut self.du, &mut self.constrained);
         let average = CellAverage::of(&self.model, &self.cell_gradients);
         let fbar = fbar_groups(&self.model, &self.groups);
         let inputs = PointInputs { model: &self.model, conn: &self.conn, average, fbar, du: &self.du };
@@ -559,7 +571,7 @@ impl<const D: usize> Engine<D> {
         if self.frames.is_empty() {
             return Ok(reference);
         }
-        let held = self.frames.hold_in_residual(&mut self.residual, &mut self.reaction);
+        let held = self.frames.hold_in_residual(&mut self.residual, &mut self.reaction, &mut self.constrained);
         Ok((reference * reference + held).sqrt())
     }
 
@@ -611,11 +623,11 @@ impl<const D: usize> Engine<D> {
         }
         let solved = self.solve_prepared(&rhs, &mut correction, tolerance);
         (self.rhs, self.correction) = (rhs, correction);
-        let iterations = solved?;
+        let stats = solved?;
         for (u, c) in self.du.iter_mut().zip(&self.correction) {
             *u += c;
         }
-        Ok((iterations, setup))
+        Ok((stats.iterations, setup + stats.factorised))
     }
 
     /// Prepare the linear solver for the assembled tangent (factorise it, or set up the
@@ -642,8 +654,13 @@ impl<const D: usize> Engine<D> {
     /// Solve K x = b with the prepared solver to the relative residual `tolerance`, `b` in
     /// the nodes' frames (as the residual is), `x` turned back to the global frame; a failed
     /// Krylov solve is repeated by sparse LU below `DIRECT_FALLBACK_MAX_DOFS`. Returns the
-    /// Krylov iterations.
-    pub fn solve_prepared(&mut self, b: &[f64], x: &mut [f64], tolerance: f64) -> Result<usize, LinearSolveError> {
+    /// Krylov iterations and the time of any factorisation the solve made (a fallback's).
+    pub fn solve_prepared(
+        &mut self,
+        b: &[f64],
+        x: &mut [f64],
+        tolerance: f64,
+    ) -> Result<LinearSolveStats, LinearSolveError> {
         let system = LinearSystem {
             pattern: &self.pattern,
             matrix: &self.matrix,
@@ -659,14 +676,19 @@ impl<const D: usize> Engine<D> {
                 let direct = self.fallback.get_or_insert_with(|| SparseDirectSolver::new(LinearSolverKind::Lu));
                 let columns = SystemMatrix::Columns(self.matrix.to_columns(&self.pattern).into_owned());
                 let system = LinearSystem { matrix: &columns, ..system };
-                direct.prepare(&system).and_then(|()| direct.solve(&system, b, x, tolerance))
+                let start = std::time::Instant::now();
+                direct.prepare(&system).and_then(|()| {
+                    let factorised = start.elapsed();
+                    let stats = direct.solve(&system, b, x, tolerance)?;
+                    Ok(LinearSolveStats { factorised: stats.factorised + factorised, ..stats })
+                })
             }
             result => result,
         };
         // The LU fallback's failures (a NaN solution, a missing pivot) are traced as well.
         let stats = solved.map_err(|e| self.traced(e))?;
         self.frames.to_global(x);
-        Ok(stats.iterations)
+        Ok(stats)
     }
 
     /// The assembled tangent as the linear solvers see it.
@@ -740,6 +762,7 @@ impl<const D: usize> Engine<D> {
 
     /// Per constraint, Σ (f_int − f_ext) over its nodes on its fixed components, then per
     /// inclined roller the sum over its nodes, then per body constraint over its nodes,
+    /// then per frictional plane the force on the material at its nodes,
     /// from the reactions of the converged residual (one per dof, global).
     fn constraint_reactions(&self) -> Vec<[f64; 3]> {
         let (model, active) = (&self.model, self.conn.active_nodes());
@@ -749,6 +772,7 @@ impl<const D: usize> Engine<D> {
         let bodies = (model.body_constraints().iter().enumerate())
             .map(|(k, c)| self.reaction_sum(model.body_constraint_nodes(&self.conn, k), &c.fixed));
         reactions.extend(bodies);
+        reactions.extend(self.frames.plane_reactions(&self.reaction));
         reactions
     }
 

@@ -409,8 +409,13 @@ impl<const D: usize> Model<D> {
 
     /// The active nodes roller `k` holds.
     pub fn inclined_roller_nodes(&self, active: &ActiveNodes, k: usize) -> Vec<usize> {
-        let roller = &self.inclined[k];
-        (0..active.len()).filter(|&a| self.roller_holds(roller, active.active_to_grid[a] as usize)).collect()
+        self.plane_nodes(active, &self.inclined[k])
+    }
+
+    /// The active nodes on `plane` or beyond it (those a roller there holds, those a
+    /// frictional plane there meets).
+    pub fn plane_nodes(&self, active: &ActiveNodes, plane: &InclinedRoller<D>) -> Vec<usize> {
+        (0..active.len()).filter(|&a| self.roller_holds(plane, active.active_to_grid[a] as usize)).collect()
     }
 
     /// Rigid planes with Coulomb friction (docs/theory.md §5), which the material may

@@ -97,8 +97,8 @@ const ACCEPTED: [Acceptance; 12] = [
     },
     Acceptance {
         is: |o| matches!(o, ModelOption::FrictionalPlane { .. }),
-        by: [false, false, true],
-        why: "is applied to the grid velocities by the explicit analysis only; the implicit analyses have no frictional contact yet (a roller, on a grid plane or inclined, holds without friction)",
+        by: [true, true, true],
+        why: "",
     },
     Acceptance {
         is: |o| matches!(o, ModelOption::BodyContact),

@@ -9,7 +9,7 @@
 //! from the D + (1 or 3) parameters, and the free motions are the null space of
 //! G = Σ rows ⊗ rows, found from its eigenvalues (a few parameters: a 3 × 3 or 6 × 6
 //! matrix per body). An inclined roller holds the component along its normal, a row the
-//! same way. Free translations are the axes no node of the body holds; the rest of
+//! same way; a frictional plane its normal, and every component where it has friction. Free translations are the axes no node of the body holds; the rest of
 //! the null space is rotations, named by axis (a coordinate axis where one is free) and a
 //! point the axis passes through.
 
@@ -153,6 +153,14 @@ impl<const D: usize> Model<D> {
             let mut held: Vec<Vector3<f64>> = (0..D).filter(|&i| axes[i]).map(|i| Vector3::ith(i, 1.0)).collect();
             for roller in self.inclined_rollers().iter().filter(|r| self.roller_holds(r, g as usize)) {
                 held.push(Vector3::from_fn(|i, _| if i < D { roller.normal()[i] } else { 0.0 }));
+            }
+            // A frictional plane holds its normal, and while the node sticks every
+            // direction: friction is what keeps a block on an incline.
+            for plane in self.frictional_planes().iter().filter(|p| self.roller_holds(p.plane(), g as usize)) {
+                match plane.friction() > 0.0 {
+                    true => held.extend((0..D).map(|i| Vector3::ith(i, 1.0))),
+                    false => held.push(Vector3::from_fn(|i, _| if i < D { plane.plane().normal()[i] } else { 0.0 })),
+                }
             }
             let b = &mut nodes[body[a]];
             b.x.push(Vector3::from_fn(|i, _| if i < D { x[i] } else { 0.0 }));

@@ -463,7 +463,7 @@ fn cases() -> Vec<(&'static str, String)> {
         ("rigid footing overlapping the clay, may_overlap", edit(RIGID, &[("min: [0.0, 3.0], max: [0.5, 3.3]), points_per_cell: 2)", "min: [0.0, 2.8], max: [0.5, 3.3]), points_per_cell: 2, may_overlap: true)")])),
         ("rigid footing leaving the grid", edit(RIGID, &[("velocity: [0.0, -0.1]", "velocity: [0.0, -0.4]")])),
         ("rigid footing with a load", edit(RIGID, &[("rigid_bodies:", "loads: [PointLoad(at: [1.0, 3.0], force: [0.0, -1.0], time: Ramp(duration: 1.0))],\n    rigid_bodies:")])),
-        ("column frictional base, quasi-static", edit(COLUMN, &[("analysis:", "frictional_planes: [(point: [0.0, 0.0], normal: [0.0, 1.0], friction: 0.4)],\n    analysis:")])),
+        ("column frictional plane below the grid", edit(COLUMN, &[("analysis:", "frictional_planes: [(point: [0.0, -5.0], normal: [0.0, 1.0], friction: 0.4)],\n    analysis:")])),
         ("runout polygon of two", edit(RUNOUT, &[("(50.0, 0.0), (50.0, 20.0), (30.0, 20.0), (20.0, 10.0), ", "")])),
         ("footing", edit(FOOTING, &[])),
         ("footing gimp", edit(FOOTING, &[("basis: Linear", "basis: Gimp")])),

@@ -392,7 +392,7 @@ impl LinearSolver for IterativeSolver {
             KrylovOutcome::Converged(iterations, residual) => {
                 self.timings.iterations += iterations;
                 if x.iter().all(|v| v.is_finite()) {
-                    Ok(LinearSolveStats { iterations, residual })
+                    Ok(LinearSolveStats { iterations, residual, ..Default::default() })
                 } else {
                     Err(LinearSolveError::NonFinite)
                 }

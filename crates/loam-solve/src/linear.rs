@@ -118,6 +118,9 @@ pub struct LinearSolveStats {
     pub iterations: usize,
     /// ‖b − A x‖ / ‖b‖ reached (0 for a direct solve, which does not compute it).
     pub residual: f64,
+    /// The time a factorisation made during the solve took (the LU after a Krylov method
+    /// that did not converge), set-up time that the solver's `prepare` did not see.
+    pub factorised: std::time::Duration,
 }
 
 /// A linear solver. See the module docs.
@@ -480,15 +483,17 @@ impl SparseDirectSolver {
         match outcome {
             KrylovOutcome::Converged(iterations, residual) if x.iter().all(|v| v.is_finite()) => {
                 self.timings.iterations += iterations;
-                Ok(LinearSolveStats { iterations, residual })
+                Ok(LinearSolveStats { iterations, residual, ..Default::default() })
             }
             _ => {
                 tracing::debug!(max_iterations, "GMRES on the symmetric part's factor did not converge; LU");
                 self.timings.iterations += max_iterations;
+                let t = Instant::now();
                 self.factorize_tangent(system)?;
+                let factorised = t.elapsed();
                 x.copy_from_slice(rhs);
                 self.solve_in_place(x)?;
-                Ok(LinearSolveStats { iterations: max_iterations, residual: 0.0 })
+                Ok(LinearSolveStats { iterations: max_iterations, residual: 0.0, factorised })
             }
         }
     }

@@ -119,6 +119,29 @@ impl SystemMatrix {
         }
     }
 
+    /// Change block (i, j) (row-major) by `change`; nothing where the nodes are not coupled.
+    pub fn change_block(&mut self, pattern: &BlockPattern, i: usize, j: usize, change: impl FnOnce(&mut [f64])) {
+        let d = pattern.dofs_per_node();
+        self.with_block(pattern, i, j, &mut vec![0.0; d * d], change);
+    }
+
+    /// Row operations on node `node`'s block row: for each `(target, source, factor)`,
+    /// row `target` of every block (node, j) gains `factor` times row `source` (a
+    /// frictional contact's tangential row taking μ s times its normal row).
+    pub fn add_row_multiples(&mut self, pattern: &BlockPattern, node: usize, rows: &[(usize, usize, f64)]) {
+        let d = pattern.dofs_per_node();
+        let mut block = vec![0.0; d * d];
+        for &j in pattern.neighbours(node) {
+            self.with_block(pattern, node, j as usize, &mut block, |b| {
+                for &(target, source, factor) in rows {
+                    for k in 0..d {
+                        b[target * d + k] += factor * b[source * d + k];
+                    }
+                }
+            });
+        }
+    }
+
     /// Hold `dofs` (node · d + component): their rows and columns zero but for the
     /// diagonal, which keeps its value, as assembly does for the constrained dofs it is
     /// given.

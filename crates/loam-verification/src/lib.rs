@@ -16,7 +16,7 @@
 //!   a spherical cavity expanded from a small radius;
 //! - [`water`]: V7, columns under a water table and submerged;
 //! - [`granular`]: V8, the collapse of a granular column (explicit);
-//! - [`sliding`]: V9, a block on a frictional incline (explicit);
+//! - [`sliding`]: V9, a block on a frictional incline (explicit and implicit);
 //! - [`hard_cases`]: where implicit MPM usually breaks (softening, small cuts, ...).
 //!
 //! Shared tools: [`block`] (the elastic block that sizes the solvers), [`dynamics`] (time histories and the periods measured from them),

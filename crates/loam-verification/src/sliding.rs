@@ -13,7 +13,8 @@
 //! along the diagonal of x and z, so that friction has to oppose a slip along no axis; and
 //! the block as a body of its own on an elastic slab of the same soil, the contact between
 //! the two bodies' velocity fields (`Model::with_body_contact`) in place of the plane.
-//! Explicit MPM only (the frictional planes' analysis); units m, t, s, kN, kPa.
+//! The plane cases run in explicit MPM and in implicit dynamics, the bodies' and the rigid
+//! slab's in explicit MPM (where contact between bodies is built); units m, t, s, kN, kPa.
 
 use crate::Bound;
 use loam_constitutive::{ConstitutiveLaw, Elastic};
