@@ -214,7 +214,9 @@ impl Krylov {
             let mut buf = MemBuffer::new(conjugate_gradient_scratch(m, a, 1, Par::Seq));
             match conjugate_gradient(out, m, a, b, params, on_iterate, Par::Seq, MemStack::new(&mut buf)) {
                 Ok(info) => KrylovOutcome::Converged(info.iter_count, info.rel_residual),
-                Err(CgError::NoConvergence { rel_residual, .. }) => KrylovOutcome::NotConverged(rel_residual),
+                Err(CgError::NoConvergence { rel_residual, .. }) => {
+                    KrylovOutcome::NotConverged(max_iters, rel_residual)
+                }
                 Err(CgError::NonPositiveDefiniteOperator) => KrylovOutcome::Breakdown("the tangent"),
                 Err(CgError::NonPositiveDefinitePreconditioner) => KrylovOutcome::Breakdown("the preconditioner"),
             }
@@ -230,7 +232,9 @@ impl Krylov {
             let mut buf = MemBuffer::new(bicgstab_scratch(id, m, a, 1, Par::Seq));
             match bicgstab(out, id, m, a, b, params, on_iterate, Par::Seq, MemStack::new(&mut buf)) {
                 Ok(info) => KrylovOutcome::Converged(info.iter_count, info.rel_residual),
-                Err(BicgError::NoConvergence { rel_residual, .. }) => KrylovOutcome::NotConverged(rel_residual),
+                Err(BicgError::NoConvergence { rel_residual, .. }) => {
+                    KrylovOutcome::NotConverged(max_iters, rel_residual)
+                }
             }
         }
     }
@@ -296,7 +300,7 @@ fn gmres(
         }
         let r = column[j].hypot(next);
         if !(r.is_finite() && r > 0.0) {
-            return KrylovOutcome::NotConverged(g[j].abs() / beta);
+            return KrylovOutcome::NotConverged(j, g[j].abs() / beta);
         }
         let (c, s) = (column[j] / r, next / r);
         column[j] = r;
@@ -312,7 +316,7 @@ fn gmres(
         }
         basis.push(w.iter().map(|w| w / next).collect());
     }
-    KrylovOutcome::NotConverged(g[max_iterations].abs() / beta)
+    KrylovOutcome::NotConverged(max_iterations, g[max_iterations].abs() / beta)
 }
 
 /// x = Σ y_j z_j with R y = g, R the rotated Hessenberg matrix (upper triangular; column j
@@ -335,7 +339,9 @@ fn combine(h: &[Vec<f64>], g: &[f64], directions: &[Vec<f64>], x: &mut [f64]) {
 
 pub(crate) enum KrylovOutcome {
     Converged(usize, f64),
-    NotConverged(f64),
+    /// Stopped after this many iterations (a breakdown, or the most allowed) at this
+    /// relative residual.
+    NotConverged(usize, f64),
     /// CG met a direction of non-positive curvature in the named operator.
     Breakdown(&'static str),
 }
@@ -397,7 +403,7 @@ impl LinearSolver for IterativeSolver {
                     Err(LinearSolveError::NonFinite)
                 }
             }
-            KrylovOutcome::NotConverged(reported) => {
+            KrylovOutcome::NotConverged(_, reported) => {
                 // faer reports no usable residual on failure (1.0 in 0.24.4): the history's
                 // last entry is the true one.
                 let mut history = Vec::new();

@@ -485,15 +485,19 @@ impl SparseDirectSolver {
                 self.timings.iterations += iterations;
                 Ok(LinearSolveStats { iterations, residual, ..Default::default() })
             }
-            _ => {
-                tracing::debug!(max_iterations, "GMRES on the symmetric part's factor did not converge; LU");
-                self.timings.iterations += max_iterations;
+            outcome => {
+                let iterations = match outcome {
+                    KrylovOutcome::Converged(n, _) | KrylovOutcome::NotConverged(n, _) => n,
+                    KrylovOutcome::Breakdown(_) => max_iterations,
+                };
+                tracing::debug!(iterations, "GMRES on the symmetric part's factor did not converge; LU");
+                self.timings.iterations += iterations;
                 let t = Instant::now();
                 self.factorize_tangent(system)?;
                 let factorised = t.elapsed();
                 x.copy_from_slice(rhs);
                 self.solve_in_place(x)?;
-                Ok(LinearSolveStats { iterations: max_iterations, residual: 0.0, factorised })
+                Ok(LinearSolveStats { iterations, residual: 0.0, factorised })
             }
         }
     }
@@ -568,8 +572,10 @@ impl LinearSolver for SparseDirectSolver {
         self.kind
     }
 
+    /// Cholesky and the symmetric part's LDLᵀ order by nested dissection on the lattice;
+    /// faer's LU orders its columns itself.
     fn uses_lattice(&self) -> bool {
-        true
+        self.kind == LinearSolverKind::Cholesky || self.symmetric_part.is_some()
     }
 
     fn description(&self) -> String {

@@ -54,7 +54,9 @@ fn coupling_width(pattern: &BlockPattern, lattice: &NodeLattice) -> [i64; 3] {
 }
 
 /// Append `nodes` to `order` in nested-dissection order: the part below the median plane
-/// of the longest axis, the part above the plane's `width` layers, then the plane.
+/// of the longest axis, the part above the plane's `width` layers, then the plane; where
+/// that plane leaves one side empty (a part thinner than the coupling along it), the
+/// next longest axis's.
 fn dissect(nodes: Vec<u32>, coordinates: &dyn Fn(u32) -> [i64; 3], width: [i64; 3], order: &mut Vec<u32>) {
     if nodes.len() <= LEAF_NODES {
         order.extend(nodes);
@@ -68,28 +70,40 @@ fn dissect(nodes: Vec<u32>, coordinates: &dyn Fn(u32) -> [i64; 3], width: [i64; 
             high[a] = high[a].max(c[a]);
         }
     }
-    let axis = (0..3).max_by_key(|&a| (high[a] - low[a], std::cmp::Reverse(a))).expect("three axes");
+    let mut axes = [0, 1, 2];
+    axes.sort_by_key(|&a| (std::cmp::Reverse(high[a] - low[a]), a));
+    for axis in axes {
+        if let Some((below, above, separator)) = split(&nodes, coordinates, axis, width[axis]) {
+            dissect(below, coordinates, width, order);
+            dissect(above, coordinates, width, order);
+            order.extend(separator);
+            return;
+        }
+    }
+    order.extend(nodes);
+}
+
+/// A part's nodes below a plane, above it, and in it.
+type Parts = (Vec<u32>, Vec<u32>, Vec<u32>);
+
+/// The parts of `nodes` below and above the median plane of `axis`, `width` layers thick,
+/// and the plane; `None` where a part is empty.
+fn split(nodes: &[u32], coordinates: &dyn Fn(u32) -> [i64; 3], axis: usize, width: i64) -> Option<Parts> {
     let mut along: Vec<i64> = nodes.iter().map(|&n| coordinates(n)[axis]).collect();
     along.sort_unstable();
     let plane = along[along.len() / 2];
     let (mut below, mut above, mut separator) = (Vec::new(), Vec::new(), Vec::new());
-    for &n in &nodes {
+    for &n in nodes {
         let c = coordinates(n)[axis];
         if c < plane {
             below.push(n);
-        } else if c >= plane + width[axis] {
+        } else if c >= plane + width {
             above.push(n);
         } else {
             separator.push(n);
         }
     }
-    if below.is_empty() || above.is_empty() {
-        order.extend(nodes);
-        return;
-    }
-    dissect(below, coordinates, width, order);
-    dissect(above, coordinates, width, order);
-    order.extend(separator);
+    (!below.is_empty() && !above.is_empty()).then_some((below, above, separator))
 }
 
 #[cfg(test)]
