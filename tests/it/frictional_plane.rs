@@ -54,7 +54,7 @@ fn moved(dir: &Path) -> (f64, [f64; 2]) {
     (mass, [sum(x, x0), sum(y, y0)])
 }
 
-/// With μ = 0.7 > tan 30° the block rests: the plane's force on it is the weight upwards,
+/// With μ = 0.6, just above tan 30° = 0.577, the block rests: the plane's force on it is the weight upwards,
 /// to 1e-9 of the weight (the residual tolerance is 1e-12; the reaction is f_int − f_ext
 /// at the held dofs, which sums to minus the external force up to the free dofs'
 /// residual), with a tangential part W sin 30° within μ times the normal W cos 30°. The
@@ -63,7 +63,7 @@ fn moved(dir: &Path) -> (f64, [f64; 2]) {
 /// its centre's movement: a block that slid would go on.
 #[test]
 fn a_block_rests_on_a_rough_incline() {
-    let dir = run(INCLINE.replace("MU", "0.7").replace("young: 1e6", "young: 1e8"));
+    let dir = run(INCLINE.replace("MU", "0.6").replace("young: 1e6", "young: 1e8"));
     let (header, rows) = table(&dir.path().join("run_log.csv"));
     let last = rows.last().unwrap();
     let force =
@@ -75,14 +75,15 @@ fn a_block_rests_on_a_rough_incline() {
     assert!(largest < 1e-3, "the block's centre moved {largest} m");
 }
 
-/// With μ = 0.2 < tan 30° no state holds the block: the quasi-static step fails (it
+/// With μ = 0.55, just below tan 30° = 0.577, no state holds the block: the quasi-static step fails (it
 /// cuts back to its limit and reports that Newton did not converge: with every base node
 /// slipping, nothing resists a translation along the plane).
 #[test]
 fn a_block_on_a_smoother_incline_finds_no_equilibrium() {
     let dir = tempfile::tempdir().unwrap();
-    let scene = LoadedScene::parse(Path::new("frictional.ron"), INCLINE.replace("MU", "0.2")).unwrap();
-    let error = run_scene(&scene, dir.path(), &mut |_| {}).expect_err("a block held by μ = 0.2 on a 30° incline");
+    let text = INCLINE.replace("MU", "0.55").replace("young: 1e6", "young: 1e8");
+    let scene = LoadedScene::parse(Path::new("frictional.ron"), text).unwrap();
+    let error = run_scene(&scene, dir.path(), &mut |_| {}).expect_err("a block held by μ = 0.55 on a 30° incline");
     assert!(error.to_string().contains("did not converge"), "{error}");
 }
 
@@ -152,4 +153,41 @@ fn a_block_dragged_on_a_rough_base_pulls_mu_times_its_weight() {
         assert!(iterations <= 8.0, "{iterations} corrections");
     }
     assert!(moved[0] / mass > 0.1, "the block moved {} m", moved[0] / mass);
+}
+
+/// The block of the drag test on its rough base (μ = 0.4), in its geostatic stress (its
+/// weight W in full from the start), pushed sideways by a traction on its left face whose
+/// resultant follows the load factor up to 2 μ W: it holds while the push is below the
+/// friction μ W and slides when it passes it, so the quasi-static run ends at the limit
+/// load λ = ½ (the push μ W), found to the run's resolution (`limit_resolution` 1e-3 of
+/// the full load; bound 2e-3), with the base's tangential force μ W against the push.
+#[test]
+fn a_block_pushed_past_mu_times_its_weight_slides() {
+    let text = r#"Scene(
+    dimension: 2,
+    grid: (origin: [0.0, 0.0], cell_size: [0.25, 0.25], cells: [16, 6]),
+    basis: Gimp,
+    kinematics: SmallStrain,
+    materials: [(name: "block", density: 1000.0, law: Elastic(young: 1e7, poisson: 0.3))],
+    bodies: [(name: "block", material: "block", shape: Box(min: [1.0, 0.0], max: [2.0, 1.0]))],
+    gravity: [0.0, -10.0],
+    initial_stress: Geostatic(k0: 0.5),
+    frictional_planes: [(point: [0.0, 0.0], normal: [0.0, 1.0], friction: 0.4)],
+    loads: [Traction(within: Some((min: [0.9, 0.05], max: [1.1, 0.95])), traction: [8000.0, 0.0])],
+    analysis: QuasiStatic(load_steps: 4),
+    solver: (residual_tolerance: 1e-10),
+    output: (vtu_every: 0, final_csv: true),
+)"#;
+    let dir = run(text.to_string());
+    let (header, rows) = table(&dir.path().join("run_log.csv"));
+    let (mass, _) = moved(dir.path());
+    let weight = mass * 10.0;
+    let push = 8000.0 * 1.0;
+    assert!((push / (2.0 * 0.4 * weight) - 1.0).abs() < 1e-9, "the full push {push} is not 2 μ W, W = {weight}");
+    let last = rows.last().unwrap();
+    let lambda = last[column(&header, "load_factor")];
+    let base = last[column(&header, "frictional_plane0_reaction_x")];
+    println!("slides at λ {lambda} (base {base}, push {}), {} rows", lambda * push, rows.len());
+    assert!((lambda - 0.5).abs() <= 2e-3, "the block held to λ = {lambda}, not ½");
+    assert!((base + lambda * push).abs() <= 1e-6 * weight, "base {base} against the push {}", lambda * push);
 }

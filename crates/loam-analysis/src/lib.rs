@@ -98,7 +98,7 @@ pub struct Progress {
     pub dofs: usize,
     /// The force of each support on the material, in the order: grid-plane constraints,
     /// inclined rollers, body constraints, frictional planes, rigid bodies. Implicit
-    /// analyses give the first three; explicit ones the rollers', frictional planes' and
+    /// analyses give the first four; explicit ones the rollers', frictional planes' and
     /// rigid bodies' (NaN for the rest).
     pub reactions: Vec<[f64; 3]>,
     pub wall_time: Duration,

@@ -520,6 +520,13 @@ fn reduced_materials<const D: usize>(
     if !has_strength(model) {
         return Err(StrengthReductionError::Reduction("no material has a strength to reduce (all are elastic)".into()));
     }
+    if !model.frictional_planes().is_empty() {
+        // A mechanism along the plane would be found at the soil's factor with the
+        // interface at full strength: a factor of safety that is not one.
+        return Err(StrengthReductionError::Reduction(
+            "a frictional plane's μ is not reduced with the materials' strength yet; remove the strength reduction or the plane".into(),
+        ));
+    }
     model
         .materials()
         .iter()

@@ -297,7 +297,8 @@ impl<const D: usize> Dynamic<D> {
     }
 
     /// The nodal mass, velocity and acceleration of the committed points, scattered
-    /// mass-weighted (zero on constrained dofs and along an inclined roller's normal).
+    /// mass-weighted (zero on constrained dofs and along an inclined roller's normal, and
+    /// into a frictional plane).
     /// Nodes that persist from step to step keep their own velocity and acceleration,
     /// mapped once at the start.
     fn map_to_nodes(&mut self) {
@@ -378,14 +379,16 @@ impl<const D: usize> Dynamic<D> {
         self.engine.du.extend_from_slice(&inertia.predictor[..n]);
     }
 
-    /// After convergence: the new nodal accelerations a_{n+1} = (Δu − Δũ) / (β Δt²), and
-    /// the points' velocity and acceleration (before the commit moves the points; the
+    /// After convergence: the new nodal accelerations a_{n+1} = (Δu − Δũ) / (β Δt²) (where
+    /// a frictional plane holds a node, those that stop it: `LocalFrames::stop_held_motion`),
+    /// and the points' velocity and acceleration (before the commit moves the points; the
     /// connectivity is that of the step's start).
     fn update_motion(&mut self, dt: f64) {
         let (beta, gamma) = (self.settings.beta, self.settings.gamma);
         let e = &mut self.engine;
-        let a_new: Vec<f64> =
+        let mut a_new: Vec<f64> =
             e.du.iter().zip(&self.inertia.predictor).map(|(u, p)| (u - p) / (beta * dt * dt)).collect();
+        e.frames.stop_held_motion(&mut a_new, &self.inertia.velocity, &self.acceleration, dt, gamma);
         let conn = &e.conn;
         let persist = e.model.background().moves_with_body();
         let pts = e.model.points_mut();
@@ -414,7 +417,8 @@ impl<const D: usize> Dynamic<D> {
 
 /// A nodal velocity or acceleration a step starts from: `value(k, field[k]) / m_I` on every
 /// dof k of a node I with mass that no constraint holds, zero elsewhere, and without its
-/// normal component at the nodes of inclined rollers (docs/theory.md §5).
+/// normal component at the nodes of inclined rollers, and a normal component into a
+/// frictional plane at its nodes (docs/theory.md §5).
 fn per_unit_mass<const D: usize>(
     engine: &Engine<D>,
     nodal_mass: &[f64],

@@ -186,10 +186,10 @@ impl<const D: usize> LocalFrames<D> {
     }
 
     /// Before a point update, the kinematic changes of state at the increment `du`
-    /// (global): an open node moving into its plane closes and sticks, a slipping one
-    /// that moves against its slip direction sticks, a slipping one in 3D takes the
-    /// direction it moves in; then the held components of `du` are put to zero (the
-    /// planes do not move).
+    /// (global): an open node moving into its plane closes, slipping the way it moves
+    /// along the plane (sticking if it does not), a slipping one that moves against its
+    /// slip direction sticks, a slipping one in 3D takes the direction it moves in; then
+    /// the held components of `du` are put to zero (the planes do not move).
     pub fn settle(&mut self, du: &mut [f64], constrained: &mut [bool]) {
         let mut changed = false;
         for f in self.frames.iter_mut() {
@@ -212,13 +212,13 @@ impl<const D: usize> LocalFrames<D> {
                 Contact::Slip(_) if D == 3 && length > 0.0 => *contact = Contact::Slip([x[1] / length, x[2] / length]),
                 _ => {}
             }
-            f.slip_length = length;
             if f.holds(0) {
                 (0..D).filter(|&i| f.holds(i)).for_each(|i| x[i] = 0.0);
                 for r in 0..D {
                     du[a * D + r] = (0..D).map(|m| f.t[r * D + m] * x[m]).sum();
                 }
             }
+            f.slip_length = if f.holds(1) { 0.0 } else { length };
         }
         if changed {
             self.hold_dofs(constrained);
@@ -290,13 +290,38 @@ impl<const D: usize> LocalFrames<D> {
         self.to_global(v);
     }
 
+    /// At the end of an implicit dynamic step, the new nodal accelerations `a_new` (global,
+    /// D per active node) at the components a frictional plane holds, set so that the node
+    /// ends the step at rest there, v + Δt ((1 − γ) a + γ a_new) = 0 (`v`, `a` the nodal
+    /// velocity and acceleration the step started from). Newmark's relation would give a
+    /// held node that started moving the opposite velocity (−v with the trapezoidal rule);
+    /// with a lumped mass the held components' inertia enters only their reactions.
+    pub fn stop_held_motion(&self, a_new: &mut [f64], v: &[f64], a: &[f64], dt: f64, gamma: f64) {
+        for f in self.frames.iter().filter(|f| matches!(f.hold, Hold::Plane { .. })) {
+            let k = f.node * D;
+            let local =
+                |g: &[f64]| -> [f64; D] { std::array::from_fn(|r| (0..D).map(|m| f.t[m * D + r] * g[k + m]).sum()) };
+            let (mut an, vl, al) = (local(a_new), local(v), local(a));
+            for i in (0..D).filter(|&i| f.holds(i)) {
+                an[i] = -(vl[i] + dt * (1.0 - gamma) * al[i]) / (gamma * dt);
+            }
+            for r in 0..D {
+                a_new[k + r] = (0..D).map(|m| f.t[r * D + m] * an[m]).sum();
+            }
+        }
+    }
+
     /// The tangent at the framed nodes in their frames: a slipping node's tangential rows
     /// take the friction's terms (the module docs), then the held dofs are eliminated.
     pub fn hold_in_matrix(&self, pattern: &BlockPattern, matrix: &mut SystemMatrix) {
         matrix.transform_blocks(pattern, |a| self.frame(a));
         for f in &self.frames {
             let Hold::Plane { friction, contact: Contact::Slip(s), .. } = f.hold else { continue };
+            // A pulling node (it opens at the next iterate) has no friction.
             let n = f.normal_force;
+            if n <= 0.0 {
+                continue;
+            }
             // Row j of the node's blocks += μ s_j row 0 (the normal's).
             let rows: Vec<(usize, usize, f64)> = (1..D).map(|j| (j, 0, friction * s[j - 1])).collect();
             matrix.add_row_multiples(pattern, f.node, &rows);
@@ -334,7 +359,7 @@ impl<const D: usize> LocalFrames<D> {
             (0..D).for_each(|i| reaction[a * D + i] = 0.0);
             if let Hold::Plane { friction, contact: Contact::Slip(s), .. } = f.hold {
                 for j in 1..D {
-                    let force = friction * f.normal_force * s[j - 1];
+                    let force = friction * f.normal_force.max(0.0) * s[j - 1];
                     r[a * D + j] += force;
                     reaction[a * D + j] = -force;
                     squares += force * force;

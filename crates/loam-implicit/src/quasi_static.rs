@@ -500,6 +500,10 @@ impl<const D: usize> QuasiStatic<D> {
         self.engine.external_forces(LoadLevel::Factor(lambda));
         self.engine.du.clear();
         self.engine.size_buffers();
+        // An inspection assembles before any Newton solve: the contact states of a solve's
+        // start, not the last step's.
+        let e = &mut self.engine;
+        e.frames.reset_contacts(&mut e.constrained);
         (step, lambda)
     }
 

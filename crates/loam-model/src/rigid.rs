@@ -9,8 +9,9 @@
 //! from the D + (1 or 3) parameters, and the free motions are the null space of
 //! G = Σ rows ⊗ rows, found from its eigenvalues (a few parameters: a 3 × 3 or 6 × 6
 //! matrix per body). An inclined roller holds the component along its normal, a row the
-//! same way; a frictional plane its normal, and every component where it has friction. Free translations are the axes no node of the body holds; the rest of
-//! the null space is rotations, named by axis (a coordinate axis where one is free) and a
+//! same way; a frictional plane its normal, and every component where it has friction.
+//! Free translations are the axes no node of the body holds; the rest of the null space
+//! is rotations, named by axis (a coordinate axis where one is free) and a
 //! point the axis passes through.
 
 use crate::Model;

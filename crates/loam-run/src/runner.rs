@@ -505,7 +505,8 @@ impl<'a, const D: usize> Outputs<'a, D> {
 /// NaN in explicit ones), a displaced one (a footing) its prescribed displacement before
 /// it: the load–displacement curve; every inclined roller its reaction per component
 /// (implicit and explicit); every body constraint, as a plane constraint does, its
-/// displacement and reaction; every frictional plane its force on the material (explicit).
+/// displacement and reaction; every frictional plane its force on the material (implicit and
+/// explicit).
 /// Every load adds its resultant at the step's load factor or time, per component, and
 /// every monitoring point its displacement and stress.
 struct RunLog {

@@ -50,11 +50,11 @@ pub struct Scene {
     #[serde(default)]
     pub constraints: Vec<ConstraintSpec>,
     /// Rollers on inclined planes: the nodes on or beyond each plane held along its normal
-    /// (QuasiStatic; default none).
+    /// (every analysis; default none).
     #[serde(default)]
     pub inclined_rollers: Vec<InclinedRollerSpec>,
-    /// Rigid planes with Coulomb friction that the material may leave (Explicit; default
-    /// none).
+    /// Rigid planes with Coulomb friction that the material may leave (every analysis;
+    /// default none).
     #[serde(default)]
     pub frictional_planes: Vec<FrictionalPlaneSpec>,
     /// The bodies in frictional contact with each other, a velocity field each (Explicit;
