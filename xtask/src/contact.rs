@@ -82,10 +82,9 @@ fn run<const D: usize>(case: &Case, model: Model<D>, downhill: SVector<f64, D>) 
         times.push(r.time);
         speeds.push(block_speed(ex.model(), &downhill));
         let Some(force) = r.plane_forces.first().or(r.rigid_forces.first()) else { continue };
-        let f = SVector::<f64, D>::from_fn(|i, _| force[i]);
-        let along = f.dot(&downhill) * downhill;
-        normal += (f - along).norm() * r.dt;
-        tangential += along.norm() * r.dt;
+        let (n, t) = normal_and_tangential(force, &downhill);
+        normal += n * r.dt;
+        tangential += t * r.dt;
     }
     Ok(Measured {
         acceleration: fitted_slope(&times, &speeds),
@@ -94,6 +93,13 @@ fn run<const D: usize>(case: &Case, model: Model<D>, downhill: SVector<f64, D>) 
         steps,
         wall: start.elapsed().as_secs_f64(),
     })
+}
+
+/// The sizes of a plane's `force` (D components used) across and along `downhill`.
+fn normal_and_tangential<const D: usize>(force: &[f64; 3], downhill: &SVector<f64, D>) -> (f64, f64) {
+    let f = SVector::<f64, D>::from_fn(|i, _| force[i]);
+    let along = f.dot(downhill) * downhill;
+    ((f - along).norm(), along.norm())
 }
 
 /// [`run`] in implicit dynamics: Bossak's α = −0.3 (β and γ from it), Δt =
@@ -119,10 +125,9 @@ fn run_implicit<const D: usize>(case: &Case, model: Model<D>, downhill: SVector<
         times.push(r.time);
         speeds.push(block_speed(dynamic.model(), &downhill));
         // The plane is the model's only support: its reaction comes first.
-        let f = SVector::<f64, D>::from_fn(|i, _| r.reactions[0][i]);
-        let along = f.dot(&downhill) * downhill;
-        normal += (f - along).norm();
-        tangential += along.norm();
+        let (n, t) = normal_and_tangential(&r.reactions[0], &downhill);
+        normal += n;
+        tangential += t;
     }
     Ok(Measured {
         acceleration: fitted_slope(&times, &speeds),

@@ -63,6 +63,20 @@ struct Frame {
 }
 
 impl Frame {
+    /// The node's components of the global field `v` (D per node) in its frame, Tᵀ v_I.
+    fn local<const D: usize>(&self, v: &[f64]) -> [f64; D] {
+        let k = self.node * D;
+        std::array::from_fn(|r| (0..D).map(|m| self.t[m * D + r] * v[k + m]).sum())
+    }
+
+    /// Write the local components `x` into the global field `v` at the node, v_I = T x.
+    fn put_global<const D: usize>(&self, x: &[f64; D], v: &mut [f64]) {
+        let k = self.node * D;
+        for r in 0..D {
+            v[k + r] = (0..D).map(|m| self.t[r * D + m] * x[m]).sum();
+        }
+    }
+
     /// Whether local component `i` is held.
     fn holds(&self, i: usize) -> bool {
         match self.hold {
@@ -193,30 +207,26 @@ impl<const D: usize> LocalFrames<D> {
     pub fn settle(&mut self, du: &mut [f64], constrained: &mut [bool]) {
         let mut changed = false;
         for f in self.frames.iter_mut() {
-            let Hold::Plane { contact, .. } = &mut f.hold else { continue };
-            let a = f.node;
-            // x = Tᵀ du_a, the increment in the node's frame.
-            let mut x: [f64; D] = std::array::from_fn(|r| (0..D).map(|m| f.t[m * D + r] * du[a * D + m]).sum());
+            // The increment in the node's frame, and the way it moves along the plane.
+            let mut x: [f64; D] = f.local(du);
             let length = x[1..].iter().map(|v| v * v).sum::<f64>().sqrt();
+            let along = if length > 0.0 { [x[1] / length, if D == 3 { x[2] / length } else { 0.0 }] } else { [0.0; 2] };
+            let Hold::Plane { contact, .. } = &mut f.hold else { continue };
             match *contact {
                 // Closing, it keeps sliding the way it moves (a node that friction holds
                 // turns back, and sticks, at the next iterate).
                 Contact::Open if x[0] < 0.0 => {
-                    let s =
-                        if length > 0.0 { [x[1] / length, if D == 3 { x[2] / length } else { 0.0 }] } else { [0.0; 2] };
-                    (*contact, changed) = (if length > 0.0 { Contact::Slip(s) } else { Contact::Stick }, true)
+                    (*contact, changed) = (if length > 0.0 { Contact::Slip(along) } else { Contact::Stick }, true)
                 }
                 Contact::Slip(s) if (1..D).map(|j| x[j] * s[j - 1]).sum::<f64>() < 0.0 => {
                     (*contact, changed) = (Contact::Stick, true)
                 }
-                Contact::Slip(_) if D == 3 && length > 0.0 => *contact = Contact::Slip([x[1] / length, x[2] / length]),
+                Contact::Slip(_) if D == 3 && length > 0.0 => *contact = Contact::Slip(along),
                 _ => {}
             }
             if f.holds(0) {
                 (0..D).filter(|&i| f.holds(i)).for_each(|i| x[i] = 0.0);
-                for r in 0..D {
-                    du[a * D + r] = (0..D).map(|m| f.t[r * D + m] * x[m]).sum();
-                }
+                f.put_global(&x, du);
             }
             f.slip_length = if f.holds(1) { 0.0 } else { length };
         }
@@ -298,16 +308,11 @@ impl<const D: usize> LocalFrames<D> {
     /// with a lumped mass the held components' inertia enters only their reactions.
     pub fn stop_held_motion(&self, a_new: &mut [f64], v: &[f64], a: &[f64], dt: f64, gamma: f64) {
         for f in self.frames.iter().filter(|f| matches!(f.hold, Hold::Plane { .. })) {
-            let k = f.node * D;
-            let local =
-                |g: &[f64]| -> [f64; D] { std::array::from_fn(|r| (0..D).map(|m| f.t[m * D + r] * g[k + m]).sum()) };
-            let (mut an, vl, al) = (local(a_new), local(v), local(a));
+            let (mut an, vl, al): ([f64; D], [f64; D], [f64; D]) = (f.local(a_new), f.local(v), f.local(a));
             for i in (0..D).filter(|&i| f.holds(i)) {
                 an[i] = -(vl[i] + dt * (1.0 - gamma) * al[i]) / (gamma * dt);
             }
-            for r in 0..D {
-                a_new[k + r] = (0..D).map(|m| f.t[r * D + m] * an[m]).sum();
-            }
+            f.put_global(&an, a_new);
         }
     }
 
