@@ -130,8 +130,8 @@ impl<const D: usize> Engine<D> {
     /// symmetrisation; a softening tangent is indefinite and Cholesky would stop at the
     /// first negative pivot; the stiffness of a follower load, or of the buoyancy on a
     /// point's current volume in finite strain, and the friction of a slipping node on a
-    /// frictional plane are not symmetric). `indefinite` says the
-    /// analysis goes where the tangent is indefinite whatever the model (past a limit point).
+    /// frictional plane are not symmetric). `indefinite` says the analysis goes where the
+    /// tangent is indefinite whatever the model (past a limit point).
     pub fn new(model: Model<D>, newton: NewtonSettings, linear_choice: LinearSolverChoice, indefinite: bool) -> Self {
         let definite = !indefinite
             && model.symmetric_tangent()
